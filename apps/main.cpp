@@ -1,0 +1,102 @@
+// The isochor command line.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "isochor/error.hpp"
+#include "isochor/output.hpp"
+#include "isochor/output_reader.hpp"
+#include "isochor/scene.hpp"
+
+using namespace isochor;
+
+namespace {
+
+std::vector<double> zone_volumes(const Mesh& mesh, const Points& x,
+                                 const std::vector<std::pair<std::string, std::vector<int>>>& zones) {
+  std::vector<double> v{tets_volume(x, mesh.tets())};
+  for (const auto& [name, tets] : zones) {
+    double z = 0.0;
+    for (int e : tets) {
+      const Tet& t = mesh.tets()[e];
+      z += tet_signed_volume(x.col(t[0]), x.col(t[1]), x.col(t[2]), x.col(t[3]));
+    }
+    v.push_back(z);
+  }
+  return v;
+}
+
+int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& overrides, std::string out) {
+  Scene sc = load_scene(scene_path, overrides);
+  if (out.empty()) {
+    std::filesystem::path p(sc.output.path);
+    out = (p.parent_path() / (p.stem().string() + "_mesh.h5")).string();
+  }
+  RunInfo info{sc.file.text_as_run(), scene_path, "mesh"};
+  OutputWriter w(out, sc.mesh, sc.zones, info, false);
+  Frame f;
+  f.positions = &sc.mesh.rest_positions();
+  f.volumes = zone_volumes(sc.mesh, sc.mesh.rest_positions(), sc.zones);
+  w.write_frame(f);
+  w.close();
+  const Mesh& m = sc.mesh;
+  std::printf("%s: %d nodes, %d tets, %zu surface triangles, volume %.9g", scene_path.c_str(), m.num_nodes(),
+              m.num_tets(), m.surface().size(), m.rest_volume());
+  if (m.reoriented_tets()) std::printf(", %d tets reoriented", m.reoriented_tets());
+  std::printf("\n");
+  for (const auto& [name, tets] : sc.zones) std::printf("  zone %-16s %zu tets\n", name.c_str(), tets.size());
+  for (const auto& [name, nodes] : m.node_sets) std::printf("  node set %-12s %zu nodes\n", name.c_str(), nodes.size());
+  std::printf("wrote %s and %s\n", out.c_str(), w.xdmf_path().c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"isochor: volume-preserving simulation of soft, nearly incompressible solids"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string(isochor_version()) + " (" + isochor_git_revision() + ")");
+
+  std::string scene_path, out_path, h5_path, dir, prefix = "frame";
+  std::vector<std::string> overrides;
+
+  auto* mesh = app.add_subcommand("mesh", "Write the rest configuration of a scene as frame 0 (inspect a mesh before simulating it)");
+  mesh->add_option("scene", scene_path, "Scene file (TOML)")->required();
+  mesh->add_option("--set", overrides, "Override a scene key, e.g. --set mesh.cells=8")->take_all();
+  mesh->add_option("-o,--output", out_path, "Output .h5 (default: output.path with _mesh)");
+
+  auto* info = app.add_subcommand("info", "Summarise an output file: mesh, zones, frames, volume drift, solver statistics");
+  info->add_option("file", h5_path, "Output file (.h5)")->required();
+
+  auto* obj = app.add_subcommand("export-obj", "Write the surface of every frame as an OBJ sequence");
+  obj->add_option("file", h5_path, "Output file (.h5)")->required();
+  obj->add_option("--dir", dir, "Directory for the OBJ files (default: beside the file, <name>_obj)");
+  obj->add_option("--prefix", prefix, "File name prefix");
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (mesh->parsed()) return cmd_mesh(scene_path, overrides, out_path);
+    if (info->parsed()) {
+      std::fputs(describe_run(h5_path).c_str(), stdout);
+      return 0;
+    }
+    if (obj->parsed()) {
+      if (dir.empty()) {
+        std::filesystem::path p(h5_path);
+        dir = (p.parent_path() / (p.stem().string() + "_obj")).string();
+      }
+      int n = export_obj_sequence(h5_path, dir, prefix);
+      std::printf("wrote %d OBJ files to %s\n", n, dir.c_str());
+      return 0;
+    }
+  } catch (const Error& e) {
+    std::fprintf(stderr, "isochor: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "isochor: internal error: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}

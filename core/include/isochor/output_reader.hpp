@@ -1,0 +1,42 @@
+// Reading a run's HDF5 file back: the summary that `isochor info` prints and per-frame positions.
+#pragma once
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "isochor/mesh.hpp"
+
+namespace isochor {
+
+class RunFile {
+ public:
+  explicit RunFile(const std::string& path);
+  ~RunFile();
+  int num_nodes() const;
+  int num_tets() const;
+  int num_frames() const;
+  std::vector<std::string> zone_names() const;      // in /frames/volume column order
+  std::map<std::string, std::size_t> zone_sizes() const;
+  std::vector<double> times() const;
+  std::vector<std::vector<double>> volumes() const;  // per frame: total, then zones
+  std::vector<Tri> surface() const;
+  Points rest_positions() const;
+  Points positions(int frame) const;
+  std::map<std::string, std::string> attributes() const;       // root attributes (strings)
+  std::map<std::string, double> stat_totals() const;           // numeric attributes of /stats
+  std::map<std::string, std::vector<double>> stat_series() const;  // datasets under /stats
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The summary printed by `isochor info`.
+std::string describe_run(const std::string& path);
+
+// Writes the surface of each frame as <dir>/<prefix>_<frame>.obj (frames numbered from 0);
+// returns the number of files written.
+int export_obj_sequence(const std::string& h5_path, const std::string& dir, const std::string& prefix);
+
+}  // namespace isochor

@@ -1,0 +1,115 @@
+// Scene files in TOML. A Section reads typed keys with defaults and ranges; every failure is one
+// line `file:line: key: what was expected`. Keys that nothing read are reported as unknown by
+// SceneFile::check_unknown_keys() once the whole scene has been parsed.
+#pragma once
+#include <Eigen/Core>
+#include <array>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace toml {
+inline namespace v3 {
+class node;
+class table;
+}  // namespace v3
+}  // namespace toml
+
+namespace isochor {
+
+struct Range {
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  bool min_open = false;  // true: value must be > min
+  bool max_open = false;
+  static Range positive() { return {0.0, std::numeric_limits<double>::infinity(), true, false}; }
+  static Range non_negative() { return {0.0, std::numeric_limits<double>::infinity(), false, false}; }
+  static Range closed(double a, double b) { return {a, b, false, false}; }
+  bool contains(double v) const;
+  std::string describe() const;
+};
+
+class SceneFile;
+
+class Section {
+ public:
+  // The dotted path of this table ("" for the root, "mesh", "zones.zone[2]").
+  const std::string& path() const { return path_; }
+  bool has(std::string_view key) const;
+  bool exists() const { return table_ != nullptr; }
+
+  double number(std::string_view key, double fallback, Range range = {}) const;
+  std::optional<double> number_opt(std::string_view key, Range range = {}) const;
+  long integer(std::string_view key, long fallback, long min, long max) const;
+  std::optional<long> integer_opt(std::string_view key, long min, long max) const;
+  bool boolean(std::string_view key, bool fallback) const;
+  std::string string(std::string_view key, const std::string& fallback,
+                     const std::vector<std::string>& choices = {}) const;
+  std::optional<std::string> string_opt(std::string_view key,
+                                        const std::vector<std::string>& choices = {}) const;
+  Eigen::Vector3d vec3(std::string_view key, const Eigen::Vector3d& fallback, Range range = {}) const;
+  std::optional<Eigen::Vector3d> vec3_opt(std::string_view key, Range range = {}) const;
+  std::vector<double> numbers(std::string_view key, Range range = {}) const;  // absent: empty
+  std::vector<long> integers(std::string_view key, long min, long max) const;  // absent: empty
+  // An int or a list of three ints (e.g. cells per axis).
+  std::array<long, 3> int3(std::string_view key, std::array<long, 3> fallback, long min, long max) const;
+
+  // A sub-table; an absent key gives an empty section (exists() false).
+  Section table(std::string_view key) const;
+  // An array of tables ([[zones.zone]]); absent gives an empty list.
+  std::vector<Section> tables(std::string_view key) const;
+
+  // `file:line: path.key: message`, with the line of the key if present, else of this table.
+  [[noreturn]] void fail(std::string_view key, const std::string& message) const;
+  std::string where(std::string_view key) const;
+
+ private:
+  friend class SceneFile;
+  Section(const SceneFile* file, const toml::table* table, std::string path)
+      : file_(file), table_(table), path_(std::move(path)) {}
+  const toml::node* get(std::string_view key) const;  // marks the key as read
+  std::string full(std::string_view key) const;
+  const SceneFile* file_ = nullptr;
+  const toml::table* table_ = nullptr;
+  std::string path_;
+};
+
+class SceneFile {
+ public:
+  // Reads a scene file and applies `--set key=value` overrides (dotted keys, TOML values; a
+  // value that is not valid TOML is taken as a string).
+  static SceneFile load(const std::string& path, const std::vector<std::string>& overrides = {});
+  static SceneFile parse(const std::string& text, const std::string& name,
+                         const std::vector<std::string>& overrides = {});
+  SceneFile(SceneFile&&) noexcept;
+  SceneFile& operator=(SceneFile&&) noexcept;
+  ~SceneFile();
+
+  Section root() const;
+  const std::string& name() const { return name_; }
+  // Directory of the scene file: relative file names in the scene are resolved against it.
+  const std::string& directory() const { return directory_; }
+  std::string resolve_path(const std::string& p) const;
+  // The scene as run (overrides applied), as TOML text.
+  std::string text_as_run() const;
+  // Throws on the first key (in file order) that no parser read.
+  void check_unknown_keys() const;
+  // Every dotted key (array indices dropped) that parsers asked for, present or not.
+  const std::set<std::string>& queried_keys() const { return queried_; }
+
+ private:
+  friend class Section;
+  SceneFile();
+  std::unique_ptr<toml::table> root_;
+  std::string name_, directory_;
+  mutable std::set<const toml::node*> read_;
+  mutable std::map<std::string, std::set<std::string>> asked_;  // table path -> keys asked for
+  mutable std::set<std::string> queried_;
+};
+
+}  // namespace isochor

@@ -1,0 +1,289 @@
+// Everything that goes through Gmsh's C++ API: curved shapes, .msh files, closed surfaces.
+#include <gmsh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <unordered_map>
+
+#include "isochor/error.hpp"
+#include "isochor/meshing.hpp"
+
+namespace isochor {
+
+namespace {
+
+// Gmsh keeps global state: one session per process, used by one thread at a time.
+class GmshSession {
+ public:
+  explicit GmshSession(const std::string& model) : lock_(mutex()) {
+    static bool initialised = false;
+    if (!initialised) {
+      gmsh::initialize(0, nullptr, false);
+      gmsh::option::setNumber("General.Terminal", 0);
+      std::atexit([] { gmsh::finalize(); });
+      initialised = true;
+    }
+    gmsh::clear();
+    gmsh::option::setNumber("General.Terminal", 0);
+    gmsh::option::setNumber("General.NumThreads", 1);
+    gmsh::option::setNumber("Mesh.RandomSeed", 1);
+    gmsh::option::setNumber("Mesh.Algorithm3D", 1);
+    gmsh::logger::start();
+    gmsh::model::add(model);
+  }
+  ~GmshSession() {
+    gmsh::logger::stop();
+    gmsh::clear();
+  }
+  // The first error Gmsh logged since the session started, or "".
+  static std::string first_error() {
+    std::vector<std::string> log;
+    gmsh::logger::get(log);
+    for (const std::string& l : log)
+      if (l.rfind("Error", 0) == 0) return l;
+    return "";
+  }
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+};
+
+struct Extracted {
+  Points x;
+  std::vector<Tet> tets;
+  std::unordered_map<std::size_t, int> node_index;  // Gmsh node tag -> index before compaction
+  std::unordered_map<std::size_t, int> tet_index;   // Gmsh element tag -> tet index
+};
+
+Extracted extract_tets(const std::string& what) {
+  Extracted e;
+  std::vector<std::size_t> tags;
+  std::vector<double> coords, param;
+  gmsh::model::mesh::getNodes(tags, coords, param, -1, -1, false, false);
+  e.x.resize(3, static_cast<Eigen::Index>(tags.size()));
+  for (std::size_t i = 0; i < tags.size(); ++i) {
+    e.node_index[tags[i]] = static_cast<int>(i);
+    e.x.col(i) = Eigen::Vector3d(coords[3 * i], coords[3 * i + 1], coords[3 * i + 2]);
+  }
+  std::vector<int> types;
+  gmsh::model::mesh::getElementTypes(types, 3);
+  for (int t : types)
+    if (t != 4) {
+      std::string name;
+      int dim, order, nn, np;
+      std::vector<double> lc;
+      gmsh::model::mesh::getElementProperties(t, name, dim, order, nn, lc, np);
+      throw Error(what + ": contains 3-D elements of type \"" + name +
+                  "\", expected only linear 4-node tetrahedra");
+    }
+  std::vector<std::size_t> etags, enodes;
+  gmsh::model::mesh::getElementsByType(4, etags, enodes);
+  if (etags.empty()) throw Error(what + ": contains no tetrahedra (expected a volume mesh)");
+  e.tets.resize(etags.size());
+  for (std::size_t i = 0; i < etags.size(); ++i) {
+    e.tet_index[etags[i]] = static_cast<int>(i);
+    for (int k = 0; k < 4; ++k) {
+      auto it = e.node_index.find(enodes[4 * i + k]);
+      if (it == e.node_index.end())
+        throw Error(what + ": element " + std::to_string(etags[i]) + " refers to missing node " +
+                    std::to_string(enodes[4 * i + k]));
+      e.tets[i][k] = it->second;
+    }
+  }
+  return e;
+}
+
+Mesh finish(Extracted e, const std::string& what, std::map<std::string, std::vector<int>> zones,
+            std::map<std::string, std::vector<int>> node_sets) {
+  compact_unused_nodes(e.x, e.tets, &node_sets);
+  Mesh m(std::move(e.x), std::move(e.tets), what);
+  for (auto& [k, v] : zones) std::sort(v.begin(), v.end());
+  for (auto& [k, v] : node_sets) std::sort(v.begin(), v.end());
+  m.zones = std::move(zones);
+  m.node_sets = std::move(node_sets);
+  return m;
+}
+
+void generate_3d(const std::string& what) {
+  gmsh::model::mesh::generate(3);
+  std::string err = GmshSession::first_error();
+  if (!err.empty()) throw Error(what + ": Gmsh could not mesh the volume: " + err);
+}
+
+// Gmsh signals some failures by throwing non-standard values: turn anything but our own Error
+// into one naming `what` and Gmsh's first logged error.
+template <class F>
+auto guarded(const std::string& what, const std::string& expected, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const Error&) {
+    throw;
+  } catch (...) {
+    std::string err = GmshSession::first_error();
+    throw Error(what + ": " + expected + (err.empty() ? "" : " (Gmsh: " + err + ")"));
+  }
+}
+
+void check_readable(const std::string& path, const std::string& expected) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw Error(path + ": no such file (expected " + expected + ")");
+  if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory (expected " + expected + ")");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot be read (expected " + expected + ")");
+}
+
+}  // namespace
+
+Mesh make_sphere(double radius, double edge_length, long target_tets, const Eigen::Vector3d& c) {
+  GmshSession session("sphere");
+  gmsh::model::occ::addSphere(c.x(), c.y(), c.z(), radius);
+  gmsh::model::occ::synchronize();
+  auto mesh_with = [&](double h) {
+    gmsh::model::mesh::clear();
+    gmsh::option::setNumber("Mesh.MeshSizeMin", h);
+    gmsh::option::setNumber("Mesh.MeshSizeMax", h);
+    gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
+    generate_3d("sphere");
+    std::vector<std::size_t> t, n;
+    gmsh::model::mesh::getElementsByType(4, t, n);
+    return static_cast<double>(t.size());
+  };
+  if (edge_length > 0) {
+    mesh_with(edge_length);
+  } else {
+    // A Delaunay mesh has about 6 sqrt(2) V / h^3 tets; correct the estimate twice by the count.
+    const double V = 4.0 / 3.0 * M_PI * radius * radius * radius;
+    // Up to four passes; keep the size whose count came closest (within 3% ends the search).
+    const double target = static_cast<double>(target_tets);
+    double h = std::cbrt(6.0 * std::sqrt(2.0) * V / target), best_h = h, best_err = 1e300;
+    for (int pass = 0; pass < 4; ++pass) {
+      const double n = mesh_with(h);
+      const double err = std::abs(n / target - 1.0);
+      if (err < best_err) {
+        best_err = err;
+        best_h = h;
+      }
+      if (err < 0.03) break;
+      h *= std::cbrt(n / target);
+    }
+    if (best_h != h || best_err >= 0.03) mesh_with(best_h);
+  }
+  return finish(extract_tets("sphere"), "sphere", {}, {});
+}
+
+Mesh make_cylinder(double radius, double height, int resolution, const Eigen::Vector3d& c) {
+  GmshSession session("cylinder");
+  gmsh::model::occ::addCylinder(c.x(), c.y(), c.z() - height / 2, 0, 0, height, radius);
+  gmsh::model::occ::synchronize();
+  const double h = 2.0 * M_PI * radius / resolution;
+  gmsh::option::setNumber("Mesh.MeshSizeMin", h);
+  gmsh::option::setNumber("Mesh.MeshSizeMax", h);
+  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
+  generate_3d("cylinder");
+  Extracted e = extract_tets("cylinder");
+  std::map<std::string, std::vector<int>> sets;
+  const double tol = 1e-9 * std::max(radius, height);
+  for (int i = 0; i < e.x.cols(); ++i) {
+    if (std::abs(e.x(2, i) - (c.z() - height / 2)) < tol) sets["bottom"].push_back(i);
+    if (std::abs(e.x(2, i) - (c.z() + height / 2)) < tol) sets["top"].push_back(i);
+  }
+  return finish(std::move(e), "cylinder", {}, std::move(sets));
+}
+
+Mesh read_msh(const std::string& path) {
+  check_readable(path, "a Gmsh .msh file");
+  GmshSession session("file");
+  return guarded(path, "is not a readable Gmsh mesh (expected a .msh file, version 2 or 4)", [&] {
+  gmsh::open(path);
+  std::string err = GmshSession::first_error();
+  if (!err.empty()) throw Error(path + ": is not a readable Gmsh mesh: " + err);
+  Extracted e = extract_tets(path);
+  std::map<std::string, std::vector<int>> zones, sets;
+  gmsh::vectorpair groups;
+  gmsh::model::getPhysicalGroups(groups, -1);
+  for (const auto& [dim, tag] : groups) {
+    std::string name;
+    gmsh::model::getPhysicalName(dim, tag, name);
+    if (name.empty()) name = "physical_" + std::to_string(dim) + "d_" + std::to_string(tag);
+    std::vector<std::size_t> ntags;
+    std::vector<double> coord;
+    gmsh::model::mesh::getNodesForPhysicalGroup(dim, tag, ntags, coord);
+    auto& set = sets[name];
+    for (std::size_t t : ntags) set.push_back(e.node_index.at(t));
+    if (dim == 3) {
+      std::vector<int> entities;
+      gmsh::model::getEntitiesForPhysicalGroup(dim, tag, entities);
+      auto& zone = zones[name];
+      for (int ent : entities) {
+        std::vector<std::size_t> etags, enodes;
+        gmsh::model::mesh::getElementsByType(4, etags, enodes, ent);
+        for (std::size_t t : etags) zone.push_back(e.tet_index.at(t));
+      }
+    }
+  }
+  return finish(std::move(e), path, std::move(zones), std::move(sets));
+  });
+}
+
+Mesh mesh_closed_surface(const std::string& path, double edge_length) {
+  check_readable(path, "a closed triangle surface (.obj or .stl)");
+  Points x;
+  std::vector<Tri> tris;
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+  if (ext == ".obj") read_obj_surface(path, x, tris);
+  else read_stl_surface(path, x, tris);
+  if (tris.empty()) throw Error(path + ": has no triangles (expected a closed surface)");
+  SurfaceCheck sc = check_surface(tris);
+  if (!sc.closed)
+    throw Error(path + ": the surface is not closed: edge (" + std::to_string(sc.first_bad_edge[0] + 1) + ", " +
+                std::to_string(sc.first_bad_edge[1] + 1) + ") is in " +
+                (sc.boundary_edges ? "one triangle" : "more than two triangles") +
+                ", expected every edge in exactly two (" + std::to_string(sc.boundary_edges) + " boundary, " +
+                std::to_string(sc.nonmanifold_edges) + " non-manifold edges)");
+  if (!sc.oriented)
+    throw Error(path + ": the triangles are not consistently oriented (expected every edge traversed once each way)");
+  double vol = surface_volume(x, tris);
+  if (vol < 0) {  // inward: flip
+    for (Tri& t : tris) std::swap(t[1], t[2]);
+  }
+  GmshSession session("surface");
+  const int s = gmsh::model::addDiscreteEntity(2);
+  std::vector<std::size_t> ntags(x.cols());
+  std::vector<double> coords(3 * x.cols());
+  for (int i = 0; i < x.cols(); ++i) {
+    ntags[i] = static_cast<std::size_t>(i + 1);
+    for (int k = 0; k < 3; ++k) coords[3 * i + k] = x(k, i);
+  }
+  gmsh::model::mesh::addNodes(2, s, ntags, coords);
+  std::vector<std::size_t> etags(tris.size()), enodes(3 * tris.size());
+  for (std::size_t f = 0; f < tris.size(); ++f) {
+    etags[f] = f + 1;
+    for (int k = 0; k < 3; ++k) enodes[3 * f + k] = static_cast<std::size_t>(tris[f][k] + 1);
+  }
+  gmsh::model::mesh::addElementsByType(s, 2, etags, enodes);
+  const int loop = gmsh::model::geo::addSurfaceLoop({s});
+  gmsh::model::geo::addVolume({loop});
+  gmsh::model::geo::synchronize();
+  return guarded(path, "Gmsh could not tetrahedralise the surface", [&] {
+    if (edge_length > 0) {
+      // Gmsh 4.8's Delaunay does not refine inside a discrete surface; HXT does, by the size
+      // bound. The surface triangles stay as they are.
+      gmsh::option::setNumber("Mesh.Algorithm3D", 10);
+      gmsh::option::setNumber("Mesh.MeshSizeMax", edge_length);
+      gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
+      gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
+    }
+    generate_3d(path);
+    return finish(extract_tets(path), path, {}, {});
+  });
+}
+
+}  // namespace isochor

@@ -1,0 +1,332 @@
+#include "isochor/output.hpp"
+
+#include <hdf5.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "isochor/error.hpp"
+
+#ifndef ISOCHOR_VERSION
+#define ISOCHOR_VERSION "0.0.0"
+#endif
+#ifndef ISOCHOR_GIT_REVISION
+#define ISOCHOR_GIT_REVISION "unknown"
+#endif
+
+namespace isochor {
+
+const char* isochor_version() { return ISOCHOR_VERSION; }
+const char* isochor_git_revision() { return ISOCHOR_GIT_REVISION; }
+
+namespace {
+
+// Closes an HDF5 handle with the right call when it goes out of scope.
+class H {
+ public:
+  H() = default;
+  H(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
+  H(H&& o) noexcept : id_(o.id_), close_(o.close_) { o.id_ = -1; }
+  H& operator=(H&& o) noexcept {
+    reset();
+    id_ = o.id_;
+    close_ = o.close_;
+    o.id_ = -1;
+    return *this;
+  }
+  ~H() { reset(); }
+  void reset() {
+    if (id_ >= 0 && close_) close_(id_);
+    id_ = -1;
+  }
+  operator hid_t() const { return id_; }
+  bool valid() const { return id_ >= 0; }
+
+ private:
+  hid_t id_ = -1;
+  herr_t (*close_)(hid_t) = nullptr;
+};
+
+void check(herr_t status, const std::string& what) {
+  if (status < 0) throw Error("HDF5: " + what + " failed");
+}
+hid_t checked(hid_t id, const std::string& what) {
+  if (id < 0) throw Error("HDF5: " + what + " failed");
+  return id;
+}
+
+H group(hid_t loc, const std::string& name) {
+  return H(checked(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "create group " + name), H5Gclose);
+}
+
+void write_array(hid_t loc, const std::string& name, hid_t type, const std::vector<hsize_t>& dims, const void* data) {
+  H space(checked(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), "dataspace"), H5Sclose);
+  H ds(checked(H5Dcreate2(loc, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "create " + name),
+       H5Dclose);
+  check(H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), "write " + name);
+}
+
+void string_attribute(hid_t loc, const std::string& name, const std::string& value) {
+  if (H5Aexists(loc, name.c_str()) > 0) H5Adelete(loc, name.c_str());
+  H type(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(type, H5T_VARIABLE);
+  H5Tset_cset(type, H5T_CSET_UTF8);
+  H space(H5Screate(H5S_SCALAR), H5Sclose);
+  H attr(checked(H5Acreate2(loc, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT), "attribute " + name), H5Aclose);
+  const char* p = value.c_str();
+  check(H5Awrite(attr, type, &p), "write attribute " + name);
+}
+
+void number_attribute(hid_t loc, const std::string& name, double value) {
+  if (H5Aexists(loc, name.c_str()) > 0) H5Adelete(loc, name.c_str());
+  H space(H5Screate(H5S_SCALAR), H5Sclose);
+  H attr(checked(H5Acreate2(loc, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT), "attribute " + name),
+         H5Aclose);
+  check(H5Awrite(attr, H5T_NATIVE_DOUBLE, &value), "write attribute " + name);
+}
+
+// A dataset growing along its first dimension, one frame (row) at a time.
+struct Series {
+  H ds;
+  std::vector<hsize_t> row;  // shape of one frame
+  hid_t type = H5T_NATIVE_DOUBLE;
+
+  Series(hid_t loc, const std::string& name, std::vector<hsize_t> row_shape, hid_t t) : row(std::move(row_shape)), type(t) {
+    std::vector<hsize_t> dims{0}, maxdims{H5S_UNLIMITED}, chunk{1};
+    for (hsize_t d : row) {
+      dims.push_back(d);
+      maxdims.push_back(d);
+      chunk.push_back(std::max<hsize_t>(d, 1));
+    }
+    H space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxdims.data()), H5Sclose);
+    H dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+    // Rows of scalars are chunked by many frames; bigger rows one frame per chunk.
+    if (row.empty()) chunk[0] = 1024;
+    H5Pset_chunk(dcpl, static_cast<int>(chunk.size()), chunk.data());
+    ds = H(checked(H5Dcreate2(loc, name.c_str(), type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT), "create " + name), H5Dclose);
+  }
+
+  void append(hsize_t frame, const void* data) {
+    std::vector<hsize_t> dims{frame + 1}, start{frame}, count{1};
+    for (hsize_t d : row) {
+      dims.push_back(d);
+      start.push_back(0);
+      count.push_back(d);
+    }
+    check(H5Dset_extent(ds, dims.data()), "extend dataset");
+    H file_space(H5Dget_space(ds), H5Sclose);
+    check(H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr), "select");
+    H mem_space(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr), H5Sclose);
+    check(H5Dwrite(ds, type, mem_space, file_space, H5P_DEFAULT, data), "write frame");
+  }
+};
+
+std::string frame_name(int k) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%06d", k);
+  return buf;
+}
+
+}  // namespace
+
+struct OutputWriter::Impl {
+  std::string path, h5_name;
+  H file;
+  int nodes = 0, tets = 0, frames = 0;
+  bool pressure = false;
+  std::unique_ptr<Series> time, positions, volume, energy, pressure_series;
+  std::map<std::string, std::unique_ptr<Series>> stats;
+  H frames_group, xdmf_group, stats_group;
+  std::vector<double> times;
+
+  void add_frame_view(const std::string& source, int k, hsize_t width, const std::string& prefix) {
+    // /frames/xdmf/<prefix>_<k>: a (rows, width) virtual dataset over frame k of `source`, so
+    // that XDMF readers can reference each frame directly without a copy.
+    const hsize_t rows = static_cast<hsize_t>(prefix == "pressure" ? tets : nodes);
+    std::vector<hsize_t> vdims{rows};
+    if (width) vdims.push_back(width);
+    H vspace(H5Screate_simple(static_cast<int>(vdims.size()), vdims.data(), nullptr), H5Sclose);
+    std::vector<hsize_t> sdims{static_cast<hsize_t>(k + 1), rows}, start{static_cast<hsize_t>(k), 0}, count{1, rows};
+    if (width) {
+      sdims.push_back(width);
+      start.push_back(0);
+      count.push_back(width);
+    }
+    H sspace(H5Screate_simple(static_cast<int>(sdims.size()), sdims.data(), nullptr), H5Sclose);
+    check(H5Sselect_hyperslab(sspace, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr), "select");
+    H dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+    check(H5Pset_virtual(dcpl, vspace, ".", source.c_str(), sspace), "virtual dataset");
+    const std::string name = prefix + "_" + frame_name(k);
+    H ds(checked(H5Dcreate2(xdmf_group, name.c_str(), H5T_NATIVE_DOUBLE, vspace, H5P_DEFAULT, dcpl, H5P_DEFAULT),
+                 "create " + name),
+         H5Dclose);
+  }
+
+  void write_xdmf() {
+    std::ostringstream x;
+    x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+      << "  <Grid Name=\"isochor\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (int k = 0; k < frames; ++k) {
+      const std::string f = frame_name(k);
+      x.precision(17);
+      x << "   <Grid Name=\"frame_" << f << "\" GridType=\"Uniform\">\n"
+        << "    <Time Value=\"" << times[k] << "\"/>\n"
+        << "    <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" << tets << "\">\n"
+        << "     <DataItem Dimensions=\"" << tets << " 4\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
+        << h5_name << ":/mesh/tets</DataItem>\n    </Topology>\n"
+        << "    <Geometry GeometryType=\"XYZ\">\n"
+        << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
+        << h5_name << ":/frames/xdmf/position_" << f << "</DataItem>\n    </Geometry>\n"
+        << "    <Attribute Name=\"position\" AttributeType=\"Vector\" Center=\"Node\">\n"
+        << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
+        << h5_name << ":/frames/xdmf/position_" << f << "</DataItem>\n    </Attribute>\n";
+      if (pressure)
+        x << "    <Attribute Name=\"pressure\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+          << "     <DataItem Dimensions=\"" << tets << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name
+          << ":/frames/xdmf/pressure_" << f << "</DataItem>\n    </Attribute>\n";
+      x << "   </Grid>\n";
+    }
+    x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+    // Replace atomically so that a reader never sees half a file.
+    const std::string xp = xdmf_file(), tmp = xp + ".tmp";
+    {
+      std::ofstream out(tmp);
+      out << x.str();
+      if (!out) throw Error(xp + ": cannot be written");
+    }
+    std::filesystem::rename(tmp, xp);
+  }
+
+  std::string xdmf_file() const { return std::filesystem::path(path).replace_extension(".xdmf").string(); }
+};
+
+OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh,
+                           const std::vector<std::pair<std::string, std::vector<int>>>& zones, const RunInfo& info,
+                           bool pressure)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.path = path;
+  m.h5_name = std::filesystem::path(path).filename().string();
+  m.nodes = mesh.num_nodes();
+  m.tets = mesh.num_tets();
+  m.pressure = pressure;
+  std::error_code ec;
+  auto dir = std::filesystem::path(path).parent_path();
+  if (!dir.empty()) std::filesystem::create_directories(dir, ec);
+  if (ec) throw Error(path + ": cannot create the directory " + dir.string() + " (" + ec.message() + ")");
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported by Error, not printed
+  // Default format bounds: the superblock then has no "open for writing" flag, so a file whose
+  // writer was killed opens without h5clear.
+  hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (f < 0) throw Error(path + ": cannot be created (expected a writable output path)");
+  m.file = H(f, H5Fclose);
+
+  string_attribute(m.file, "scene", info.scene_text);
+  string_attribute(m.file, "scene_file", info.scene_file);
+  string_attribute(m.file, "command", info.command);
+  string_attribute(m.file, "isochor_version", isochor_version());
+  string_attribute(m.file, "git_revision", isochor_git_revision());
+
+  {
+    H g = group(m.file, "mesh");
+    write_array(g, "rest_positions", H5T_NATIVE_DOUBLE, {static_cast<hsize_t>(m.nodes), 3}, mesh.rest_positions().data());
+    write_array(g, "tets", H5T_NATIVE_INT, {static_cast<hsize_t>(m.tets), 4}, mesh.tets().data());
+    write_array(g, "surface", H5T_NATIVE_INT, {mesh.surface().size(), 3}, mesh.surface().data());
+    write_array(g, "rest_volumes", H5T_NATIVE_DOUBLE, {static_cast<hsize_t>(m.tets)}, mesh.rest_volumes().data());
+    H sets = group(g, "node_sets");
+    for (const auto& [name, nodes] : mesh.node_sets)
+      write_array(sets, name, H5T_NATIVE_INT, {nodes.size()}, nodes.data());
+  }
+  {
+    H g = group(m.file, "zones");
+    for (const auto& [name, tets] : zones) write_array(g, name, H5T_NATIVE_INT, {tets.size()}, tets.data());
+  }
+  m.frames_group = group(m.file, "frames");
+  m.xdmf_group = group(m.frames_group, "xdmf");
+  m.stats_group = group(m.file, "stats");
+  m.time = std::make_unique<Series>(m.frames_group, "time", std::vector<hsize_t>{}, H5T_NATIVE_DOUBLE);
+  m.positions = std::make_unique<Series>(m.frames_group, "positions",
+                                         std::vector<hsize_t>{static_cast<hsize_t>(m.nodes), 3}, H5T_NATIVE_DOUBLE);
+  m.volume = std::make_unique<Series>(m.frames_group, "volume", std::vector<hsize_t>{1 + zones.size()}, H5T_NATIVE_DOUBLE);
+  std::string columns = "total";
+  for (const auto& z : zones) columns += "," + z.first;
+  H vol(H5Dopen2(m.frames_group, "volume", H5P_DEFAULT), H5Dclose);
+  string_attribute(vol, "columns", columns);
+  m.energy = std::make_unique<Series>(m.frames_group, "energy", std::vector<hsize_t>{3}, H5T_NATIVE_DOUBLE);
+  H en(H5Dopen2(m.frames_group, "energy", H5P_DEFAULT), H5Dclose);
+  string_attribute(en, "columns", "kinetic,elastic,external");
+  if (pressure)
+    m.pressure_series = std::make_unique<Series>(m.frames_group, "pressure",
+                                                 std::vector<hsize_t>{static_cast<hsize_t>(m.tets)}, H5T_NATIVE_DOUBLE);
+  H5Fflush(m.file, H5F_SCOPE_GLOBAL);
+}
+
+OutputWriter::~OutputWriter() {
+  try {
+    close();
+  } catch (...) {
+  }
+}
+
+void OutputWriter::write_frame(const Frame& f) {
+  Impl& m = *impl_;
+  if (!m.file.valid()) throw Error(m.path + ": the output is closed");
+  if (!f.positions || f.positions->cols() != m.nodes) throw Error(m.path + ": a frame needs the positions of every node");
+  const hsize_t k = static_cast<hsize_t>(m.frames);
+  if (f.volumes.size() != m.volume->row[0])
+    throw Error(m.path + ": a frame needs " + std::to_string(m.volume->row[0]) + " volumes (total and each zone)");
+  m.time->append(k, &f.time);
+  m.positions->append(k, f.positions->data());
+  m.volume->append(k, f.volumes.data());
+  m.energy->append(k, f.energy.data());
+  m.add_frame_view("/frames/positions", m.frames, 3, "position");
+  if (m.pressure_series) {
+    if (!f.pressure || static_cast<int>(f.pressure->size()) != m.tets)
+      throw Error(m.path + ": pressure output is on but a frame has no pressure per tet");
+    m.pressure_series->append(k, f.pressure->data());
+    m.add_frame_view("/frames/pressure", m.frames, 0, "pressure");
+  }
+  for (const auto& [name, value] : f.stats) {
+    auto it = m.stats.find(name);
+    if (it == m.stats.end()) {
+      it = m.stats.emplace(name, std::make_unique<Series>(m.stats_group, name, std::vector<hsize_t>{}, H5T_NATIVE_DOUBLE)).first;
+      const double missing = std::numeric_limits<double>::quiet_NaN();  // frames before it appeared
+      for (hsize_t j = 0; j < k; ++j) it->second->append(j, &missing);
+    }
+    it->second->append(k, &value);
+  }
+  m.times.push_back(f.time);
+  m.frames++;
+  H5Fflush(m.file, H5F_SCOPE_GLOBAL);
+  m.write_xdmf();
+}
+
+void OutputWriter::set_stat(const std::string& name, double value) { number_attribute(impl_->stats_group, name, value); }
+void OutputWriter::set_stat(const std::string& name, const std::string& value) {
+  string_attribute(impl_->stats_group, name, value);
+}
+
+void OutputWriter::close() {
+  Impl& m = *impl_;
+  if (!m.file.valid()) return;
+  if (m.frames == 0) m.write_xdmf();
+  m.time.reset();
+  m.positions.reset();
+  m.volume.reset();
+  m.energy.reset();
+  m.pressure_series.reset();
+  m.stats.clear();
+  m.frames_group.reset();
+  m.xdmf_group.reset();
+  m.stats_group.reset();
+  m.file.reset();
+}
+
+int OutputWriter::frames_written() const { return impl_->frames; }
+const std::string& OutputWriter::path() const { return impl_->path; }
+std::string OutputWriter::xdmf_path() const { return impl_->xdmf_file(); }
+
+}  // namespace isochor

@@ -1,0 +1,261 @@
+#include "isochor/output_reader.hpp"
+
+#include <hdf5.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "isochor/error.hpp"
+
+namespace isochor {
+
+struct RunFile::Impl {
+  std::string path;
+  hid_t file = -1;
+
+  std::vector<hsize_t> dims(const std::string& name) const {
+    hid_t ds = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+    if (ds < 0) throw Error(path + ": has no dataset " + name + " (expected an isochor output file)");
+    hid_t sp = H5Dget_space(ds);
+    int rank = H5Sget_simple_extent_ndims(sp);
+    std::vector<hsize_t> d(std::max(rank, 0));
+    H5Sget_simple_extent_dims(sp, d.data(), nullptr);
+    H5Sclose(sp);
+    H5Dclose(ds);
+    return d;
+  }
+  template <class T>
+  std::vector<T> read(const std::string& name, hid_t type) const {
+    auto d = dims(name);
+    std::size_t n = 1;
+    for (hsize_t x : d) n *= x;
+    std::vector<T> out(n);
+    hid_t ds = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+    herr_t st = n ? H5Dread(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) : 0;
+    H5Dclose(ds);
+    if (st < 0) throw Error(path + ": cannot read " + name);
+    return out;
+  }
+  std::string string_attr(hid_t loc, const char* name) const {
+    hid_t a = H5Aopen(loc, name, H5P_DEFAULT);
+    if (a < 0) return "";
+    hid_t t = H5Aget_type(a);
+    std::string out;
+    if (H5Tis_variable_str(t) > 0) {
+      char* p = nullptr;
+      hid_t mt = H5Tcopy(H5T_C_S1);
+      H5Tset_size(mt, H5T_VARIABLE);
+      H5Tset_cset(mt, H5Tget_cset(t));
+      if (H5Aread(a, mt, &p) >= 0 && p) out = p;
+      if (p) H5free_memory(p);
+      H5Tclose(mt);
+    }
+    H5Tclose(t);
+    H5Aclose(a);
+    return out;
+  }
+};
+
+RunFile::RunFile(const std::string& path) : impl_(std::make_unique<Impl>()) {
+  impl_->path = path;
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw Error(path + ": no such file (expected an isochor .h5 output)");
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not an HDF5 file (expected an isochor .h5 output)");
+  impl_->file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (impl_->file < 0) throw Error(path + ": cannot be opened");
+  impl_->dims("/mesh/tets");
+}
+
+RunFile::~RunFile() {
+  if (impl_->file >= 0) H5Fclose(impl_->file);
+}
+
+int RunFile::num_nodes() const { return static_cast<int>(impl_->dims("/mesh/rest_positions")[0]); }
+int RunFile::num_tets() const { return static_cast<int>(impl_->dims("/mesh/tets")[0]); }
+int RunFile::num_frames() const { return static_cast<int>(impl_->dims("/frames/time")[0]); }
+std::vector<double> RunFile::times() const { return impl_->read<double>("/frames/time", H5T_NATIVE_DOUBLE); }
+
+std::vector<std::string> RunFile::zone_names() const {
+  hid_t ds = H5Dopen2(impl_->file, "/frames/volume", H5P_DEFAULT);
+  std::string cols = impl_->string_attr(ds, "columns");
+  H5Dclose(ds);
+  std::vector<std::string> out;
+  std::stringstream s(cols);
+  for (std::string c; std::getline(s, c, ',');) out.push_back(c);
+  if (!out.empty()) out.erase(out.begin());  // "total"
+  return out;
+}
+
+std::map<std::string, std::size_t> RunFile::zone_sizes() const {
+  std::map<std::string, std::size_t> out;
+  for (const std::string& z : zone_names()) out[z] = impl_->dims("/zones/" + z)[0];
+  return out;
+}
+
+std::vector<std::vector<double>> RunFile::volumes() const {
+  auto d = impl_->dims("/frames/volume");
+  auto flat = impl_->read<double>("/frames/volume", H5T_NATIVE_DOUBLE);
+  std::vector<std::vector<double>> out(d[0]);
+  for (hsize_t f = 0; f < d[0]; ++f) out[f].assign(flat.begin() + f * d[1], flat.begin() + (f + 1) * d[1]);
+  return out;
+}
+
+std::vector<Tri> RunFile::surface() const {
+  auto flat = impl_->read<int>("/mesh/surface", H5T_NATIVE_INT);
+  std::vector<Tri> out(flat.size() / 3);
+  std::copy(flat.begin(), flat.end(), out.front().data());
+  return out;
+}
+
+Points RunFile::rest_positions() const {
+  auto flat = impl_->read<double>("/mesh/rest_positions", H5T_NATIVE_DOUBLE);
+  return Eigen::Map<Points>(flat.data(), 3, static_cast<Eigen::Index>(flat.size() / 3));
+}
+
+Points RunFile::positions(int frame) const {
+  const int n = num_nodes();
+  if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
+  Points x(3, n);
+  hid_t ds = H5Dopen2(impl_->file, "/frames/positions", H5P_DEFAULT);
+  hid_t fs = H5Dget_space(ds);
+  hsize_t start[3] = {static_cast<hsize_t>(frame), 0, 0}, count[3] = {1, static_cast<hsize_t>(n), 3};
+  H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, nullptr, count, nullptr);
+  hid_t ms = H5Screate_simple(3, count, nullptr);
+  herr_t st = H5Dread(ds, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, x.data());
+  H5Sclose(ms);
+  H5Sclose(fs);
+  H5Dclose(ds);
+  if (st < 0) throw Error(impl_->path + ": cannot read the positions of frame " + std::to_string(frame));
+  return x;
+}
+
+std::map<std::string, std::string> RunFile::attributes() const {
+  std::map<std::string, std::string> out;
+  for (const char* k : {"scene", "scene_file", "command", "isochor_version", "git_revision"})
+    out[k] = impl_->string_attr(impl_->file, k);
+  return out;
+}
+
+namespace {
+herr_t collect_attr(hid_t loc, const char* name, const H5A_info_t*, void* data) {
+  auto* out = static_cast<std::map<std::string, double>*>(data);
+  hid_t a = H5Aopen(loc, name, H5P_DEFAULT);
+  hid_t t = H5Aget_type(a);
+  if (H5Tget_class(t) == H5T_FLOAT || H5Tget_class(t) == H5T_INTEGER) {
+    double v;
+    if (H5Aread(a, H5T_NATIVE_DOUBLE, &v) >= 0) (*out)[name] = v;
+  }
+  H5Tclose(t);
+  H5Aclose(a);
+  return 0;
+}
+herr_t collect_name(hid_t, const char* name, const H5L_info_t*, void* data) {
+  static_cast<std::vector<std::string>*>(data)->push_back(name);
+  return 0;
+}
+}  // namespace
+
+std::map<std::string, double> RunFile::stat_totals() const {
+  std::map<std::string, double> out;
+  hid_t g = H5Gopen2(impl_->file, "/stats", H5P_DEFAULT);
+  if (g < 0) return out;
+  H5Aiterate2(g, H5_INDEX_NAME, H5_ITER_INC, nullptr, collect_attr, &out);
+  H5Gclose(g);
+  return out;
+}
+
+std::map<std::string, std::vector<double>> RunFile::stat_series() const {
+  std::vector<std::string> names;
+  hid_t g = H5Gopen2(impl_->file, "/stats", H5P_DEFAULT);
+  if (g < 0) return {};
+  H5Literate(g, H5_INDEX_NAME, H5_ITER_INC, nullptr, collect_name, &names);
+  H5Gclose(g);
+  std::map<std::string, std::vector<double>> out;
+  for (const std::string& n : names) out[n] = impl_->read<double>("/stats/" + n, H5T_NATIVE_DOUBLE);
+  return out;
+}
+
+std::string describe_run(const std::string& path) {
+  RunFile r(path);
+  std::ostringstream s;
+  auto attrs = r.attributes();
+  s << path << "\n";
+  s << "  written by  isochor " << attrs["isochor_version"] << " (" << attrs["git_revision"] << "), command "
+    << attrs["command"] << ", scene " << attrs["scene_file"] << "\n";
+  s << "  mesh        " << r.num_nodes() << " nodes, " << r.num_tets() << " tets, " << r.surface().size()
+    << " surface triangles\n";
+  auto zones = r.zone_sizes();
+  s << "  zones       " << zones.size();
+  for (const auto& [name, n] : zones) s << (name == zones.begin()->first ? ": " : ", ") << name << " (" << n << " tets)";
+  s << "\n";
+  auto t = r.times();
+  s << "  frames      " << t.size();
+  if (!t.empty()) s << ", t = " << t.front() << " .. " << t.back() << " s";
+  s << "\n";
+  auto vol = r.volumes();
+  if (!vol.empty()) {
+    auto names = r.zone_names();
+    names.insert(names.begin(), "total");
+    s << "  volume drift (max |V - V0| / V0 over frames)\n";
+    for (std::size_t c = 0; c < names.size(); ++c) {
+      double v0 = vol.front()[c], worst = 0.0;
+      for (const auto& row : vol) worst = std::max(worst, std::abs(row[c] - v0) / std::abs(v0));
+      char buf[128];
+      std::snprintf(buf, sizeof buf, "    %-20s V0 = %.6g, drift %.3e\n", names[c].c_str(), v0, worst);
+      s << buf;
+    }
+  }
+  auto series = r.stat_series();
+  if (series.count("inverted_tets")) {
+    const auto& inv = series["inverted_tets"];
+    double worst = inv.empty() ? 0 : *std::max_element(inv.begin(), inv.end());
+    s << "  inverted tets, most in one frame: " << worst << "\n";
+  }
+  auto totals = r.stat_totals();
+  if (!totals.empty()) {
+    s << "  solver statistics\n";
+    for (const auto& [k, v] : totals) {
+      char buf[128];
+      std::snprintf(buf, sizeof buf, "    %-28s %.6g\n", k.c_str(), v);
+      s << buf;
+    }
+  }
+  return s.str();
+}
+
+int export_obj_sequence(const std::string& h5_path, const std::string& dir, const std::string& prefix) {
+  RunFile r(h5_path);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw Error(dir + ": cannot create the directory (" + ec.message() + ")");
+  auto surface = r.surface();
+  // Only surface nodes are written, renumbered from 1 in index order.
+  std::vector<int> nodes;
+  for (const Tri& f : surface) nodes.insert(nodes.end(), f.begin(), f.end());
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  std::vector<int> local(r.num_nodes(), -1);
+  for (std::size_t i = 0; i < nodes.size(); ++i) local[nodes[i]] = static_cast<int>(i) + 1;
+  const int F = r.num_frames();
+  const int width = std::max(4, static_cast<int>(std::to_string(F).size()));
+  for (int f = 0; f < F; ++f) {
+    Points x = r.positions(f);
+    std::string num = std::to_string(f);
+    num.insert(0, static_cast<std::size_t>(std::max(0, width - static_cast<int>(num.size()))), '0');
+    std::string file = (std::filesystem::path(dir) / (prefix + "_" + num + ".obj")).string();
+    std::ofstream out(file);
+    if (!out) throw Error(file + ": cannot be written");
+    out.precision(9);
+    out << "# isochor surface, frame " << f << "\n";
+    for (int v : nodes) out << "v " << x(0, v) << " " << x(1, v) << " " << x(2, v) << "\n";
+    for (const Tri& t : surface) out << "f " << local[t[0]] << " " << local[t[1]] << " " << local[t[2]] << "\n";
+  }
+  return F;
+}
+
+}  // namespace isochor

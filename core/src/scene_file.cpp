@@ -1,0 +1,376 @@
+#include "isochor/scene_file.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "isochor/error.hpp"
+
+namespace isochor {
+
+namespace {
+
+constexpr const char* kOverride = "--set";
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+std::string source_of(const toml::node* n, const std::string& fallback_file) {
+  if (n && n->source().path && *n->source().path == kOverride) return kOverride;
+  std::string file = (n && n->source().path) ? *n->source().path : fallback_file;
+  long line = n ? static_cast<long>(n->source().begin.line) : 0;
+  return file + ":" + std::to_string(line);
+}
+
+std::string type_name(const toml::node& n) {
+  switch (n.type()) {
+    case toml::node_type::table: return "a table";
+    case toml::node_type::array: return "a list";
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a number";
+    case toml::node_type::boolean: return "a boolean";
+    default: return "a date or time";
+  }
+}
+
+std::string strip_indices(const std::string& path) {
+  std::string out;
+  bool skip = false;
+  for (char c : path) {
+    if (c == '[') skip = true;
+    if (!skip) out += c;
+    if (c == ']') skip = false;
+  }
+  return out;
+}
+
+}  // namespace
+
+bool Range::contains(double v) const {
+  if (std::isnan(v)) return false;
+  if (min_open ? !(v > min) : !(v >= min)) return false;
+  if (max_open ? !(v < max) : !(v <= max)) return false;
+  return true;
+}
+
+std::string Range::describe() const {
+  bool lo = std::isfinite(min), hi = std::isfinite(max);
+  if (lo && hi) return std::string("a number in ") + (min_open ? "(" : "[") + fmt(min) + ", " + fmt(max) + (max_open ? ")" : "]");
+  if (lo) return std::string("a number ") + (min_open ? "> " : ">= ") + fmt(min);
+  if (hi) return std::string("a number ") + (max_open ? "< " : "<= ") + fmt(max);
+  return "a finite number";
+}
+
+// ---------------------------------------------------------------- Section
+
+std::string Section::full(std::string_view key) const {
+  return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+}
+
+const toml::node* Section::get(std::string_view key) const {
+  file_->asked_[path_].insert(std::string(key));
+  file_->queried_.insert(strip_indices(full(key)));
+  if (!table_) return nullptr;
+  const toml::node* n = table_->get(key);
+  if (n) file_->read_.insert(n);
+  return n;
+}
+
+bool Section::has(std::string_view key) const {
+  file_->asked_[path_].insert(std::string(key));
+  return table_ && table_->contains(key);
+}
+
+std::string Section::where(std::string_view key) const {
+  const toml::node* n = table_ ? table_->get(key) : nullptr;
+  if (!n) n = table_;
+  if (n && n->source().path && *n->source().path == kOverride) return std::string(kOverride) + " " + full(key);
+  return source_of(n, file_->name_) + ": " + full(key);
+}
+
+void Section::fail(std::string_view key, const std::string& message) const {
+  throw Error(where(key) + ": " + message);
+}
+
+std::optional<double> Section::number_opt(std::string_view key, Range range) const {
+  const toml::node* n = get(key);
+  if (!n) return std::nullopt;
+  double v;
+  if (auto i = n->as_integer()) v = static_cast<double>(i->get());
+  else if (auto f = n->as_floating_point()) v = f->get();
+  else fail(key, "expected " + range.describe() + ", got " + type_name(*n));
+  if (!std::isfinite(v) || !range.contains(v)) fail(key, "expected " + range.describe() + ", got " + fmt(v));
+  return v;
+}
+
+double Section::number(std::string_view key, double fallback, Range range) const {
+  return number_opt(key, range).value_or(fallback);
+}
+
+std::optional<long> Section::integer_opt(std::string_view key, long min, long max) const {
+  const toml::node* n = get(key);
+  if (!n) return std::nullopt;
+  std::string expect = "an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
+  auto i = n->as_integer();
+  if (!i) fail(key, "expected " + expect + ", got " + type_name(*n));
+  long v = static_cast<long>(i->get());
+  if (v < min || v > max) fail(key, "expected " + expect + ", got " + std::to_string(v));
+  return v;
+}
+
+long Section::integer(std::string_view key, long fallback, long min, long max) const {
+  return integer_opt(key, min, max).value_or(fallback);
+}
+
+bool Section::boolean(std::string_view key, bool fallback) const {
+  const toml::node* n = get(key);
+  if (!n) return fallback;
+  auto b = n->as_boolean();
+  if (!b) fail(key, "expected true or false, got " + type_name(*n));
+  return b->get();
+}
+
+std::optional<std::string> Section::string_opt(std::string_view key,
+                                               const std::vector<std::string>& choices) const {
+  const toml::node* n = get(key);
+  if (!n) return std::nullopt;
+  std::string expect = "a string";
+  if (!choices.empty()) {
+    expect = "one of";
+    for (std::size_t i = 0; i < choices.size(); ++i) expect += (i ? ", \"" : " \"") + choices[i] + "\"";
+  }
+  auto s = n->as_string();
+  if (!s) fail(key, "expected " + expect + ", got " + type_name(*n));
+  std::string v = s->get();
+  if (!choices.empty() && std::find(choices.begin(), choices.end(), v) == choices.end())
+    fail(key, "expected " + expect + ", got \"" + v + "\"");
+  return v;
+}
+
+std::string Section::string(std::string_view key, const std::string& fallback,
+                            const std::vector<std::string>& choices) const {
+  return string_opt(key, choices).value_or(fallback);
+}
+
+std::vector<double> Section::numbers(std::string_view key, Range range) const {
+  const toml::node* n = get(key);
+  if (!n) return {};
+  std::string expect = "a list of numbers, each " + range.describe();
+  auto a = n->as_array();
+  if (!a) fail(key, "expected " + expect + ", got " + type_name(*n));
+  std::vector<double> out;
+  for (const toml::node& e : *a) {
+    double v;
+    if (auto i = e.as_integer()) v = static_cast<double>(i->get());
+    else if (auto f = e.as_floating_point()) v = f->get();
+    else fail(key, "expected " + expect + ", got an element that is " + type_name(e));
+    if (!std::isfinite(v) || !range.contains(v)) fail(key, "expected " + expect + ", got " + fmt(v));
+    out.push_back(v);
+  }
+  return out;
+}
+
+std::vector<long> Section::integers(std::string_view key, long min, long max) const {
+  const toml::node* n = get(key);
+  if (!n) return {};
+  std::string expect = "a list of integers in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
+  auto a = n->as_array();
+  if (!a) fail(key, "expected " + expect + ", got " + type_name(*n));
+  std::vector<long> out;
+  for (const toml::node& e : *a) {
+    auto i = e.as_integer();
+    if (!i) fail(key, "expected " + expect + ", got an element that is " + type_name(e));
+    long v = static_cast<long>(i->get());
+    if (v < min || v > max) fail(key, "expected " + expect + ", got " + std::to_string(v));
+    out.push_back(v);
+  }
+  return out;
+}
+
+std::optional<Eigen::Vector3d> Section::vec3_opt(std::string_view key, Range range) const {
+  if (!has(key)) {
+    get(key);
+    return std::nullopt;
+  }
+  std::vector<double> v = numbers(key, range);
+  if (v.size() != 3) fail(key, "expected a list of 3 numbers, got " + std::to_string(v.size()));
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+Eigen::Vector3d Section::vec3(std::string_view key, const Eigen::Vector3d& fallback, Range range) const {
+  return vec3_opt(key, range).value_or(fallback);
+}
+
+std::array<long, 3> Section::int3(std::string_view key, std::array<long, 3> fallback, long min, long max) const {
+  const toml::node* n = get(key);
+  if (!n) return fallback;
+  if (n->is_integer()) {
+    long v = integer(key, 0, min, max);
+    return {v, v, v};
+  }
+  if (!n->is_array())
+    fail(key, "expected an integer or a list of 3 integers in [" + std::to_string(min) + ", " + std::to_string(max) +
+                  "], got " + type_name(*n));
+  std::vector<long> v = integers(key, min, max);
+  if (v.size() != 3) fail(key, "expected an integer or a list of 3 integers, got a list of " + std::to_string(v.size()));
+  return {v[0], v[1], v[2]};
+}
+
+Section Section::table(std::string_view key) const {
+  const toml::node* n = get(key);
+  if (!n) return Section(file_, nullptr, full(key));
+  auto t = n->as_table();
+  if (!t) fail(key, "expected a table, got " + type_name(*n));
+  return Section(file_, t, full(key));
+}
+
+std::vector<Section> Section::tables(std::string_view key) const {
+  const toml::node* n = get(key);
+  std::vector<Section> out;
+  if (!n) return out;
+  auto a = n->as_array();
+  if (!a || !a->is_array_of_tables()) fail(key, "expected a list of tables ([[" + full(key) + "]]), got " + type_name(*n));
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const toml::table* t = (*a)[i].as_table();
+    file_->read_.insert(t);
+    out.push_back(Section(file_, t, full(key) + "[" + std::to_string(i) + "]"));
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- SceneFile
+
+SceneFile::SceneFile() : root_(std::make_unique<toml::table>()) {}
+SceneFile::SceneFile(SceneFile&&) noexcept = default;
+SceneFile& SceneFile::operator=(SceneFile&&) noexcept = default;
+SceneFile::~SceneFile() = default;
+
+Section SceneFile::root() const { return Section(this, root_.get(), ""); }
+
+std::string SceneFile::resolve_path(const std::string& p) const {
+  std::filesystem::path path(p);
+  if (path.is_absolute() || directory_.empty()) return p;
+  return (std::filesystem::path(directory_) / path).lexically_normal().string();
+}
+
+SceneFile SceneFile::load(const std::string& path, const std::vector<std::string>& overrides) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw Error(path + ": no such file (expected a scene file in TOML)");
+  if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory (expected a scene file in TOML)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot be read (expected a readable scene file)");
+  std::stringstream buf;
+  buf << in.rdbuf();
+  SceneFile f = parse(buf.str(), path, overrides);
+  f.directory_ = std::filesystem::path(path).parent_path().string();
+  return f;
+}
+
+SceneFile SceneFile::parse(const std::string& text, const std::string& name,
+                           const std::vector<std::string>& overrides) {
+  SceneFile f;
+  f.name_ = name;
+  try {
+    *f.root_ = toml::parse(text, name);
+  } catch (const toml::parse_error& e) {
+    throw Error(name + ":" + std::to_string(e.source().begin.line) + ": " + std::string(e.description()) +
+                " (expected valid TOML)");
+  }
+  for (const std::string& o : overrides) {
+    auto eq = o.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw Error(std::string(kOverride) + " " + o + ": expected key=value, e.g. integrator.rtol=1e-6");
+    std::string key = o.substr(0, eq), value = o.substr(eq + 1);
+    toml::table parsed;
+    try {
+      parsed = toml::parse(key + " = " + value, std::string_view(kOverride));
+    } catch (const toml::parse_error&) {
+      try {  // a bare word: take it as a string
+        std::ostringstream quoted;
+        quoted << toml::value<std::string>(value);
+        parsed = toml::parse(key + " = " + quoted.str(), std::string_view(kOverride));
+      } catch (const toml::parse_error& e) {
+        throw Error(std::string(kOverride) + " " + o + ": " + std::string(e.description()) + " (expected key=value)");
+      }
+    }
+    // Walk the single dotted path of `parsed` and put its leaf into the scene.
+    toml::table* dst = f.root_.get();
+    toml::table* src = &parsed;
+    std::string walked;
+    while (true) {
+      auto it = src->begin();
+      std::string k(it->first.str());
+      walked += (walked.empty() ? "" : ".") + k;
+      if (auto sub = it->second.as_table()) {
+        toml::node* d = dst->get(k);
+        if (!d) d = &dst->insert_or_assign(k, toml::table{}).first->second;
+        if (!d->is_table())
+          throw Error(std::string(kOverride) + " " + o + ": " + walked + " is " + type_name(*d) + " in " + name +
+                      ", expected a table");
+        dst = d->as_table();
+        src = sub;
+        continue;
+      }
+      dst->insert_or_assign(k, std::move(it->second));
+      break;
+    }
+  }
+  return f;
+}
+
+std::string SceneFile::text_as_run() const {
+  std::ostringstream s;
+  s << *root_;
+  return s.str();
+}
+
+void SceneFile::check_unknown_keys() const {
+  struct Unknown {
+    const toml::node* node;
+    std::string path, table_path, key;
+  };
+  std::vector<Unknown> unknown;
+  auto walk = [&](auto&& self, const toml::table& t, const std::string& path) -> void {
+    for (const auto& [k, n] : t) {
+      std::string key(k.str());
+      std::string p = path.empty() ? key : path + "." + key;
+      if (!read_.count(&n)) {
+        unknown.push_back({&n, p, path, key});
+        continue;
+      }
+      if (auto sub = n.as_table()) self(self, *sub, p);
+      if (auto arr = n.as_array())
+        for (std::size_t i = 0; i < arr->size(); ++i)
+          if (auto sub2 = (*arr)[i].as_table()) self(self, *sub2, p + "[" + std::to_string(i) + "]");
+    }
+  };
+  walk(walk, *root_, "");
+  if (unknown.empty()) return;
+  // The first in file order; overrides last.
+  auto line = [](const Unknown& u) {
+    bool ov = u.node->source().path && *u.node->source().path == kOverride;
+    return std::make_pair(ov ? 1 : 0, static_cast<long>(u.node->source().begin.line));
+  };
+  const Unknown& u = *std::min_element(unknown.begin(), unknown.end(),
+                                       [&](const Unknown& a, const Unknown& b) { return line(a) < line(b); });
+  std::string known;
+  auto it = asked_.find(u.table_path);
+  if (it != asked_.end())
+    for (const std::string& k : it->second) known += (known.empty() ? "" : ", ") + k;
+  std::string msg = "unknown key";
+  if (!known.empty()) msg += " (expected one of: " + known + ")";
+  std::string loc = (u.node->source().path && *u.node->source().path == kOverride)
+                        ? std::string(kOverride) + " " + u.path
+                        : source_of(u.node, name_) + ": " + u.path;
+  throw Error(loc + ": " + msg);
+}
+
+}  // namespace isochor

@@ -1,0 +1,58 @@
+// A scene as the user wrote it, parsed and checked: the mesh, material parameters, zones,
+// integrator settings, frames and output. Every key is documented in docs/scenes.md.
+#pragma once
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "isochor/mesh.hpp"
+#include "isochor/scene_file.hpp"
+
+namespace isochor {
+
+struct MaterialSpec {
+  std::string model = "cnh";  // cnh | unh | snh | mass_spring
+  double density = 1000.0;    // kg/m^3
+  double mu = 0.0, lambda = 0.0;  // Pa (Lamé parameters, from mu/lambda or E/nu)
+  double beta = 1.0;          // CNH penalty shape
+  double epsilon = 0.1;       // CNH: J below which alpha~ is extended
+};
+
+struct IntegratorSpec {
+  std::string kind = "ida";
+  double rtol = 1e-6, atol = 1e-8, dt = 1e-3;
+  int max_order = 5;
+};
+
+struct FramesSpec {
+  double rate = 100.0;     // frames per second
+  double duration = 1.0;   // s
+  int count = 0;           // statics: number of frames (load increments)
+  // Frame times 0, 1/rate, ..., duration (or 0..count-1 for statics).
+  std::vector<double> times() const;
+};
+
+struct OutputSpec {
+  std::string path;
+  bool pressure = false;
+};
+
+struct Scene {
+  SceneFile file;
+  Mesh mesh;
+  MaterialSpec material;
+  std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tet indices
+  IntegratorSpec integrator;
+  FramesSpec frames;
+  OutputSpec output;
+};
+
+// Parses a scene file with overrides; every key is checked and unknown keys are errors.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+Scene parse_scene(SceneFile file);
+
+// Lamé parameters from Young's modulus and Poisson's ratio.
+std::pair<double, double> lame_from_young(double E, double nu);
+
+}  // namespace isochor

@@ -1,0 +1,109 @@
+#include "isochor/scene.hpp"
+
+#include <cmath>
+#include <filesystem>
+
+#include "isochor/error.hpp"
+#include "isochor/meshing.hpp"
+#include "isochor/selection.hpp"
+
+namespace isochor {
+
+std::pair<double, double> lame_from_young(double E, double nu) {
+  return {E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))};
+}
+
+std::vector<double> FramesSpec::times() const {
+  std::vector<double> t;
+  if (count > 0) {
+    for (int k = 0; k < count; ++k) t.push_back(k);
+    return t;
+  }
+  const long n = std::lround(std::floor(duration * rate + 1e-9));
+  for (long k = 0; k <= n; ++k) t.push_back(static_cast<double>(k) / rate);
+  return t;
+}
+
+namespace {
+
+MaterialSpec parse_material(const Section& s) {
+  MaterialSpec m;
+  m.model = s.string("model", m.model, {"cnh", "unh", "snh", "mass_spring"});
+  m.density = s.number("density", m.density, Range::positive());
+  const bool lame = s.has("mu") || s.has("lambda"), young = s.has("E") || s.has("nu");
+  if (lame && young) s.fail(s.has("E") ? "E" : "nu", "give either mu and lambda or E and nu, not both");
+  if (young) {
+    const double E = s.number("E", 1e5, Range::positive());
+    const double nu = s.number("nu", 0.45, {-1.0, 0.5, true, true});
+    std::tie(m.mu, m.lambda) = lame_from_young(E, nu);
+  } else {
+    m.mu = s.number("mu", 1e4, Range::positive());
+    m.lambda = s.number("lambda", 9e4, Range::non_negative());
+  }
+  m.beta = s.number("beta", m.beta, Range::non_negative());
+  m.epsilon = s.number("epsilon", m.epsilon, {0.0, 1.0, true, false});
+  return m;
+}
+
+std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section& s, const Mesh& mesh) {
+  std::vector<std::pair<std::string, std::vector<int>>> zones;
+  if (s.boolean("global", true)) {
+    std::vector<int> all(mesh.num_tets());
+    for (int e = 0; e < mesh.num_tets(); ++e) all[e] = e;
+    zones.emplace_back("global", std::move(all));
+  }
+  if (s.boolean("from_mesh", false))
+    for (const auto& [name, tets] : mesh.zones) zones.emplace_back(name, tets);
+  for (const Section& z : s.tables("zone")) {
+    std::string name = z.string("name", "");
+    if (name.empty()) z.fail("name", "missing, expected a zone name");
+    if (name.find_first_of("/.,") != std::string::npos) z.fail("name", "expected a name without '/', '.' or ','");
+    for (const auto& other : zones)
+      if (other.first == name) z.fail("name", "zone \"" + name + "\" is defined twice");
+    Section sel = z.table("select");
+    if (!sel.exists()) z.fail("select", "missing, expected a selection such as { kind = \"box\", min = [..], max = [..] }");
+    zones.emplace_back(name, select_tets(mesh, Selection::parse(sel)));
+  }
+  return zones;
+}
+
+}  // namespace
+
+Scene parse_scene(SceneFile file) {
+  Scene sc{std::move(file), {}, {}, {}, {}, {}, {}};
+  const Section root = sc.file.root();
+  Section mesh = root.table("mesh");
+  if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
+  sc.mesh = mesh_from_scene(mesh, sc.file);
+  sc.material = parse_material(root.table("material"));
+  sc.zones = parse_zones(root.table("zones"), sc.mesh);
+
+  const Section in = root.table("integrator");
+  IntegratorSpec& ig = sc.integrator;
+  ig.kind = in.string("kind", ig.kind, {"ida", "static", "backward_euler", "semi_implicit", "xpbd", "mass_spring"});
+  ig.rtol = in.number("rtol", ig.rtol, Range::positive());
+  ig.atol = in.number("atol", ig.atol, Range::positive());
+  ig.dt = in.number("dt", ig.dt, Range::positive());
+  ig.max_order = static_cast<int>(in.integer("max_order", ig.max_order, 1, 5));
+
+  const Section fr = root.table("frames");
+  if (fr.has("count") && (fr.has("rate") || fr.has("duration")))
+    fr.fail("count", "give either count (statics) or rate and duration, not both");
+  sc.frames.rate = fr.number("rate", sc.frames.rate, Range::positive());
+  sc.frames.duration = fr.number("duration", sc.frames.duration, Range::non_negative());
+  sc.frames.count = static_cast<int>(fr.integer("count", 0, 1, 1000000));
+
+  const Section out = root.table("output");
+  const std::string stem = std::filesystem::path(sc.file.name()).stem().string();
+  sc.output.path = out.string("path", "out/" + (stem.empty() ? std::string("scene") : stem) + ".h5");
+  sc.output.pressure = out.boolean("pressure", false);
+
+  sc.file.check_unknown_keys();
+  return sc;
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+  return parse_scene(SceneFile::load(path, overrides));
+}
+
+}  // namespace isochor

@@ -1,0 +1,124 @@
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "isochor/error.hpp"
+#include "isochor/meshing.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+
+namespace {
+
+void expect_closed_outward(const Mesh& m) {
+  SurfaceCheck c = check_surface(m.surface());
+  EXPECT_TRUE(c.closed);
+  EXPECT_TRUE(c.oriented);
+  EXPECT_EQ(c.euler_characteristic, 2);
+  // Outward: the divergence-theorem volume equals the sum of tet volumes.
+  const double vs = surface_volume(m.rest_positions(), m.surface());
+  EXPECT_NEAR(vs / m.rest_volume(), 1.0, 1e-12);
+  double sum = 0;
+  for (double v : m.rest_volumes()) {
+    EXPECT_GT(v, 0.0);
+    sum += v;
+  }
+  EXPECT_NEAR(sum / m.rest_volume(), 1.0, 1e-14);
+}
+
+}  // namespace
+
+TEST(Mesh, BoxVolumeIsExactForBothSplits) {
+  for (int split : {5, 6}) {
+    Mesh m = make_box(Eigen::Vector3d(2.0, 0.5, 1.5), {3, 4, 5}, Eigen::Vector3d(1, 2, 3), split);
+    EXPECT_EQ(m.num_tets(), 3 * 4 * 5 * split);
+    EXPECT_EQ(m.num_nodes(), 4 * 5 * 6);
+    EXPECT_NEAR(m.rest_volume(), 1.5, 1e-14);
+    expect_closed_outward(m);
+    // Every cell's surface is two triangles per boundary face of the box.
+    EXPECT_EQ(m.surface().size(), 2u * 2 * (3 * 4 + 4 * 5 + 3 * 5));
+    if (split == 6) {
+      for (double v : m.rest_volumes()) EXPECT_NEAR(v, 1.5 / 360.0, 1e-15);
+    }
+  }
+}
+
+TEST(Mesh, FiveSplitTetVolumes) {
+  // Unit cells: four corner tets of 1/6 and a central tet of 1/3.
+  Mesh m = make_box(Eigen::Vector3d::Ones() * 2, {2, 2, 2}, Eigen::Vector3d::Zero(), 5);
+  int corners = 0, centres = 0;
+  for (double v : m.rest_volumes()) {
+    if (std::abs(v - 1.0 / 6.0) < 1e-14) corners++;
+    if (std::abs(v - 1.0 / 3.0) < 1e-14) centres++;
+  }
+  EXPECT_EQ(corners, 32);
+  EXPECT_EQ(centres, 8);
+}
+
+TEST(Mesh, KuhnSplitInteriorVertexHasKnownRings) {
+  // In the Freudenthal-Kuhn triangulation every interior vertex has 14 edge neighbours and 24 tets.
+  Mesh m = make_box(Eigen::Vector3d::Ones(), {4, 4, 4}, Eigen::Vector3d::Zero(), 6);
+  const int centre = 2 + 5 * (2 + 5 * 2);
+  EXPECT_EQ(m.node_ring(centre, 1).size(), 15u);
+  EXPECT_EQ(m.tet_ring(centre, 1).size(), 24u);
+  EXPECT_EQ(m.node_ring(centre, 0), std::vector<int>{centre});
+  // The 2-ring of the Kuhn lattice: points p with max(|p|, |p_a - p_b|) <= 2 in lattice norm.
+  int expected = 0;
+  for (int i = -2; i <= 2; ++i)
+    for (int j = -2; j <= 2; ++j)
+      for (int k = -2; k <= 2; ++k) {
+        // Graph distance in the Kuhn lattice (edges along e_a, e_a+e_b, e_1+e_2+e_3 sums of positive
+        // or negative steps): max(positive part) + max(negative part) of the coordinates.
+        int pos = std::max({i, j, k, 0}), neg = -std::min({i, j, k, 0});
+        if (pos + neg <= 2) expected++;
+      }
+  EXPECT_EQ(static_cast<int>(m.node_ring(centre, 2).size()), expected);
+  // tet_ring(k=2): every tet touching a node of the 1-ring.
+  std::vector<int> t2 = m.tet_ring(centre, 2);
+  for (int v : m.node_ring(centre, 1))
+    for (const int* e = m.node_tets().begin(v); e != m.node_tets().end(v); ++e)
+      EXPECT_TRUE(std::binary_search(t2.begin(), t2.end(), *e));
+}
+
+TEST(Mesh, ReversedTetIsReorderedAndFlatTetRejected) {
+  Points x(3, 5);
+  x << 0, 1, 0, 0, 1,  //
+      0, 0, 1, 0, 1,   //
+      0, 0, 0, 1, 1;
+  // Tet 1 is given with negative orientation.
+  Mesh m(x, {{0, 1, 2, 3}, {1, 3, 2, 4}}, "two");
+  EXPECT_EQ(m.reoriented_tets(), 1);
+  EXPECT_NEAR(m.rest_volumes()[0], 1.0 / 6.0, 1e-15);
+  EXPECT_NEAR(m.rest_volumes()[1], 1.0 / 3.0, 1e-15);
+  for (const Tet& t : m.tets())
+    EXPECT_GT(tet_signed_volume(x.col(t[0]), x.col(t[1]), x.col(t[2]), x.col(t[3])), 0.0);
+  expect_closed_outward(m);
+
+  Points y = x;
+  y.col(4) = Eigen::Vector3d(0.5, 0.5, 0.0);  // tet (1, 2, 0, 4) lies in z = 0
+  std::string msg = test::error_of([&] { Mesh(y, {{0, 1, 2, 3}, {1, 2, 0, 4}}, "flat"); });
+  EXPECT_NE(msg.find("flat: tet 1 is degenerate"), std::string::npos) << msg;
+}
+
+TEST(Mesh, SurfaceCheckFindsHoles) {
+  Mesh m = make_box(Eigen::Vector3d::Ones(), {2, 2, 2}, Eigen::Vector3d::Zero(), 6);
+  std::vector<Tri> s = m.surface();
+  s.pop_back();
+  SurfaceCheck c = check_surface(s);
+  EXPECT_FALSE(c.closed);
+  EXPECT_EQ(c.boundary_edges, 3);
+  EXPECT_EQ(c.euler_characteristic, 1);
+}
+
+TEST(Mesh, UnusedNodesAreRemoved) {
+  Points x(3, 6);
+  x << 9, 0, 1, 0, 0, 7,  //
+      9, 0, 0, 1, 0, 7,   //
+      9, 0, 0, 0, 1, 7;
+  std::vector<Tet> tets{{1, 2, 3, 4}};
+  std::map<std::string, std::vector<int>> sets{{"s", {0, 2, 5}}};
+  compact_unused_nodes(x, tets, &sets);
+  EXPECT_EQ(x.cols(), 4);
+  EXPECT_EQ(tets[0], (Tet{0, 1, 2, 3}));
+  EXPECT_EQ(sets["s"], std::vector<int>{1});
+}

@@ -1,0 +1,196 @@
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <cstring>
+
+#include "isochor/error.hpp"
+#include "isochor/meshing.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* kCubeObj = R"(# unit cube, quads, outward
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+f 1 4 3 2
+f 1 2 6 5
+f 2 3 7 6
+f 3 4 8 7
+f 4 1 5 8
+f 5 6 7 8
+)";
+
+double zone_volume(const Mesh& m, const std::string& zone) {
+  double v = 0;
+  for (int e : m.zones.at(zone)) v += m.rest_volumes()[e];
+  return v;
+}
+
+std::string cube_stl_binary() {
+  Points x;
+  std::vector<Tri> tris;
+  // Triangulate the OBJ cube by reading it.
+  fs::path d = fs::temp_directory_path() / "isochor_tests";
+  fs::create_directories(d);
+  read_obj_surface(test::write_file(d / "cube_for_stl.obj", kCubeObj), x, tris);
+  std::string out(80, ' ');
+  std::uint32_t n = static_cast<std::uint32_t>(tris.size());
+  out.append(reinterpret_cast<const char*>(&n), 4);
+  for (const Tri& t : tris) {
+    float rec[12] = {0};
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) rec[3 + 3 * k + c] = static_cast<float>(x(c, t[k]));
+    out.append(reinterpret_cast<const char*>(rec), 48);
+    out.append(2, '\0');
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(MeshFiles, HandWrittenMshV2WithPhysicalGroups) {
+  fs::path d = test::temp_dir();
+  std::string p = test::write_file(d / "two.msh", R"($MeshFormat
+2.2 0 8
+$EndMeshFormat
+$PhysicalNames
+3
+2 3 "base"
+3 1 "left"
+3 2 "right"
+$EndPhysicalNames
+$Nodes
+5
+1 0 0 0
+2 1 0 0
+3 0 1 0
+4 0 0 1
+5 1 1 1
+$EndNodes
+$Elements
+3
+1 2 2 3 1 1 2 3
+2 4 2 1 1 1 2 3 4
+3 4 2 2 2 2 3 4 5
+$EndElements
+)");
+  Mesh m = read_msh(p);
+  EXPECT_EQ(m.num_nodes(), 5);
+  EXPECT_EQ(m.num_tets(), 2);
+  EXPECT_NEAR(zone_volume(m, "left"), 1.0 / 6.0, 1e-15);
+  EXPECT_NEAR(zone_volume(m, "right"), 1.0 / 3.0, 1e-15);
+  EXPECT_EQ(m.node_sets.at("base").size(), 3u);
+  for (int v : m.node_sets.at("base")) EXPECT_EQ(m.rest_positions()(2, v), 0.0);
+}
+
+TEST(MeshFiles, GmshWrittenV41AndV22AgreeOnZonesAndSets) {
+  fs::path d = test::temp_dir();
+  const std::string geo = std::string(ISOCHOR_SOURCE_DIR) + "/tests/data/two_boxes.geo";
+  for (const char* format : {"msh41", "msh22"}) {
+    const std::string out = (d / (std::string("boxes_") + format + ".msh")).string();
+    const std::string cmd = "gmsh -3 -v 0 " + geo + " -format " + format + " -o " + out;
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    Mesh m = read_msh(out);
+    EXPECT_NEAR(m.rest_volume(), 2.0, 1e-12) << format;
+    EXPECT_NEAR(zone_volume(m, "left"), 1.0, 1e-12) << format;
+    EXPECT_NEAR(zone_volume(m, "right"), 1.0, 1e-12) << format;
+    EXPECT_EQ(m.zones.at("left").size() + m.zones.at("right").size(), static_cast<std::size_t>(m.num_tets()));
+    const auto& bottom = m.node_sets.at("bottom");
+    EXPECT_GT(bottom.size(), 10u);
+    std::size_t on_plane = 0;
+    for (int v = 0; v < m.num_nodes(); ++v) on_plane += std::abs(m.rest_positions()(2, v)) < 1e-12;
+    EXPECT_EQ(bottom.size(), on_plane) << format;
+  }
+}
+
+TEST(MeshFiles, TetGenOneAndZeroBasedWithRealAttributes) {
+  fs::path d = test::temp_dir();
+  for (int base : {1, 0}) {
+    auto idx = [&](int i) { return std::to_string(i + base); };
+    std::string node = "# points\n5 3 0 1\n";
+    const char* xyz[5] = {"0 0 0", "1 0 0", "0 1 0", "0 0 1", "1 1 1"};
+    const int marker[5] = {5, 5, 5, 0, 0};
+    for (int i = 0; i < 5; ++i) node += idx(i) + " " + xyz[i] + " " + std::to_string(marker[i]) + "\n";
+    std::string ele = "2 4 1\n" + idx(0) + " " + idx(0) + " " + idx(1) + " " + idx(2) + " " + idx(3) + " 1.5\n" +
+                      idx(1) + " " + idx(1) + " " + idx(2) + " " + idx(3) + " " + idx(4) + " -2  # comment\n";
+    const std::string stem = (d / ("m" + std::to_string(base))).string();
+    test::write_file(stem + ".node", node);
+    test::write_file(stem + ".ele", ele);
+    Mesh m = read_tetgen(stem + ".ele");
+    EXPECT_EQ(m.num_tets(), 2);
+    EXPECT_NEAR(zone_volume(m, "region_1.5"), 1.0 / 6.0, 1e-15);
+    EXPECT_NEAR(zone_volume(m, "region_-2"), 1.0 / 3.0, 1e-15);
+    EXPECT_EQ(m.node_sets.at("marker_5"), (std::vector<int>{0, 1, 2}));
+  }
+}
+
+TEST(MeshFiles, ClosedObjIsTetrahedralisedWithoutChangingItsSurface) {
+  fs::path d = test::temp_dir();
+  Mesh m = mesh_closed_surface(test::write_file(d / "cube.obj", kCubeObj), 0.0);
+  EXPECT_NEAR(m.rest_volume(), 1.0, 1e-12);
+  EXPECT_EQ(m.surface().size(), 12u);
+  SurfaceCheck c = check_surface(m.surface());
+  EXPECT_TRUE(c.closed && c.oriented);
+  EXPECT_NEAR(surface_volume(m.rest_positions(), m.surface()), 1.0, 1e-12);
+  // Interior refinement by edge length keeps the surface triangles.
+  Mesh fine = mesh_closed_surface(d / "cube.obj", 0.2);
+  EXPECT_GT(fine.num_tets(), m.num_tets());
+  EXPECT_NEAR(fine.rest_volume(), 1.0, 1e-12);
+}
+
+TEST(MeshFiles, InwardObjIsFlippedAndStlReadsTheSame) {
+  fs::path d = test::temp_dir();
+  std::string inward;
+  for (std::string line : {"v 0 0 0", "v 1 0 0", "v 1 1 0", "v 0 1 0", "v 0 0 1", "v 1 0 1", "v 1 1 1", "v 0 1 1",
+                           "f 2 3 4 1", "f 5 6 2 1", "f 6 7 3 2", "f 7 8 4 3", "f 8 5 1 4", "f 8 7 6 5"})
+    inward += line + "\n";
+  EXPECT_NEAR(mesh_closed_surface(test::write_file(d / "in.obj", inward), 0.0).rest_volume(), 1.0, 1e-12);
+  EXPECT_NEAR(mesh_closed_surface(test::write_file(d / "cube.stl", cube_stl_binary()), 0.0).rest_volume(), 1.0, 1e-12);
+  std::string ascii = "solid cube\n";
+  Points x;
+  std::vector<Tri> tris;
+  read_obj_surface(test::write_file(d / "c.obj", kCubeObj), x, tris);
+  for (const Tri& t : tris) {
+    ascii += " facet normal 0 0 0\n  outer loop\n";
+    for (int k : t) ascii += "   vertex " + std::to_string(x(0, k)) + " " + std::to_string(x(1, k)) + " " + std::to_string(x(2, k)) + "\n";
+    ascii += "  endloop\n endfacet\n";
+  }
+  ascii += "endsolid cube\n";
+  EXPECT_NEAR(mesh_closed_surface(test::write_file(d / "ascii.stl", ascii), 0.0).rest_volume(), 1.0, 1e-12);
+}
+
+TEST(MeshFiles, BadSurfacesAndFilesAreNamedInErrors) {
+  fs::path d = test::temp_dir();
+  std::string open = std::string(kCubeObj);
+  open = open.substr(0, open.rfind("f 5 6 7 8"));
+  std::string msg = test::error_of([&] { mesh_closed_surface(test::write_file(d / "open.obj", open), 0.0); });
+  EXPECT_NE(msg.find("open.obj: the surface is not closed"), std::string::npos) << msg;
+
+  std::string twisted = std::string(kCubeObj);
+  twisted.replace(twisted.find("f 5 6 7 8"), 9, "f 8 7 6 5");
+  msg = test::error_of([&] { mesh_closed_surface(test::write_file(d / "twisted.obj", twisted), 0.0); });
+  EXPECT_NE(msg.find("twisted.obj: the triangles are not consistently oriented"), std::string::npos) << msg;
+
+  msg = test::error_of([&] { read_msh((d / "missing.msh").string()); });
+  EXPECT_NE(msg.find("missing.msh: no such file"), std::string::npos) << msg;
+  msg = test::error_of([&] { read_msh(test::write_file(d / "garbage.msh", "this is not a mesh\n")); });
+  EXPECT_NE(msg.find("garbage.msh"), std::string::npos) << msg;
+  msg = test::error_of([&] { read_msh(d.string()); });
+  EXPECT_NE(msg.find("is a directory"), std::string::npos) << msg;
+  msg = test::error_of([&] { read_tetgen((d / "none.node").string()); });
+  EXPECT_NE(msg.find("none.node: no such file"), std::string::npos) << msg;
+  test::write_file(d / "short.node", "3 3 0 0\n1 0 0 0\n");
+  msg = test::error_of([&] { read_tetgen((d / "short.node").string()); });
+  EXPECT_NE(msg.find("short.node:2: expected 3 points"), std::string::npos) << msg;
+  msg = test::error_of([&] { mesh_closed_surface(test::write_file(d / "bad.obj", "v 0 0 0\nf 1 2 3\n"), 0.0); });
+  EXPECT_NE(msg.find("bad.obj:2: vertex 2 is not defined"), std::string::npos) << msg;
+}

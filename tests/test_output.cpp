@@ -1,0 +1,136 @@
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+
+#include "isochor/error.hpp"
+#include "isochor/meshing.hpp"
+#include "isochor/output.hpp"
+#include "isochor/output_reader.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Frame k: every node moved by (k, 2k, 3k) * 0.01 and the whole mesh scaled in z by 1 + 0.1 k.
+Points frame_positions(const Mesh& m, int k) {
+  Points x = m.rest_positions();
+  x.row(2) *= 1.0 + 0.1 * k;
+  for (int i = 0; i < x.cols(); ++i) x.col(i) += 0.01 * k * Eigen::Vector3d(1, 2, 3);
+  return x;
+}
+
+void write_frames(OutputWriter& w, const Mesh& m, int first, int count, bool zones = true) {
+  for (int k = first; k < first + count; ++k) {
+    Points x = frame_positions(m, k);
+    Frame f;
+    f.time = 0.5 * k;
+    f.positions = &x;
+    f.volumes = {tets_volume(x, m.tets())};
+    if (zones) f.volumes.push_back(0.5 * tets_volume(x, m.tets()));
+    f.energy = {1.0 * k, 2.0 * k, 3.0 * k};
+    std::vector<double> p(m.num_tets(), 10.0 * k);
+    f.pressure = &p;
+    f.stats = {{"steps", 4.0 * k}};
+    w.write_frame(f);
+  }
+}
+
+Mesh test_mesh() {
+  Mesh m = make_box(Eigen::Vector3d(1, 2, 3), {2, 3, 4}, Eigen::Vector3d::Zero(), 6);
+  return m;
+}
+
+std::vector<std::pair<std::string, std::vector<int>>> half_zone(const Mesh& m) {
+  std::vector<int> half;
+  for (int e = 0; e < m.num_tets() / 2; ++e) half.push_back(e);
+  return {{"half", half}};
+}
+
+}  // namespace
+
+TEST(Output, RoundTripThroughTheReader) {
+  fs::path d = test::temp_dir();
+  Mesh m = test_mesh();
+  const std::string path = (d / "run.h5").string();
+  {
+    OutputWriter w(path, m, half_zone(m), {"[mesh]\nshape = \"box\"\n", "scene.toml", "test"}, true);
+    write_frames(w, m, 0, 4);
+    w.set_stat("wall_seconds", 1.25);
+  }
+  RunFile r(path);
+  EXPECT_EQ(r.num_nodes(), m.num_nodes());
+  EXPECT_EQ(r.num_tets(), m.num_tets());
+  EXPECT_EQ(r.num_frames(), 4);
+  EXPECT_EQ(r.times(), (std::vector<double>{0, 0.5, 1.0, 1.5}));
+  EXPECT_EQ(r.zone_names(), std::vector<std::string>{"half"});
+  EXPECT_EQ((r.positions(3) - frame_positions(m, 3)).cwiseAbs().maxCoeff(), 0.0);
+  // Volume scales with the z stretch: V_k = V_0 (1 + 0.1 k).
+  EXPECT_NEAR(r.volumes()[2][0], 6.0 * 1.2, 1e-12);
+  EXPECT_EQ(r.attributes()["scene"], "[mesh]\nshape = \"box\"\n");
+  EXPECT_EQ(r.attributes()["isochor_version"], isochor_version());
+  EXPECT_EQ(r.stat_totals()["wall_seconds"], 1.25);
+  EXPECT_EQ(r.stat_series()["steps"], (std::vector<double>{0, 4, 8, 12}));
+  const std::string info = describe_run(path);
+  EXPECT_NE(info.find("frames      4, t = 0 .. 1.5 s"), std::string::npos) << info;
+  EXPECT_NE(info.find("drift 3.000e-01"), std::string::npos) << info;  // 1.3 / 1.0 - 1
+}
+
+TEST(Output, MeshioReadsTheXdmfTimeSeries) {
+  fs::path d = test::temp_dir();
+  Mesh m = test_mesh();
+  const std::string path = (d / "series.h5").string();
+  {
+    OutputWriter w(path, m, half_zone(m), {"", "", "test"}, true);
+    write_frames(w, m, 0, 3);
+  }
+  // The Python side recomputes the expected positions from the formula above.
+  const std::string cmd = std::string(ISOCHOR_PYTHON) + " " + ISOCHOR_SOURCE_DIR + "/tests/read_xdmf.py " +
+                          (d / "series.xdmf").string() + " " + std::to_string(m.num_nodes()) + " " +
+                          std::to_string(m.num_tets()) + " 3";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+}
+
+TEST(Output, AKilledWriterKeepsEveryFinishedFrame) {
+  fs::path d = test::temp_dir();
+  Mesh m = test_mesh();
+  const std::string path = (d / "killed.h5").string();
+  pid_t pid = fork();
+  if (pid == 0) {
+    OutputWriter* w = new OutputWriter(path, m, half_zone(m), {"", "", "test"}, false);
+    write_frames(*w, m, 0, 3);
+    _exit(0);  // no close, no destructors: as if killed
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  RunFile r(path);
+  EXPECT_EQ(r.num_frames(), 3);
+  EXPECT_EQ((r.positions(2) - frame_positions(m, 2)).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(Output, ObjSequenceHasTheSurfaceOfEveryFrame) {
+  fs::path d = test::temp_dir();
+  Mesh m = test_mesh();
+  const std::string path = (d / "seq.h5").string();
+  {
+    OutputWriter w(path, m, {}, {"", "", "test"}, false);
+    write_frames(w, m, 0, 2, false);
+  }
+  ASSERT_EQ(export_obj_sequence(path, (d / "obj").string(), "f"), 2);
+  Points x;
+  std::vector<Tri> tris;
+  read_obj_surface((d / "obj" / "f_0001.obj").string(), x, tris);
+  EXPECT_EQ(tris.size(), m.surface().size());
+  // The surface encloses the frame's volume: 6 * 1.1.
+  EXPECT_NEAR(surface_volume(x, tris), 6.0 * 1.1, 1e-6);
+}
+
+TEST(Output, UnwritablePathIsAnError) {
+  Mesh m = test_mesh();
+  std::string msg = test::error_of([&] { OutputWriter w("/proc/no/such/dir/x.h5", m, {}, {"", "", ""}, false); });
+  EXPECT_NE(msg.find("/proc/no/such/dir/x.h5"), std::string::npos) << msg;
+}

@@ -1,0 +1,116 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <regex>
+#include <set>
+
+#include "isochor/error.hpp"
+#include "isochor/scene.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+namespace fs = std::filesystem;
+
+TEST(SceneFile, TypedKeysRangesAndMessages) {
+  SceneFile f = SceneFile::parse("[a]\nx = 2\ny = 1.5\ns = \"box\"\nv = [1, 2, 3]\nb = true\n", "s.toml");
+  Section a = f.root().table("a");
+  EXPECT_EQ(a.number("x", 0.0), 2.0);  // an integer is a number
+  EXPECT_EQ(a.integer("x", 0, 0, 10), 2);
+  EXPECT_EQ(a.number("missing", 7.0), 7.0);
+  EXPECT_EQ(a.string("s", ""), "box");
+  EXPECT_EQ(a.vec3("v", {}), Eigen::Vector3d(1, 2, 3));
+  EXPECT_TRUE(a.boolean("b", false));
+  EXPECT_EQ(test::error_of([&] { a.integer("y", 0, 0, 10); }), "s.toml:3: a.y: expected an integer in [0, 10], got a number");
+  EXPECT_EQ(test::error_of([&] { a.number("y", 0, Range::closed(2, 3)); }), "s.toml:3: a.y: expected a number in [2, 3], got 1.5");
+  EXPECT_EQ(test::error_of([&] { a.number("s", 0, Range::positive()); }), "s.toml:4: a.s: expected a number > 0, got a string");
+  EXPECT_EQ(test::error_of([&] { a.string("s", "", {"sphere"}); }), "s.toml:4: a.s: expected one of \"sphere\", got \"box\"");
+  EXPECT_EQ(test::error_of([&] { f.check_unknown_keys(); }), "");
+}
+
+TEST(SceneFile, UnknownKeysAreReportedInFileOrder) {
+  SceneFile f = SceneFile::parse("[a]\nx = 1\nzz = 2\n[b]\nq = 1\n", "u.toml");
+  f.root().table("a").number("x", 0);
+  EXPECT_EQ(test::error_of([&] { f.check_unknown_keys(); }), "u.toml:3: a.zz: unknown key (expected one of: x)");
+  f.root().table("a").number("zz", 0);
+  EXPECT_EQ(test::error_of([&] { f.check_unknown_keys(); }), "u.toml:4: b: unknown key (expected one of: a)");
+}
+
+TEST(SceneFile, OverridesReplaceAddAndQuote) {
+  SceneFile f = SceneFile::parse("[integrator]\nrtol = 1e-6\n", "o.toml",
+                                 {"integrator.rtol=1e-9", "integrator.kind=backward_euler", "mesh.cells=[2, 3, 4]",
+                                  "output.path=\"x y.h5\""});
+  Section in = f.root().table("integrator");
+  EXPECT_EQ(in.number("rtol", 0), 1e-9);
+  EXPECT_EQ(in.string("kind", ""), "backward_euler");
+  auto cells = f.root().table("mesh").int3("cells", {0, 0, 0}, 1, 10);
+  EXPECT_EQ(cells, (std::array<long, 3>{2, 3, 4}));
+  EXPECT_EQ(f.root().table("output").string("path", ""), "x y.h5");
+  EXPECT_EQ(test::error_of([&] { in.number("kind", 0); }), "--set integrator.kind: expected a finite number, got a string");
+  EXPECT_NE(test::error_of([&] { SceneFile::parse("a = 1\n", "o.toml", {"a.b=2"}); }).find("a is an integer in o.toml, expected a table"),
+            std::string::npos);
+  EXPECT_NE(test::error_of([&] { SceneFile::parse("", "o.toml", {"novalue"}); }).find("expected key=value"), std::string::npos);
+}
+
+TEST(SceneFile, MissingAndUnreadableFiles) {
+  fs::path d = test::temp_dir();
+  EXPECT_NE(test::error_of([&] { SceneFile::load((d / "no.toml").string()); }).find("no.toml: no such file"), std::string::npos);
+  EXPECT_NE(test::error_of([&] { SceneFile::load(d.string()); }).find("is a directory"), std::string::npos);
+  test::write_file(d / "bin.toml", std::string("\x00\x01\x02 = [", 6));
+  EXPECT_NE(test::error_of([&] { SceneFile::load((d / "bin.toml").string()); }).find("expected valid TOML"), std::string::npos);
+}
+
+TEST(Scene, LameFromYoungMatchesTheDefinitions) {
+  auto [mu, lambda] = lame_from_young(46400.0, 0.45);
+  EXPECT_NEAR(mu, 16000.0, 1e-9);
+  // lambda = 2 mu nu / (1 - 2 nu)
+  EXPECT_NEAR(lambda, 2 * 16000.0 * 0.45 / 0.1, 1e-7);
+}
+
+TEST(Scene, ZonesFromSelectionsAndFrames) {
+  fs::path d = test::temp_dir();
+  std::string p = test::write_file(d / "z.toml", R"(
+[mesh]
+shape = "box"
+cells = 2
+center = [0.5, 0.5, 0.5]
+[zones]
+global = true
+[[zones.zone]]
+name = "bottom"
+select = { kind = "box", min = [0, 0, 0], max = [1, 1, 0.5] }
+[frames]
+rate = 10
+duration = 0.5
+)");
+  Scene sc = load_scene(p);
+  ASSERT_EQ(sc.zones.size(), 2u);
+  EXPECT_EQ(sc.zones[0].first, "global");
+  EXPECT_EQ(sc.zones[0].second.size(), 48u);
+  EXPECT_EQ(sc.zones[1].second.size(), 24u);
+  EXPECT_EQ(sc.frames.times().size(), 6u);
+  EXPECT_DOUBLE_EQ(sc.frames.times().back(), 0.5);
+  EXPECT_EQ(sc.output.path, "out/z.h5");
+  std::string bad = test::write_file(d / "bad.toml", "[mesh]\nshape = \"box\"\n[[zones.zone]]\nname = \"a\"\nselect = { kind = \"all\", node = 3 }\n");
+  EXPECT_EQ(test::error_of([&] { load_scene(bad); }),
+            bad + ":5: zones.zone[0].select.node: unknown key (expected one of: kind)");
+}
+
+// Every key a parser asks for, over all demo scenes, is documented in docs/scenes.md.
+TEST(Scene, EveryKeyReadByTheDemosIsDocumented) {
+  std::ifstream doc(std::string(ISOCHOR_SOURCE_DIR) + "/docs/scenes.md");
+  ASSERT_TRUE(doc) << "docs/scenes.md is missing";
+  std::string text((std::istreambuf_iterator<char>(doc)), std::istreambuf_iterator<char>());
+  std::set<std::string> documented;
+  std::regex row(R"(\|\s*`([a-z_A-Z0-9.\[\]]+)`\s*\|)");
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), row); it != std::sregex_iterator(); ++it)
+    documented.insert((*it)[1]);
+  int scenes = 0;
+  for (const auto& e : fs::directory_iterator(std::string(ISOCHOR_SOURCE_DIR) + "/demos")) {
+    if (e.path().extension() != ".toml") continue;
+    Scene sc = load_scene(e.path().string());
+    scenes++;
+    for (const std::string& k : sc.file.queried_keys())
+      EXPECT_TRUE(documented.count(k)) << k << " (read by " << e.path().filename() << ") is not in docs/scenes.md";
+  }
+  EXPECT_GT(scenes, 0);
+}
