@@ -160,20 +160,29 @@ Mesh make_sphere(double radius, double edge_length, long target_tets, const Eige
   } else {
     // A Delaunay mesh has about 6 sqrt(2) V / h^3 tets; correct the estimate twice by the count.
     const double V = 4.0 / 3.0 * M_PI * radius * radius * radius;
-    // Up to four passes; keep the size whose count came closest (within 3% ends the search).
+    // The count is not monotonic in h (Delaunay noise of several %): bracket the target and
+    // interpolate in log-log within the bracket; keep the closest, stop within 2%.
     const double target = static_cast<double>(target_tets);
     double h = std::cbrt(6.0 * std::sqrt(2.0) * V / target), best_h = h, best_err = 1e300;
-    for (int pass = 0; pass < 4; ++pass) {
+    double lo = 0, n_lo = 0, hi = 0, n_hi = 0;  // lo: h with too many tets, hi: too few
+    for (int pass = 0; pass < 8; ++pass) {
       const double n = mesh_with(h);
       const double err = std::abs(n / target - 1.0);
       if (err < best_err) {
         best_err = err;
         best_h = h;
       }
-      if (err < 0.03) break;
-      h *= std::cbrt(n / target);
+      if (err < 0.02) break;
+      if (n > target && (lo == 0 || h > lo)) lo = h, n_lo = n;
+      if (n < target && (hi == 0 || h < hi)) hi = h, n_hi = n;
+      if (lo > 0 && hi > 0) {
+        const double s = std::log(target / n_lo) / std::log(n_hi / n_lo);  // in [0, 1]
+        h = lo * std::pow(hi / lo, std::clamp(s, 0.1, 0.9));
+      } else {
+        h *= std::cbrt(n / target);
+      }
     }
-    if (best_h != h || best_err >= 0.03) mesh_with(best_h);
+    if (best_h != h) mesh_with(best_h);
   }
   return finish(extract_tets("sphere"), "sphere", {}, {});
 }

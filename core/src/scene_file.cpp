@@ -75,9 +75,9 @@ std::string Section::full(std::string_view key) const {
   return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
 }
 
-const toml::node* Section::get(std::string_view key) const {
+const toml::node* Section::get(std::string_view key, bool leaf) const {
   file_->asked_[path_].insert(std::string(key));
-  file_->queried_.insert(strip_indices(full(key)));
+  if (leaf) file_->queried_.insert(strip_indices(full(key)));
   if (!table_) return nullptr;
   const toml::node* n = table_->get(key);
   if (n) file_->read_.insert(n);
@@ -225,7 +225,7 @@ std::array<long, 3> Section::int3(std::string_view key, std::array<long, 3> fall
 }
 
 Section Section::table(std::string_view key) const {
-  const toml::node* n = get(key);
+  const toml::node* n = get(key, false);
   if (!n) return Section(file_, nullptr, full(key));
   auto t = n->as_table();
   if (!t) fail(key, "expected a table, got " + type_name(*n));
@@ -233,7 +233,7 @@ Section Section::table(std::string_view key) const {
 }
 
 std::vector<Section> Section::tables(std::string_view key) const {
-  const toml::node* n = get(key);
+  const toml::node* n = get(key, false);
   std::vector<Section> out;
   if (!n) return out;
   auto a = n->as_array();

@@ -72,7 +72,8 @@ class Section {
   friend class SceneFile;
   Section(const SceneFile* file, const toml::table* table, std::string path)
       : file_(file), table_(table), path_(std::move(path)) {}
-  const toml::node* get(std::string_view key) const;  // marks the key as read
+  // Marks the key as read; `leaf` keys (values, not tables) are recorded in queried_keys().
+  const toml::node* get(std::string_view key, bool leaf = true) const;
   std::string full(std::string_view key) const;
   const SceneFile* file_ = nullptr;
   const toml::table* table_ = nullptr;
@@ -99,7 +100,8 @@ class SceneFile {
   std::string text_as_run() const;
   // Throws on the first key (in file order) that no parser read.
   void check_unknown_keys() const;
-  // Every dotted key (array indices dropped) that parsers asked for, present or not.
+  // Every dotted value key (array indices dropped, tables left out) that parsers asked for,
+  // present or not.
   const std::set<std::string>& queried_keys() const { return queried_; }
 
  private:
