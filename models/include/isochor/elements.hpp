@@ -1,0 +1,50 @@
+// Element kernels: value, gradient and Hessian of one element's energy (or constraint) in terms
+// of its node positions, stacked node after node (x0, y0, z0, x1, ...). No kernel knows a mesh.
+#pragma once
+#include <Eigen/Core>
+
+#include "isochor/material.hpp"
+
+namespace isochor {
+
+using Vec3 = Eigen::Vector3d;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Vec9n = Eigen::Matrix<double, 9, 1>;
+using Vec12 = Eigen::Matrix<double, 12, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Mat9n = Eigen::Matrix<double, 9, 9>;
+using Mat12 = Eigen::Matrix<double, 12, 12>;
+
+// A linear tet: F = Ds Dm^-1 and the constant 9x12 map dF/dx (vec(F) column-major).
+struct TetShape {
+  Mat3 Dm_inv;
+  double rest_volume = 0;
+  Eigen::Matrix<double, 9, 12> dFdx;
+
+  static TetShape make(const Vec3& X0, const Vec3& X1, const Vec3& X2, const Vec3& X3);
+  Mat3 F(const Vec12& x) const;
+};
+
+// Energy V psi(F) of a tet; gradient V dFdx^T vec(P), Hessian V dFdx^T dP/dF dFdx.
+double tet_energy(const Material& m, const TetShape& s, const Vec12& x, Vec12* grad, Mat12* hess);
+
+// Signed volume of a tet and its derivatives (the zone-volume constraint per element).
+double tet_volume(const Vec12& x, Vec12* grad, Mat12* hess);
+
+// Epidermis, CNH paper eq. (16): on a surface triangle of rest area A0,
+// A0 lambda_e U(J~; gamma) with J~ = A / A0 (the area ratio, det of the reduced 3x2 F).
+double epidermis_energy(double rest_area, double lambda_e, double gamma, const Vec9n& x, Vec9n* grad, Mat9n* hess);
+double triangle_area(const Vec9n& x, Vec9n* grad, Mat9n* hess);
+
+// Spring between two nodes: k/2 (|x1 - x0| - L)^2.
+double spring_energy(double k, double rest_length, const Vec6& x, Vec6* grad, Mat6* hess);
+// Spring damping force along the spring, f0 = -c (d^ d^T)(v0 - v1), f1 = -f0, with d = x1 - x0;
+// its derivatives with respect to positions and velocities (6x6 each).
+Vec6 spring_damping_force(double c, const Vec6& x, const Vec6& v, Mat6* df_dx, Mat6* df_dv);
+
+// Smooth ground: a plane through `point` with unit `normal`; for the signed distance s of a node,
+// energy k/3 (delta - s)^3 when s < delta (contact thickness delta), else 0. C^2 in position.
+double ground_energy(double k, double delta, const Vec3& point, const Vec3& normal, const Vec3& x, Vec3* grad,
+                     Mat3* hess);
+
+}  // namespace isochor

@@ -1,0 +1,117 @@
+// Surface triangles (the epidermis), springs, and the ground plane.
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "isochor/elements.hpp"
+
+namespace isochor {
+
+namespace {
+Mat3 skew(const Vec3& a) {
+  Mat3 s;
+  s << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+  return s;
+}
+}  // namespace
+
+double triangle_area(const Vec9n& x, Vec9n* grad, Mat9n* hess) {
+  // n = (x1 - x0) x (x2 - x0), A = |n| / 2. dn = -[e2]x de1 + [e1]x de2 with e1 = x1 - x0, e2 = x2 - x0.
+  const Vec3 e1 = x.segment<3>(3) - x.segment<3>(0), e2 = x.segment<3>(6) - x.segment<3>(0);
+  const Vec3 n = e1.cross(e2);
+  const double len = n.norm();
+  if (!grad && !hess) return 0.5 * len;
+  Eigen::Matrix<double, 3, 9> dn;  // dn/dx
+  const Mat3 s1 = skew(e1), s2 = skew(e2);
+  dn.block<3, 3>(0, 3) = -s2;
+  dn.block<3, 3>(0, 6) = s1;
+  dn.block<3, 3>(0, 0) = s2 - s1;
+  const Vec3 nh = n / len;
+  if (grad) *grad = 0.5 * dn.transpose() * nh;
+  if (hess) {
+    // A'' = 1/2 [dn^T (I - nh nh^T)/|n| dn + sum_i nh_i d2n_i]; d2(n . w) for fixed w:
+    // n . w = e1 . (e2 x w) so d2/de1 de2 = -[w]x ... from n.w = e1^T [e2]x^T w = -e1^T [w]x e2... 
+    Mat9n H = dn.transpose() * (Mat3::Identity() - nh * nh.transpose()) / len * dn;
+    // n . w = (e1 x e2) . w = e1 . (e2 x w) = e1^T [e2]x w = -e1^T [w]x e2, so d2/de1de2 = -[w]x.
+    Eigen::Matrix<double, 6, 6> He = Eigen::Matrix<double, 6, 6>::Zero();
+    He.block<3, 3>(0, 3) = -skew(nh);
+    He.block<3, 3>(3, 0) = skew(nh);  // transpose of -[w]x
+    Eigen::Matrix<double, 6, 9> D = Eigen::Matrix<double, 6, 9>::Zero();
+    D.block<3, 3>(0, 0) = -Mat3::Identity();
+    D.block<3, 3>(0, 3) = Mat3::Identity();
+    D.block<3, 3>(3, 0) = -Mat3::Identity();
+    D.block<3, 3>(3, 6) = Mat3::Identity();
+    H += D.transpose() * He * D;
+    *hess = 0.5 * H;
+  }
+  return 0.5 * len;
+}
+
+double epidermis_energy(double A0, double lambda_e, double gamma, const Vec9n& x, Vec9n* grad, Mat9n* hess) {
+  Vec9n dA;
+  Mat9n d2A;
+  const double A = triangle_area(x, (grad || hess) ? &dA : nullptr, hess ? &d2A : nullptr);
+  const Penalty u = penalty_U(A / A0, gamma);
+  if (grad) *grad = lambda_e * u.dU * dA;
+  if (hess) *hess = lambda_e * (u.d2U / A0 * dA * dA.transpose() + u.dU * d2A);
+  return A0 * lambda_e * u.U;
+}
+
+double spring_energy(double k, double L, const Vec6& x, Vec6* grad, Mat6* hess) {
+  const Vec3 d = x.segment<3>(3) - x.segment<3>(0);
+  const double len = d.norm(), ext = len - L;
+  const Vec3 dh = d / len;
+  if (grad) {
+    grad->segment<3>(3) = k * ext * dh;
+    grad->segment<3>(0) = -k * ext * dh;
+  }
+  if (hess) {
+    const Mat3 K = k * (dh * dh.transpose() + ext / len * (Mat3::Identity() - dh * dh.transpose()));
+    hess->block<3, 3>(0, 0) = K;
+    hess->block<3, 3>(3, 3) = K;
+    hess->block<3, 3>(0, 3) = -K;
+    hess->block<3, 3>(3, 0) = -K;
+  }
+  return 0.5 * k * ext * ext;
+}
+
+Vec6 spring_damping_force(double c, const Vec6& x, const Vec6& v, Mat6* df_dx, Mat6* df_dv) {
+  const Vec3 d = x.segment<3>(3) - x.segment<3>(0);
+  const double len = d.norm();
+  const Vec3 dh = d / len;
+  const Vec3 w = v.segment<3>(0) - v.segment<3>(3);
+  const Vec3 f0 = -c * dh * dh.dot(w);
+  Vec6 f;
+  f << f0, -f0;
+  const Mat3 Pd = dh * dh.transpose();
+  if (df_dv) {
+    df_dv->block<3, 3>(0, 0) = -c * Pd;
+    df_dv->block<3, 3>(0, 3) = c * Pd;
+    df_dv->block<3, 3>(3, 0) = c * Pd;
+    df_dv->block<3, 3>(3, 3) = -c * Pd;
+  }
+  if (df_dx) {
+    // d(dh (dh . w))/dd = [(dh . w) I + dh w^T] (I - dh dh^T) / |d|, and dd/dx0 = -I, dd/dx1 = I.
+    const Mat3 G = -c * (dh.dot(w) * Mat3::Identity() + dh * w.transpose()) * (Mat3::Identity() - Pd) / len;
+    df_dx->block<3, 3>(0, 0) = -G;
+    df_dx->block<3, 3>(0, 3) = G;
+    df_dx->block<3, 3>(3, 0) = G;
+    df_dx->block<3, 3>(3, 3) = -G;
+  }
+  return f;
+}
+
+double ground_energy(double k, double delta, const Vec3& point, const Vec3& normal, const Vec3& x, Vec3* grad,
+                     Mat3* hess) {
+  const double s = (x - point).dot(normal);
+  const double p = delta - s;
+  if (p <= 0) {
+    if (grad) grad->setZero();
+    if (hess) hess->setZero();
+    return 0.0;
+  }
+  if (grad) *grad = -k * p * p * normal;
+  if (hess) *hess = 2.0 * k * p * normal * normal.transpose();
+  return k / 3.0 * p * p * p;
+}
+
+}  // namespace isochor
