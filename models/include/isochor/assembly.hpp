@@ -1,0 +1,96 @@
+// Assembly of a mesh's elastic energy, gradient and Hessian over the free degrees of freedom into
+// one sparsity pattern built once. Every element keeps a slot map from its local Hessian entries
+// to positions in the value array, so that a Hessian evaluation is a plain numeric fill. Elements
+// are coloured (no two of a colour share a node) and each colour is filled in parallel (OpenMP)
+// without races or allocation.
+#pragma once
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "isochor/elements.hpp"
+#include "isochor/material.hpp"
+#include "isochor/mesh.hpp"
+
+namespace isochor {
+
+using Index = std::int64_t;
+
+// Which nodes are unknowns: free_index[node] is the node's index among the free nodes, or -1 for
+// a Dirichlet node. Degree of freedom 3 f + d for free node f and axis d.
+struct DofMap {
+  std::vector<int> free_index;
+  std::vector<int> free_nodes;
+  int num_free() const { return static_cast<int>(free_nodes.size()); }
+  static DofMap make(int num_nodes, const std::vector<int>& dirichlet_nodes);
+};
+
+// A symmetric pattern (both triangles stored) over the free dofs in compressed sparse columns,
+// with 3x3 blocks for every pair of free nodes that share an element.
+struct Pattern {
+  Index n = 0;
+  std::vector<Index> col_ptr, row_ind;
+  Index nnz() const { return static_cast<Index>(row_ind.size()); }
+  // Position of (row, col) in the value array, or -1 when outside the pattern.
+  Index find(Index row, Index col) const;
+  // Builds the pattern of all node pairs in `elements` (lists of node indices).
+  static Pattern from_elements(const DofMap& dofs, const std::vector<std::vector<int>>& elements);
+};
+
+// Slot maps: for an element of k nodes, (3k)^2 entries, -1 where a row or column is a Dirichlet dof.
+std::vector<Index> slot_map(const Pattern& p, const DofMap& dofs, const int* nodes, int k);
+
+// Greedy colouring of elements such that no two elements of one colour share a node.
+std::vector<std::vector<int>> colour_elements(int num_nodes, const std::vector<std::vector<int>>& elements);
+
+struct EpidermisSpec {
+  double lambda_e = 0.0, gamma = 1.0;  // off when lambda_e = 0
+};
+
+class ElasticAssembly {
+ public:
+  ElasticAssembly(const Mesh& mesh, std::shared_ptr<const Material> material, const DofMap& dofs,
+                  EpidermisSpec epidermis = {});
+
+  const Pattern& pattern() const { return pattern_; }
+  const DofMap& dofs() const { return dofs_; }
+  // Elastic energy at positions x (all nodes).
+  double energy(const Points& x) const;
+  // Energy and its gradient with respect to every node (3 N, Dirichlet nodes included).
+  double gradient(const Points& x, Eigen::VectorXd& grad) const;
+  // values[slot] += scale * Hessian over the free dofs (values sized pattern().nnz()).
+  void add_hessian(const Points& x, double scale, double* values) const;
+  // out += scale * K(x) v over all nodes (Rayleigh damping; v of every node, 3 N).
+  void add_hessian_times(const Points& x, const Eigen::VectorXd& v, double scale, Eigen::VectorXd& out) const;
+  // Per-tet pressure of the material, -tr(sigma)/3 (for CNH: -lambda U'(J) plus the deviatoric
+  // part, which is traceless, so exactly the penalty's volumetric stress).
+  void pressures(const Points& x, std::vector<double>& p) const;
+  // Number of tets with J <= 0.
+  int inverted_tets(const Points& x) const;
+  const Material& material() const { return *material_; }
+
+ private:
+  const Mesh& mesh_;
+  std::shared_ptr<const Material> material_;
+  DofMap dofs_;
+  EpidermisSpec epi_;
+  std::vector<TetShape> shapes_;
+  std::vector<double> tri_area_;
+  Pattern pattern_;
+  std::vector<std::vector<int>> tet_colours_, tri_colours_;
+  std::vector<Index> tet_slots_, tri_slots_;  // 144 per tet, 81 per triangle
+};
+
+// Lumped mass per node: density times a quarter of the volume of every tet around it.
+Eigen::VectorXd lumped_mass(const Mesh& mesh, double density);
+
+// Tets gathered from Eigen-style views of the positions.
+inline Vec12 gather(const Points& x, const Tet& t) {
+  Vec12 v;
+  for (int k = 0; k < 4; ++k) v.segment<3>(3 * k) = x.col(t[k]);
+  return v;
+}
+
+}  // namespace isochor

@@ -1,0 +1,58 @@
+// Volume constraints: one scalar g_j per zone (sum of the zone's tet volumes minus its rest
+// volume, CNH paper eq. (6)), or one for a closed surface (divergence theorem, for the mass-spring
+// model). Each supplies g, the sparse gradient G over the free dofs (a fixed pattern per row),
+// dg/dt from the velocities of Dirichlet nodes, and the contracted Hessian sum_j lambda_j H_j
+// filled into an assembly pattern.
+#pragma once
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "isochor/assembly.hpp"
+
+namespace isochor {
+
+class VolumeConstraints {
+ public:
+  // Zone constraints: each zone a list of tets (zones may overlap).
+  static VolumeConstraints zones(const Mesh& mesh, const std::vector<std::vector<int>>& zone_tets, const DofMap& dofs,
+                                 const Pattern& pattern);
+  // One constraint on the volume enclosed by the mesh's surface triangles.
+  static VolumeConstraints surface(const Mesh& mesh, const DofMap& dofs, const Pattern& pattern);
+
+  int size() const { return static_cast<int>(rest_.size()); }
+  const std::vector<double>& rest_volumes() const { return rest_; }
+  // Current volume of each constraint.
+  void volumes(const Points& x, Eigen::VectorXd& vol) const;
+  // g = volume - rest volume.
+  void value(const Points& x, Eigen::VectorXd& g) const;
+  // Row j of G: free dof indices (sorted, fixed) and values.
+  const std::vector<Index>& row_dofs(int j) const { return row_dofs_[j]; }
+  void gradient(const Points& x, std::vector<std::vector<double>>& rows) const;
+  // dg/dt = sum over Dirichlet nodes d of dg/dx_d . v_d (v: velocities of all nodes, 3 N).
+  void time_derivative(const Points& x, const Eigen::VectorXd& v, Eigen::VectorXd& gt) const;
+  // values[slot] += scale * sum_j lambda_j H_j over the free dofs.
+  void add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const;
+  // Full gradient of g_j with respect to every node (3 N), for tests and diagnostics.
+  Eigen::VectorXd full_gradient(const Points& x, int j) const;
+
+ private:
+  struct Element {
+    int nodes[4];  // tets; for surface triangles nodes[0] = -1 stands for the origin
+    int constraint;
+  };
+  std::vector<Element> elements_;
+  std::vector<std::vector<int>> colours_;
+  std::vector<Index> slots_;              // 144 per element
+  std::vector<std::vector<Index>> row_dofs_;
+  std::vector<std::vector<int>> row_slot_;  // per element: 12 entries, position in its row or -1
+  std::vector<double> rest_;
+  DofMap dofs_;
+  Vec12 element_x(const Points& x, const Element& e) const;
+  void finish(int num_nodes, const DofMap& dofs, const Pattern& pattern);
+};
+
+// One zone per free vertex: the tets of its k-ring (Irving et al. 2007 for k = 1).
+std::vector<std::vector<int>> ring_zones(const Mesh& mesh, int k, const DofMap& dofs);
+
+}  // namespace isochor

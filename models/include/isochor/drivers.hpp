@@ -1,0 +1,30 @@
+// Dirichlet drivers: a node set whose positions are given functions of time, x_i(t) = X_i + u(t),
+// with velocities u'(t). Kinds: fixed (u = 0), ramp (u = u_end * clamp((t - t0)/(t1 - t0))),
+// keyframes (piecewise linear, or cubic Hermite with Catmull-Rom tangents, C^1), sinusoid
+// (u = amplitude * sin(2 pi f t + phase)).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "isochor/mesh.hpp"
+
+namespace isochor {
+
+struct Driver {
+  enum class Kind { fixed, ramp, keyframes_linear, keyframes_cubic, sinusoid };
+  Kind kind = Kind::fixed;
+  std::vector<int> nodes;
+  Eigen::Vector3d vector = Eigen::Vector3d::Zero();  // ramp: end displacement; sinusoid: amplitude
+  double t0 = 0, t1 = 1;                             // ramp interval
+  double frequency = 1, phase = 0;                   // sinusoid
+  std::vector<double> times;                         // keyframes
+  std::vector<Eigen::Vector3d> values;               // keyframe displacements
+
+  // Displacement and its time derivative at t.
+  Eigen::Vector3d displacement(double t) const;
+  Eigen::Vector3d velocity(double t) const;
+  // Writes positions and velocities (3 N vector) of the driven nodes at time t.
+  void apply(const Points& rest, double t, Points& x, Eigen::VectorXd* v) const;
+};
+
+}  // namespace isochor

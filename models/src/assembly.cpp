@@ -1,0 +1,252 @@
+#include "isochor/assembly.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "isochor/error.hpp"
+
+namespace isochor {
+
+DofMap DofMap::make(int num_nodes, const std::vector<int>& dirichlet) {
+  DofMap d;
+  d.free_index.assign(num_nodes, 0);
+  for (int v : dirichlet) d.free_index.at(v) = -1;
+  for (int v = 0; v < num_nodes; ++v)
+    if (d.free_index[v] == 0) {
+      d.free_index[v] = static_cast<int>(d.free_nodes.size());
+      d.free_nodes.push_back(v);
+    }
+  return d;
+}
+
+Index Pattern::find(Index row, Index col) const {
+  auto b = row_ind.begin() + col_ptr[col], e = row_ind.begin() + col_ptr[col + 1];
+  auto it = std::lower_bound(b, e, row);
+  return (it != e && *it == row) ? static_cast<Index>(it - row_ind.begin()) : -1;
+}
+
+Pattern Pattern::from_elements(const DofMap& dofs, const std::vector<std::vector<int>>& elements) {
+  // Node graph of free nodes, then each node pair expands into a dense 3x3 block.
+  const int nf = dofs.num_free();
+  std::vector<std::vector<int>> nbr(nf);
+  for (const auto& el : elements)
+    for (int a : el) {
+      const int fa = dofs.free_index[a];
+      if (fa < 0) continue;
+      for (int b : el) {
+        const int fb = dofs.free_index[b];
+        if (fb >= 0) nbr[fa].push_back(fb);
+      }
+    }
+  Pattern p;
+  p.n = 3 * static_cast<Index>(nf);
+  p.col_ptr.assign(p.n + 1, 0);
+  for (int f = 0; f < nf; ++f) {
+    auto& list = nbr[f];
+    if (list.empty()) list.push_back(f);  // a free node in no element still has its diagonal
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  for (int f = 0; f < nf; ++f)
+    for (int d = 0; d < 3; ++d) p.col_ptr[3 * f + d + 1] = p.col_ptr[3 * f + d] + 3 * static_cast<Index>(nbr[f].size());
+  p.row_ind.resize(p.col_ptr.back());
+  for (int f = 0; f < nf; ++f)
+    for (int d = 0; d < 3; ++d) {
+      Index k = p.col_ptr[3 * f + d];
+      for (int g : nbr[f])
+        for (int e = 0; e < 3; ++e) p.row_ind[k++] = 3 * static_cast<Index>(g) + e;
+    }
+  return p;
+}
+
+std::vector<Index> slot_map(const Pattern& p, const DofMap& dofs, const int* nodes, int k) {
+  const int n = 3 * k;
+  std::vector<Index> s(n * n, -1);
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) {
+      const int fa = dofs.free_index[nodes[a / 3]], fb = dofs.free_index[nodes[b / 3]];
+      if (fa < 0 || fb < 0) continue;
+      // Local entry (a, b) = row a, column b.
+      s[a * n + b] = p.find(3 * static_cast<Index>(fa) + a % 3, 3 * static_cast<Index>(fb) + b % 3);
+    }
+  return s;
+}
+
+std::vector<std::vector<int>> colour_elements(int num_nodes, const std::vector<std::vector<int>>& elements) {
+  std::vector<std::vector<int>> node_colours(num_nodes);
+  std::vector<std::vector<int>> colours;
+  std::vector<char> used;
+  for (int e = 0; e < static_cast<int>(elements.size()); ++e) {
+    used.assign(colours.size() + 1, 0);
+    for (int v : elements[e])
+      for (int c : node_colours[v]) used[c] = 1;
+    int c = 0;
+    while (used[c]) ++c;
+    if (c == static_cast<int>(colours.size())) colours.emplace_back();
+    colours[c].push_back(e);
+    for (int v : elements[e]) node_colours[v].push_back(c);
+  }
+  return colours;
+}
+
+Eigen::VectorXd lumped_mass(const Mesh& mesh, double density) {
+  Eigen::VectorXd m = Eigen::VectorXd::Zero(mesh.num_nodes());
+  for (int e = 0; e < mesh.num_tets(); ++e)
+    for (int v : mesh.tets()[e]) m[v] += density * mesh.rest_volumes()[e] / 4.0;
+  return m;
+}
+
+namespace {
+Vec9n gather_tri(const Points& x, const Tri& t) {
+  Vec9n v;
+  for (int k = 0; k < 3; ++k) v.segment<3>(3 * k) = x.col(t[k]);
+  return v;
+}
+}  // namespace
+
+ElasticAssembly::ElasticAssembly(const Mesh& mesh, std::shared_ptr<const Material> material, const DofMap& dofs,
+                                 EpidermisSpec epidermis)
+    : mesh_(mesh), material_(std::move(material)), dofs_(dofs), epi_(epidermis) {
+  const auto& X = mesh.rest_positions();
+  std::vector<std::vector<int>> tets(mesh.num_tets()), tris;
+  shapes_.reserve(mesh.num_tets());
+  for (int e = 0; e < mesh.num_tets(); ++e) {
+    const Tet& t = mesh.tets()[e];
+    tets[e].assign(t.begin(), t.end());
+    shapes_.push_back(TetShape::make(X.col(t[0]), X.col(t[1]), X.col(t[2]), X.col(t[3])));
+  }
+  if (epi_.lambda_e > 0)
+    for (const Tri& f : mesh.surface()) {
+      tris.emplace_back(f.begin(), f.end());
+      tri_area_.push_back(triangle_area(gather_tri(X, f), nullptr, nullptr));
+    }
+  pattern_ = Pattern::from_elements(dofs_, tets);  // surface triangles couple only tet neighbours
+  tet_colours_ = colour_elements(mesh.num_nodes(), tets);
+  tri_colours_ = colour_elements(mesh.num_nodes(), tris);
+  tet_slots_.resize(144 * static_cast<std::size_t>(mesh.num_tets()));
+  for (int e = 0; e < mesh.num_tets(); ++e) {
+    auto s = slot_map(pattern_, dofs_, tets[e].data(), 4);
+    std::copy(s.begin(), s.end(), tet_slots_.begin() + 144 * static_cast<std::size_t>(e));
+  }
+  tri_slots_.resize(81 * tris.size());
+  for (std::size_t f = 0; f < tris.size(); ++f) {
+    auto s = slot_map(pattern_, dofs_, tris[f].data(), 3);
+    std::copy(s.begin(), s.end(), tri_slots_.begin() + 81 * f);
+  }
+}
+
+double ElasticAssembly::energy(const Points& x) const {
+  double E = 0.0;
+  const int T = mesh_.num_tets();
+#pragma omp parallel for reduction(+ : E) schedule(static)
+  for (int e = 0; e < T; ++e) E += tet_energy(*material_, shapes_[e], gather(x, mesh_.tets()[e]), nullptr, nullptr);
+  const int S = static_cast<int>(tri_area_.size());
+  for (int f = 0; f < S; ++f)
+    E += epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, mesh_.surface()[f]), nullptr, nullptr);
+  return E;
+}
+
+double ElasticAssembly::gradient(const Points& x, Eigen::VectorXd& grad) const {
+  grad.setZero(3 * x.cols());
+  double E = 0.0;
+  for (const auto& colour : tet_colours_) {
+    const int n = static_cast<int>(colour.size());
+#pragma omp parallel for reduction(+ : E) schedule(static)
+    for (int i = 0; i < n; ++i) {
+      const int e = colour[i];
+      const Tet& t = mesh_.tets()[e];
+      Vec12 g;
+      E += tet_energy(*material_, shapes_[e], gather(x, t), &g, nullptr);
+      for (int k = 0; k < 4; ++k) grad.segment<3>(3 * t[k]) += g.segment<3>(3 * k);
+    }
+  }
+  for (const auto& colour : tri_colours_) {
+    const int n = static_cast<int>(colour.size());
+#pragma omp parallel for reduction(+ : E) schedule(static)
+    for (int i = 0; i < n; ++i) {
+      const int f = colour[i];
+      const Tri& t = mesh_.surface()[f];
+      Vec9n g;
+      E += epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), &g, nullptr);
+      for (int k = 0; k < 3; ++k) grad.segment<3>(3 * t[k]) += g.segment<3>(3 * k);
+    }
+  }
+  return E;
+}
+
+void ElasticAssembly::add_hessian(const Points& x, double scale, double* values) const {
+  for (const auto& colour : tet_colours_) {
+    const int n = static_cast<int>(colour.size());
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      const int e = colour[i];
+      Mat12 H;
+      tet_energy(*material_, shapes_[e], gather(x, mesh_.tets()[e]), nullptr, &H);
+      const Index* s = tet_slots_.data() + 144 * static_cast<std::size_t>(e);
+      for (int a = 0; a < 12; ++a)
+        for (int b = 0; b < 12; ++b)
+          if (s[a * 12 + b] >= 0) values[s[a * 12 + b]] += scale * H(a, b);
+    }
+  }
+  for (const auto& colour : tri_colours_) {
+    const int n = static_cast<int>(colour.size());
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      const int f = colour[i];
+      Mat9n H;
+      epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, mesh_.surface()[f]), nullptr, &H);
+      const Index* s = tri_slots_.data() + 81 * static_cast<std::size_t>(f);
+      for (int a = 0; a < 9; ++a)
+        for (int b = 0; b < 9; ++b)
+          if (s[a * 9 + b] >= 0) values[s[a * 9 + b]] += scale * H(a, b);
+    }
+  }
+}
+
+void ElasticAssembly::add_hessian_times(const Points& x, const Eigen::VectorXd& v, double scale,
+                                        Eigen::VectorXd& out) const {
+  for (const auto& colour : tet_colours_) {
+    const int n = static_cast<int>(colour.size());
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      const int e = colour[i];
+      const Tet& t = mesh_.tets()[e];
+      Mat12 H;
+      tet_energy(*material_, shapes_[e], gather(x, t), nullptr, &H);
+      Vec12 ve;
+      for (int k = 0; k < 4; ++k) ve.segment<3>(3 * k) = v.segment<3>(3 * t[k]);
+      const Vec12 r = scale * H * ve;
+      for (int k = 0; k < 4; ++k) out.segment<3>(3 * t[k]) += r.segment<3>(3 * k);
+    }
+  }
+  for (const auto& colour : tri_colours_) {
+    const int n = static_cast<int>(colour.size());
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      const int f = colour[i];
+      const Tri& t = mesh_.surface()[f];
+      Mat9n H;
+      epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), nullptr, &H);
+      Vec9n ve;
+      for (int k = 0; k < 3; ++k) ve.segment<3>(3 * k) = v.segment<3>(3 * t[k]);
+      const Vec9n r = scale * H * ve;
+      for (int k = 0; k < 3; ++k) out.segment<3>(3 * t[k]) += r.segment<3>(3 * k);
+    }
+  }
+}
+
+void ElasticAssembly::pressures(const Points& x, std::vector<double>& p) const {
+  p.resize(mesh_.num_tets());
+  const int T = mesh_.num_tets();
+#pragma omp parallel for schedule(static)
+  for (int e = 0; e < T; ++e) p[e] = material_->pressure(shapes_[e].F(gather(x, mesh_.tets()[e])));
+}
+
+int ElasticAssembly::inverted_tets(const Points& x) const {
+  int n = 0;
+  for (const Tet& t : mesh_.tets())
+    n += tet_signed_volume(x.col(t[0]), x.col(t[1]), x.col(t[2]), x.col(t[3])) <= 0;
+  return n;
+}
+
+}  // namespace isochor

@@ -1,0 +1,150 @@
+#include <algorithm>
+
+#include "isochor/constraints.hpp"
+
+namespace isochor {
+
+Vec12 VolumeConstraints::element_x(const Points& x, const Element& e) const {
+  Vec12 v;
+  for (int k = 0; k < 4; ++k) v.segment<3>(3 * k) = e.nodes[k] < 0 ? Vec3::Zero() : Vec3(x.col(e.nodes[k]));
+  return v;
+}
+
+VolumeConstraints VolumeConstraints::zones(const Mesh& mesh, const std::vector<std::vector<int>>& zone_tets,
+                                           const DofMap& dofs, const Pattern& pattern) {
+  VolumeConstraints c;
+  for (int j = 0; j < static_cast<int>(zone_tets.size()); ++j) {
+    double v0 = 0;
+    for (int e : zone_tets[j]) {
+      const Tet& t = mesh.tets()[e];
+      c.elements_.push_back({{t[0], t[1], t[2], t[3]}, j});
+      v0 += mesh.rest_volumes()[e];
+    }
+    c.rest_.push_back(v0);
+  }
+  c.finish(mesh.num_nodes(), dofs, pattern);
+  return c;
+}
+
+VolumeConstraints VolumeConstraints::surface(const Mesh& mesh, const DofMap& dofs, const Pattern& pattern) {
+  // The enclosed volume is the sum over outward triangles (a, b, c) of the signed volume of the
+  // tet (origin, a, b, c): the divergence theorem. The origin is node -1.
+  VolumeConstraints c;
+  for (const Tri& f : mesh.surface()) c.elements_.push_back({{-1, f[0], f[1], f[2]}, 0});
+  c.rest_.push_back(surface_volume(mesh.rest_positions(), mesh.surface()));
+  c.finish(mesh.num_nodes(), dofs, pattern);
+  return c;
+}
+
+void VolumeConstraints::finish(int num_nodes, const DofMap& dofs, const Pattern& pattern) {
+  dofs_ = dofs;
+  auto dof = [&](int n, int d) { return 3 * static_cast<Index>(dofs.free_index[n]) + d; };
+  auto is_free = [&](int n) { return n >= 0 && dofs.free_index[n] >= 0; };
+  // Rows of G: the free dofs of every element's nodes.
+  row_dofs_.assign(rest_.size(), {});
+  for (const Element& e : elements_)
+    for (int n : e.nodes)
+      if (is_free(n))
+        for (int d = 0; d < 3; ++d) row_dofs_[e.constraint].push_back(dof(n, d));
+  for (auto& r : row_dofs_) {
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+  }
+  std::vector<std::vector<int>> lists;
+  for (const Element& e : elements_) {
+    std::vector<int> l, rs(12, -1);
+    const auto& r = row_dofs_[e.constraint];
+    for (int k = 0; k < 4; ++k) {
+      const int n = e.nodes[k];
+      if (n >= 0) l.push_back(n);
+      if (!is_free(n)) continue;
+      for (int d = 0; d < 3; ++d)
+        rs[3 * k + d] = static_cast<int>(std::lower_bound(r.begin(), r.end(), dof(n, d)) - r.begin());
+    }
+    lists.push_back(l);
+    row_slot_.push_back(rs);
+    // Hessian slots; the origin of a surface element has none (a stand-in node, then cleared).
+    int nodes[4];
+    for (int k = 0; k < 4; ++k) nodes[k] = e.nodes[k] < 0 ? e.nodes[1] : e.nodes[k];
+    auto s = slot_map(pattern, dofs, nodes, 4);
+    if (e.nodes[0] < 0)
+      for (int a = 0; a < 12; ++a)
+        for (int b = 0; b < 12; ++b)
+          if (a < 3 || b < 3) s[a * 12 + b] = -1;
+    slots_.insert(slots_.end(), s.begin(), s.end());
+  }
+  colours_ = colour_elements(num_nodes, lists);
+}
+
+void VolumeConstraints::volumes(const Points& x, Eigen::VectorXd& vol) const {
+  vol.setZero(size());
+  for (const Element& e : elements_) vol[e.constraint] += tet_volume(element_x(x, e), nullptr, nullptr);
+}
+
+void VolumeConstraints::value(const Points& x, Eigen::VectorXd& g) const {
+  volumes(x, g);
+  for (int j = 0; j < size(); ++j) g[j] -= rest_[j];
+}
+
+void VolumeConstraints::gradient(const Points& x, std::vector<std::vector<double>>& rows) const {
+  rows.resize(size());
+  for (int j = 0; j < size(); ++j) rows[j].assign(row_dofs_[j].size(), 0.0);
+  for (std::size_t i = 0; i < elements_.size(); ++i) {
+    const Element& e = elements_[i];
+    Vec12 g;
+    tet_volume(element_x(x, e), &g, nullptr);
+    for (int a = 0; a < 12; ++a)
+      if (row_slot_[i][a] >= 0) rows[e.constraint][row_slot_[i][a]] += g[a];
+  }
+}
+
+Eigen::VectorXd VolumeConstraints::full_gradient(const Points& x, int j) const {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(3 * x.cols());
+  for (const Element& e : elements_) {
+    if (e.constraint != j) continue;
+    Vec12 g;
+    tet_volume(element_x(x, e), &g, nullptr);
+    for (int k = 0; k < 4; ++k)
+      if (e.nodes[k] >= 0) out.segment<3>(3 * e.nodes[k]) += g.segment<3>(3 * k);
+  }
+  return out;
+}
+
+void VolumeConstraints::time_derivative(const Points& x, const Eigen::VectorXd& v, Eigen::VectorXd& gt) const {
+  gt.setZero(size());
+  for (const Element& e : elements_) {
+    bool driven = false;
+    for (int n : e.nodes) driven |= n >= 0 && dofs_.free_index[n] < 0;
+    if (!driven) continue;
+    Vec12 g;
+    tet_volume(element_x(x, e), &g, nullptr);
+    for (int k = 0; k < 4; ++k)
+      if (e.nodes[k] >= 0 && dofs_.free_index[e.nodes[k]] < 0)
+        gt[e.constraint] += g.segment<3>(3 * k).dot(v.segment<3>(3 * e.nodes[k]));
+  }
+}
+
+void VolumeConstraints::add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const {
+  for (const auto& colour : colours_) {
+    const int n = static_cast<int>(colour.size());
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      const Element& e = elements_[colour[i]];
+      const double w = scale * lambda[e.constraint];
+      if (w == 0.0) continue;
+      Mat12 H;
+      tet_volume(element_x(x, e), nullptr, &H);
+      const Index* s = slots_.data() + 144 * static_cast<std::size_t>(colour[i]);
+      for (int a = 0; a < 144; ++a)
+        if (s[a] >= 0) values[s[a]] += w * H(a / 12, a % 12);
+    }
+  }
+}
+
+std::vector<std::vector<int>> ring_zones(const Mesh& mesh, int k, const DofMap& dofs) {
+  std::vector<std::vector<int>> zones;
+  for (int v : dofs.free_nodes) zones.push_back(mesh.tet_ring(v, k));
+  return zones;
+}
+
+}  // namespace isochor
