@@ -13,7 +13,7 @@ test: build
 
 bench: build
 	cmake --build $(BUILD) -j$(JOBS) --target isochor_bench
-	./$(BUILD)/bench/isochor_bench
+	./$(BUILD)/isochor_bench
 
 deps:
 	./tools/install-deps.sh

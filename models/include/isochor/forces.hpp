@@ -1,0 +1,59 @@
+// Forces other than elasticity: gravity and ground contact (as a potential), Rayleigh damping,
+// and the spring network of the mass-spring model.
+#pragma once
+#include <vector>
+
+#include "isochor/assembly.hpp"
+
+namespace isochor {
+
+struct GroundSpec {
+  bool enabled = false;
+  Vec3 point = Vec3::Zero(), normal = Vec3::UnitZ();
+  double stiffness = 1e6;   // k in k/3 (delta - s)^3, N/m^3
+  double thickness = 1e-3;  // delta, m
+};
+
+// Gravity and the ground as one external potential: sum_i -m_i g . x_i + ground energy.
+class ExternalPotential {
+ public:
+  ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, GroundSpec ground, const DofMap& dofs, const Pattern& pattern);
+  double energy(const Points& x) const;
+  // grad += gradient over every node (3 N).
+  double add_gradient(const Points& x, Eigen::VectorXd& grad) const;
+  // values += scale * Hessian over the free dofs (the ground's 3x3 diagonal blocks).
+  void add_hessian(const Points& x, double scale, double* values) const;
+  const Eigen::VectorXd& mass() const { return mass_; }
+
+ private:
+  Eigen::VectorXd mass_;
+  Vec3 gravity_;
+  GroundSpec ground_;
+  DofMap dofs_;
+  std::vector<Index> diag_slots_;  // 9 per free node
+};
+
+// Rayleigh damping f = -(alpha M + beta K(x)) v. Its derivative by v is -(alpha M + beta K); the
+// derivative through K(x) (a third derivative of the energy) is left out of Jacobians.
+struct RayleighDamping {
+  double alpha = 0.0, beta = 0.0;
+  // f += damping force (all nodes).
+  void add_force(const ElasticAssembly& a, const Eigen::VectorXd& mass, const Points& x, const Eigen::VectorXd& v,
+                 Eigen::VectorXd& f) const;
+  // values += scale * (alpha M + beta K) over the free dofs.
+  void add_matrix(const ElasticAssembly& a, const Eigen::VectorXd& mass, const Points& x, double scale,
+                  double* values) const;
+};
+
+// Springs of the mass-spring model on a closed triangle surface, after Hong et al. (2006) and
+// Choi and Ko: structural springs on the edges; shear springs across each edge, between the two
+// vertices opposite it (the other diagonal of the two triangles); bending springs between
+// secondary neighbours a - b - c along the straightest continuation of each edge (cos > 0.5).
+struct Spring {
+  int a, b;
+  double rest_length;
+  enum Kind { structural, shear, bending } kind;
+};
+std::vector<Spring> surface_springs(const Points& x, const std::vector<Tri>& surface);
+
+}  // namespace isochor

@@ -1,0 +1,99 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <random>
+
+#include "isochor/forces.hpp"
+#include "isochor/meshing.hpp"
+
+using namespace isochor;
+
+TEST(Forces, GravityAndGroundDerivatives) {
+  Mesh m = make_box(Eigen::Vector3d(0.4, 0.4, 0.2), {2, 2, 1}, Eigen::Vector3d(0, 0, 0.1), 6);
+  DofMap dofs = DofMap::make(m.num_nodes(), {});
+  ElasticAssembly a(m, make_snh(1, 1), dofs);
+  GroundSpec ground{true, Vec3(0, 0, 0.004), Vec3(0, 0, 2.0), 1e5, 0.01};
+  ExternalPotential ext(lumped_mass(m, 1000.0), Vec3(0, 0, -9.81), ground, dofs, a.pattern());
+  EXPECT_NEAR(ext.mass().sum(), 1000.0 * 0.032, 1e-12);  // lumped mass sums to the total
+  Points x = m.rest_positions();
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-0.003, 0.003);
+  for (int i = 0; i < x.size(); ++i) x.data()[i] += u(rng);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
+  const double E = ext.add_gradient(x, g);
+  EXPECT_NEAR(E, ext.energy(x), 1e-15);
+  std::vector<double> values(a.pattern().nnz(), 0.0);
+  ext.add_hessian(x, 1.0, values.data());
+  int touching = 0;
+  for (int n = 0; n < m.num_nodes(); ++n) {
+    touching += x(2, n) < 0.014;
+    for (int d = 0; d < 3; ++d) {
+      Points xp = x, xm = x;
+      xp(d, n) += 1e-7;
+      xm(d, n) -= 1e-7;
+      EXPECT_NEAR(g[3 * n + d], (ext.energy(xp) - ext.energy(xm)) / 2e-7, 1e-6 * (1 + std::abs(g[3 * n + d])));
+      Eigen::VectorXd gp = Eigen::VectorXd::Zero(x.size()), gm = gp;
+      ext.add_gradient(xp, gp);
+      ext.add_gradient(xm, gm);
+      const double fd = (gp[3 * n + 2] - gm[3 * n + 2]) / 2e-7;
+      const Index slot = a.pattern().find(3 * Index(n) + 2, 3 * Index(n) + d);
+      EXPECT_NEAR(values[slot], fd, 1e-5 * (1 + std::abs(fd)));
+    }
+  }
+  EXPECT_GT(touching, 0);
+}
+
+TEST(Forces, RayleighDampingIsLinearInVelocityAndDissipative) {
+  Mesh m = make_box(Eigen::Vector3d::Ones(), {2, 2, 2}, Eigen::Vector3d::Zero(), 6);
+  DofMap dofs = DofMap::make(m.num_nodes(), m.node_sets.at("zmin"));
+  ElasticAssembly a(m, make_cnh(3, 10, 1, 0.1), dofs);
+  const Eigen::VectorXd mass = lumped_mass(m, 10.0);
+  RayleighDamping r{0.3, 0.02};
+  Points x = m.rest_positions();
+  Eigen::VectorXd v = Eigen::VectorXd::Random(x.size());
+  for (int n : m.node_sets.at("zmin")) v.segment<3>(3 * n).setZero();
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(x.size());
+  r.add_force(a, mass, x, v, f);
+  EXPECT_LT(f.dot(v), 0.0);  // at rest K is positive semi-definite and M positive
+  std::vector<double> values(a.pattern().nnz(), 0.0);
+  r.add_matrix(a, mass, x, 1.0, values.data());
+  // -(alpha M + beta K) v on the free dofs equals the force.
+  for (int fr = 0; fr < dofs.num_free(); ++fr)
+    for (int d = 0; d < 3; ++d) {
+      double s = 0;
+      const Index col = 3 * Index(fr) + d;
+      for (Index k = a.pattern().col_ptr[col]; k < a.pattern().col_ptr[col + 1]; ++k) {
+        const Index row = a.pattern().row_ind[k];
+        s += values[k] * v[3 * dofs.free_nodes[row / 3] + row % 3];
+      }
+      EXPECT_NEAR(-s, f[3 * dofs.free_nodes[fr] + d], 1e-12 * (1 + std::abs(s)));
+    }
+}
+
+TEST(Forces, SpringNetworkOnAClosedSurface) {
+  Mesh m = make_sphere(1.0, 0.0, 800, Eigen::Vector3d::Zero());
+  auto springs = surface_springs(m.rest_positions(), m.surface());
+  std::size_t structural = 0, shear = 0, bending = 0;
+  for (const Spring& s : springs) {
+    EXPECT_GT(s.rest_length, 0.0);
+    structural += s.kind == Spring::structural;
+    shear += s.kind == Spring::shear;
+    bending += s.kind == Spring::bending;
+  }
+  // A closed triangle surface has E = 3F/2 edges, one structural spring each.
+  EXPECT_EQ(structural, 3 * m.surface().size() / 2);
+  EXPECT_GT(shear, structural / 2);
+  EXPECT_GT(bending, 0u);
+}
+
+TEST(Forces, CnhPressureIsThePenaltyStress) {
+  // The F-bar deviatoric term is traceless (for J > epsilon), so -tr(sigma)/3 = -lambda U'(J).
+  auto cnh = make_cnh(3.0, 50.0, 2.0, 0.1);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  for (int t = 0; t < 10; ++t) {
+    Mat3 F = Mat3::Identity();
+    for (int i = 0; i < 9; ++i) F(i % 3, i / 3) += u(rng);
+    EXPECT_NEAR(cnh->pressure(F), -50.0 * penalty_U(F.determinant(), 2.0).dU, 1e-10 * 50.0);
+  }
+}
