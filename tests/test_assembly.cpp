@@ -244,3 +244,14 @@ TEST(Drivers, VelocityIsTheTimeDerivativeOfPosition) {
   EXPECT_LT((drivers[4].velocity(0.2 - 1e-9) - drivers[4].velocity(0.2 + 1e-9)).norm(), 1e-6);
   EXPECT_LT((drivers[1].displacement(0.35) - Eigen::Vector3d(0, 0, -0.25)).norm(), 1e-15);
 }
+
+TEST(VolumeConstraints, MultiplierPressureOnOverlappingZones) {
+  Mesh m = make_two_tets(1.0);
+  DofMap dofs = DofMap::make(m.num_nodes(), {});
+  ElasticAssembly a(m, make_cnh(1, 1, 1, 0.1), dofs);
+  const std::vector<std::vector<int>> zones{{0, 1}, {1}};
+  VolumeConstraints c = VolumeConstraints::zones(m, zones, dofs, a.pattern());
+  std::vector<double> p(2, 0.0);
+  c.add_multiplier_pressure(Eigen::Vector2d(2.0, 5.0), VolumeConstraints::element_tets(zones), p);
+  EXPECT_EQ(p, (std::vector<double>{-2.0, -7.0}));
+}

@@ -8,6 +8,10 @@
 #include "isochor/meshing.hpp"
 #include "isochor/output.hpp"
 #include "isochor/output_reader.hpp"
+#include "isochor/progress.hpp"
+
+#include <chrono>
+#include <thread>
 #include "test_util.hpp"
 
 using namespace isochor;
@@ -133,4 +137,22 @@ TEST(Output, UnwritablePathIsAnError) {
   Mesh m = test_mesh();
   std::string msg = test::error_of([&] { OutputWriter w("/proc/no/such/dir/x.h5", m, {}, {"", "", ""}, false); });
   EXPECT_NE(msg.find("/proc/no/such/dir/x.h5"), std::string::npos) << msg;
+}
+
+TEST(Progress, PlainLinesWhenNotATerminal) {
+  std::FILE* f = std::tmpfile();
+  {
+    Progress p("run", 10, f);
+    p.update(1, 0.1);  // within the first second: nothing
+    std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+    p.update(4, 0.4);
+  }
+  std::rewind(f);
+  char buf[256] = {0};
+  std::size_t n = std::fread(buf, 1, sizeof buf - 1, f);
+  std::fclose(f);
+  const std::string out(buf, n);
+  EXPECT_EQ(out.find("frame 1 of"), std::string::npos) << out;
+  EXPECT_NE(out.find("run: frame 4 of 10, t = 0.4 s, wall 1."), std::string::npos) << out;
+  EXPECT_EQ(out.back(), '\n');
 }

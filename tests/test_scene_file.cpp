@@ -114,3 +114,11 @@ TEST(Scene, EveryKeyReadByTheDemosIsDocumented) {
   }
   EXPECT_GT(scenes, 0);
 }
+
+TEST(Scene, RingZonesOnePerNode) {
+  Scene sc = parse_scene(SceneFile::parse("[mesh]\nshape = \"box\"\ncells = 2\n[zones]\nglobal = false\nrings = 1\n", "r.toml"));
+  ASSERT_EQ(sc.zones.size(), 27u);
+  // The centre node of a 2x2x2 Kuhn box is interior: its 1-ring holds 24 tets.
+  EXPECT_EQ(sc.zones[13].first, "ring1_13");
+  EXPECT_EQ(sc.zones[13].second.size(), 24u);
+}

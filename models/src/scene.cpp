@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "isochor/constraints.hpp"
 #include "isochor/error.hpp"
 #include "isochor/meshing.hpp"
 #include "isochor/selection.hpp"
@@ -51,6 +52,12 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
     std::vector<int> all(mesh.num_tets());
     for (int e = 0; e < mesh.num_tets(); ++e) all[e] = e;
     zones.emplace_back("global", std::move(all));
+  }
+  if (const long k = s.integer("rings", 0, 0, 100); k > 0) {
+    // One zone per node: the tets of its k-ring (Irving et al. 2007 for k = 1).
+    const DofMap all = DofMap::make(mesh.num_nodes(), {});
+    const auto rings = ring_zones(mesh, static_cast<int>(k), all);
+    for (std::size_t v = 0; v < rings.size(); ++v) zones.emplace_back("ring" + std::to_string(k) + "_" + std::to_string(v), rings[v]);
   }
   if (s.boolean("from_mesh", false))
     for (const auto& [name, tets] : mesh.zones) zones.emplace_back(name, tets);

@@ -33,6 +33,12 @@ class VolumeConstraints {
   void time_derivative(const Points& x, const Eigen::VectorXd& v, Eigen::VectorXd& gt) const;
   // values[slot] += scale * sum_j lambda_j H_j over the free dofs.
   void add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const;
+  // Per-tet pressure from the multipliers: p_e -= lambda_j for every zone j holding tet e (the
+  // constraint force -lambda_j dV/dx is that of a hydrostatic stress lambda_j I). Tet constraints only.
+  void add_multiplier_pressure(const Eigen::VectorXd& lambda, const std::vector<int>& tet_of_element,
+                               std::vector<double>& p) const;
+  // The tet index of each element, for zone constraints built from `zone_tets`.
+  static std::vector<int> element_tets(const std::vector<std::vector<int>>& zone_tets);
   // Full gradient of g_j with respect to every node (3 N), for tests and diagnostics.
   Eigen::VectorXd full_gradient(const Points& x, int j) const;
 

@@ -141,6 +141,17 @@ void VolumeConstraints::add_hessian(const Points& x, const Eigen::VectorXd& lamb
   }
 }
 
+void VolumeConstraints::add_multiplier_pressure(const Eigen::VectorXd& lambda, const std::vector<int>& tet_of_element,
+                                                std::vector<double>& p) const {
+  for (std::size_t i = 0; i < elements_.size(); ++i) p[tet_of_element[i]] -= lambda[elements_[i].constraint];
+}
+
+std::vector<int> VolumeConstraints::element_tets(const std::vector<std::vector<int>>& zone_tets) {
+  std::vector<int> out;
+  for (const auto& z : zone_tets) out.insert(out.end(), z.begin(), z.end());
+  return out;
+}
+
 std::vector<std::vector<int>> ring_zones(const Mesh& mesh, int k, const DofMap& dofs) {
   std::vector<std::vector<int>> zones;
   for (int v : dofs.free_nodes) zones.push_back(mesh.tet_ring(v, k));
