@@ -121,7 +121,9 @@ TEST(Penalty, ClosedFormsOfTheCnhPaper) {
       const double h = 1e-5;  // and they are derivatives of each other
       EXPECT_NEAR((penalty_U(J + h, beta).U - penalty_U(J - h, beta).U) / (2 * h), u.dU, 1e-8);
       EXPECT_NEAR((penalty_U(J + h, beta).dU - penalty_U(J - h, beta).dU) / (2 * h), u.d2U, 1e-8);
-      if (beta == 0.0) EXPECT_NEAR(u.U, 0.5 * d * d, 1e-15);  // U(J; 0) = (J - 1)^2 / 2
+      if (beta == 0.0) {
+        EXPECT_NEAR(u.U, 0.5 * d * d, 1e-15);  // U(J; 0) = (J - 1)^2 / 2
+      }
     }
 }
 
