@@ -19,13 +19,7 @@ DofMap DofMap::make(int num_nodes, const std::vector<int>& dirichlet) {
   return d;
 }
 
-Index Pattern::find(Index row, Index col) const {
-  auto b = row_ind.begin() + col_ptr[col], e = row_ind.begin() + col_ptr[col + 1];
-  auto it = std::lower_bound(b, e, row);
-  return (it != e && *it == row) ? static_cast<Index>(it - row_ind.begin()) : -1;
-}
-
-Pattern Pattern::from_elements(const DofMap& dofs, const std::vector<std::vector<int>>& elements) {
+Pattern pattern_from_elements(const DofMap& dofs, const std::vector<std::vector<int>>& elements) {
   // Node graph of free nodes, then each node pair expands into a dense 3x3 block.
   const int nf = dofs.num_free();
   std::vector<std::vector<int>> nbr(nf);
@@ -120,7 +114,7 @@ ElasticAssembly::ElasticAssembly(const Mesh& mesh, std::shared_ptr<const Materia
       tris.emplace_back(f.begin(), f.end());
       tri_area_.push_back(triangle_area(gather_tri(X, f), nullptr, nullptr));
     }
-  pattern_ = Pattern::from_elements(dofs_, tets);  // surface triangles couple only tet neighbours
+  pattern_ = pattern_from_elements(dofs_, tets);  // surface triangles couple only tet neighbours
   tet_colours_ = colour_elements(mesh.num_nodes(), tets);
   tri_colours_ = colour_elements(mesh.num_nodes(), tris);
   tet_slots_.resize(144 * static_cast<std::size_t>(mesh.num_tets()));

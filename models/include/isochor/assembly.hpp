@@ -13,10 +13,9 @@
 #include "isochor/elements.hpp"
 #include "isochor/material.hpp"
 #include "isochor/mesh.hpp"
+#include "isochor/sparse_pattern.hpp"
 
 namespace isochor {
-
-using Index = std::int64_t;
 
 // Which nodes are unknowns: free_index[node] is the node's index among the free nodes, or -1 for
 // a Dirichlet node. Degree of freedom 3 f + d for free node f and axis d.
@@ -27,17 +26,10 @@ struct DofMap {
   static DofMap make(int num_nodes, const std::vector<int>& dirichlet_nodes);
 };
 
-// A symmetric pattern (both triangles stored) over the free dofs in compressed sparse columns,
-// with 3x3 blocks for every pair of free nodes that share an element.
-struct Pattern {
-  Index n = 0;
-  std::vector<Index> col_ptr, row_ind;
-  Index nnz() const { return static_cast<Index>(row_ind.size()); }
-  // Position of (row, col) in the value array, or -1 when outside the pattern.
-  Index find(Index row, Index col) const;
-  // Builds the pattern of all node pairs in `elements` (lists of node indices).
-  static Pattern from_elements(const DofMap& dofs, const std::vector<std::vector<int>>& elements);
-};
+// The pattern of the free dofs: symmetric (both triangles stored), with 3x3 blocks for every pair
+// of free nodes that share one of `elements` (lists of node indices).
+using Pattern = SparsePattern;
+Pattern pattern_from_elements(const DofMap& dofs, const std::vector<std::vector<int>>& elements);
 
 // Slot maps: for an element of k nodes, (3k)^2 entries, -1 where a row or column is a Dirichlet dof.
 std::vector<Index> slot_map(const Pattern& p, const DofMap& dofs, const int* nodes, int k);

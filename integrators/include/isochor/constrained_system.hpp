@@ -1,0 +1,52 @@
+// What the integrators see of a model: positions q and velocities v of n free dofs, a lumped
+// (diagonal) mass, forces f(q, v, t) and their Jacobians, and m scalar constraints g(q, t) = 0
+// with their gradients G, time derivatives and contracted Hessians. Nothing here knows meshes,
+// so a pendulum or a multibody test problem runs through the same integrators as a tet mesh.
+#pragma once
+#include <Eigen/Core>
+#include <vector>
+
+#include "isochor/sparse_pattern.hpp"
+
+namespace isochor {
+
+using Eigen::VectorXd;
+
+class ConstrainedSystem {
+ public:
+  virtual ~ConstrainedSystem() = default;
+
+  virtual int num_dofs() const = 0;         // n
+  virtual int num_constraints() const = 0;  // m
+  // Dofs that belong together (a node's x, y, z): dof i is in group i / dofs_per_group().
+  virtual int dofs_per_group() const { return 3; }
+  // Lumped mass of each dof (n), constant and positive.
+  virtual const VectorXd& mass() const = 0;
+  // Pattern of the n x n force Jacobians and constraint Hessians; holds every diagonal entry.
+  virtual const SparsePattern& pattern() const = 0;
+  // The dofs of each constraint row of G (sorted), fixed for the run.
+  virtual const std::vector<std::vector<Index>>& constraint_rows() const = 0;
+
+  // Positions and velocities at the start.
+  virtual void initial_state(double t0, VectorXd& q, VectorXd& v) = 0;
+  // f(q, v, t), every force on the free dofs.
+  virtual void force(double t, const VectorXd& q, const VectorXd& v, VectorXd& f) = 0;
+  // neg_dfdq += -df/dq and neg_dfdv += -df/dv, both in pattern() (either may be null).
+  virtual void add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq,
+                                   double* neg_dfdv) = 0;
+  // g(q, t).
+  virtual void constraint(double t, const VectorXd& q, VectorXd& g) = 0;
+  // Rows of G (values in the layout of constraint_rows()) and, when asked, dg/dt.
+  virtual void constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* g_t) = 0;
+  // values += scale sum_j w_j H_j, H_j the Hessian of g_j by q, in pattern().
+  virtual void add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale,
+                                      double* values) = 0;
+  // Rows of d(G v + dg/dt)/dq (layout of constraint_rows()): (H_j xdot)^T with xdot the velocity of
+  // every point the constraint depends on, driven ones included.
+  virtual void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
+                                            std::vector<std::vector<double>>& rows) = 0;
+  // Typical size of a force, in force units, for the tolerances of the multipliers.
+  virtual double force_scale() const { return 1.0; }
+};
+
+}  // namespace isochor

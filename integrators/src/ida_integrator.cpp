@@ -1,0 +1,504 @@
+#include "isochor/ida_integrator.hpp"
+
+#include <ida/ida.h>
+#include <klu.h>
+#include <metis.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+namespace isochor {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// The GGL Jacobian's pattern over y = (q, v, lambda, mu) and the slot of every block entry.
+struct GglPattern {
+  Index N = 0;
+  SparsePattern p;
+  std::vector<Index> qq, vq, vv;          // per stiffness-pattern entry
+  std::vector<Index> q_diag, v_diag, qv;  // per dof
+  std::vector<std::vector<Index>> gq, gvq, gvv, qmu, vlam;  // per constraint row entry
+
+  void build(const SparsePattern& K, const std::vector<std::vector<Index>>& rows, Index n, Index m) {
+    N = 2 * n + 2 * m;
+    std::vector<std::pair<Index, Index>> e;  // (col, row)
+    e.reserve(3 * K.nnz() + n + 5 * 100);
+    for (Index c = 0; c < n; ++c)
+      for (Index k = K.col_ptr[c]; k < K.col_ptr[c + 1]; ++k) {
+        const Index r = K.row_ind[k];
+        e.emplace_back(c, r);
+        e.emplace_back(c, n + r);
+        e.emplace_back(n + c, n + r);
+      }
+    for (Index i = 0; i < n; ++i) e.emplace_back(n + i, i);
+    for (Index j = 0; j < m; ++j)
+      for (Index d : rows[j]) {
+        e.emplace_back(d, 2 * n + j);          // G in F_g
+        e.emplace_back(d, 2 * n + m + j);      // d(Gv)/dq in F_gv
+        e.emplace_back(n + d, 2 * n + m + j);  // G in F_gv
+        e.emplace_back(2 * n + m + j, d);      // G^T mu in F_q
+        e.emplace_back(2 * n + j, n + d);      // G^T lambda in F_v
+      }
+    std::sort(e.begin(), e.end());
+    e.erase(std::unique(e.begin(), e.end()), e.end());
+    p.n = N;
+    p.col_ptr.assign(N + 1, 0);
+    p.row_ind.resize(e.size());
+    for (std::size_t k = 0; k < e.size(); ++k) {
+      p.col_ptr[e[k].first + 1]++;
+      p.row_ind[k] = e[k].second;
+    }
+    for (Index c = 0; c < N; ++c) p.col_ptr[c + 1] += p.col_ptr[c];
+    qq.resize(K.nnz());
+    vq.resize(K.nnz());
+    vv.resize(K.nnz());
+    for (Index c = 0; c < n; ++c)
+      for (Index k = K.col_ptr[c]; k < K.col_ptr[c + 1]; ++k) {
+        const Index r = K.row_ind[k];
+        qq[k] = p.find(r, c);
+        vq[k] = p.find(n + r, c);
+        vv[k] = p.find(n + r, n + c);
+      }
+    q_diag.resize(n);
+    v_diag.resize(n);
+    qv.resize(n);
+    for (Index i = 0; i < n; ++i) {
+      q_diag[i] = p.find(i, i);
+      v_diag[i] = p.find(n + i, n + i);
+      qv[i] = p.find(i, n + i);
+    }
+    auto per_row = [&](std::vector<std::vector<Index>>& out, auto rc) {
+      out.assign(m, {});
+      for (Index j = 0; j < m; ++j)
+        for (Index d : rows[j]) {
+          auto [r, c] = rc(j, d);
+          out[j].push_back(p.find(r, c));
+        }
+    };
+    per_row(gq, [&](Index j, Index d) { return std::make_pair(2 * n + j, d); });
+    per_row(gvq, [&](Index j, Index d) { return std::make_pair(2 * n + m + j, d); });
+    per_row(gvv, [&](Index j, Index d) { return std::make_pair(2 * n + m + j, n + d); });
+    per_row(qmu, [&](Index j, Index d) { return std::make_pair(d, 2 * n + m + j); });
+    per_row(vlam, [&](Index j, Index d) { return std::make_pair(n + d, 2 * n + j); });
+  }
+};
+
+// Nested dissection (METIS) of the group graph, each group's q dofs then its v dofs together,
+// multipliers last. Returns the old index of each new position.
+std::vector<Index> metis_order(const SparsePattern& K, int per_group, Index n, Index m) {
+  const Index groups = n / per_group;
+  std::vector<std::vector<idx_t>> adj(groups);
+  for (Index c = 0; c < n; ++c)
+    for (Index k = K.col_ptr[c]; k < K.col_ptr[c + 1]; ++k) {
+      const Index a = c / per_group, b = K.row_ind[k] / per_group;
+      if (a != b) adj[a].push_back(static_cast<idx_t>(b));
+    }
+  std::vector<idx_t> xadj{0}, adjncy;
+  for (auto& l : adj) {
+    std::sort(l.begin(), l.end());
+    l.erase(std::unique(l.begin(), l.end()), l.end());
+    adjncy.insert(adjncy.end(), l.begin(), l.end());
+    xadj.push_back(static_cast<idx_t>(adjncy.size()));
+  }
+  std::vector<idx_t> perm(groups), iperm(groups);
+  idx_t nv = static_cast<idx_t>(groups);
+  if (groups > 1 && !adjncy.empty()) {
+    idx_t options[METIS_NOPTIONS];
+    METIS_SetDefaultOptions(options);
+    options[METIS_OPTION_SEED] = 1;
+    if (METIS_NodeND(&nv, xadj.data(), adjncy.data(), nullptr, options, perm.data(), iperm.data()) != METIS_OK)
+      for (Index g = 0; g < groups; ++g) iperm[g] = static_cast<idx_t>(g);
+  } else {
+    for (Index g = 0; g < groups; ++g) iperm[g] = static_cast<idx_t>(g);
+  }
+  // METIS: row i of the permuted matrix is row iperm[i] of the original.
+  std::vector<Index> order;
+  order.reserve(2 * n + 2 * m);
+  for (Index k = 0; k < groups; ++k) {
+    const Index g = iperm[k];
+    for (int d = 0; d < per_group; ++d) order.push_back(g * per_group + d);
+    for (int d = 0; d < per_group; ++d) order.push_back(n + g * per_group + d);
+  }
+  for (Index j = 0; j < 2 * m; ++j) order.push_back(2 * n + j);
+  return order;
+}
+
+SuiteSparse_long user_order(SuiteSparse_long n, SuiteSparse_long*, SuiteSparse_long*, SuiteSparse_long* perm,
+                            klu_l_common* common) {
+  const auto* order = static_cast<const std::vector<Index>*>(common->user_data);
+  if (!order || static_cast<SuiteSparse_long>(order->size()) != n) return 0;
+  for (SuiteSparse_long k = 0; k < n; ++k) perm[k] = (*order)[k];
+  return -1;  // no estimate of nnz(L): KLU sizes L from nnz(A)
+}
+
+}  // namespace
+
+struct IdaIntegrator::Impl {
+  ConstrainedSystem& sys;
+  IdaOptions opt;
+  Index n = 0, m = 0;
+  GglPattern ggl;
+  std::vector<Index> order;
+  // Work arrays, allocated once.
+  VectorXd q, v, qd, vd, lambda, mu, f, g, gt;
+  std::vector<std::vector<double>> G, Gv;
+  std::vector<double> sA, sB, sC;
+  IdaStats stats;
+  SUNContext ctx = nullptr;
+  SUNLinearSolver LS = nullptr;
+  long last_newton_failures = 0;
+  // The KLU solver's own setup and solve, wrapped to time them.
+  int (*klu_setup)(SUNLinearSolver, SUNMatrix) = nullptr;
+  int (*klu_solve)(SUNLinearSolver, SUNMatrix, N_Vector, N_Vector, realtype) = nullptr;
+  void* ida_mem = nullptr;
+
+  Impl(ConstrainedSystem& s, IdaOptions o) : sys(s), opt(std::move(o)) {
+    n = sys.num_dofs();
+    m = sys.num_constraints();
+    ggl.build(sys.pattern(), sys.constraint_rows(), n, m);
+    q.resize(n), v.resize(n), qd.resize(n), vd.resize(n), lambda.resize(m), mu.resize(m), f.resize(n), g.resize(m),
+        gt.resize(m);
+    sA.resize(sys.pattern().nnz());
+    sB.resize(sys.pattern().nnz());
+    sC.resize(sys.pattern().nnz());
+    G.resize(m);
+    Gv.resize(m);
+    for (Index j = 0; j < m; ++j) {
+      G[j].resize(sys.constraint_rows()[j].size());
+      Gv[j].resize(sys.constraint_rows()[j].size());
+    }
+    if (opt.ordering == "metis") order = metis_order(sys.pattern(), sys.dofs_per_group(), n, m);
+  }
+
+  void unpack(N_Vector yy, N_Vector yp) {
+    const double* y = N_VGetArrayPointer(yy);
+    const double* d = N_VGetArrayPointer(yp);
+    q = Eigen::Map<const VectorXd>(y, n);
+    v = Eigen::Map<const VectorXd>(y + n, n);
+    lambda = Eigen::Map<const VectorXd>(y + 2 * n, m);
+    mu = Eigen::Map<const VectorXd>(y + 2 * n + m, m);
+    qd = Eigen::Map<const VectorXd>(d, n);
+    vd = Eigen::Map<const VectorXd>(d + n, n);
+  }
+
+  int residual(double t, N_Vector yy, N_Vector yp, N_Vector rr) {
+    const auto t0 = Clock::now();
+    unpack(yy, yp);
+    double* r = N_VGetArrayPointer(rr);
+    sys.force(t, q, v, f);
+    sys.constraint(t, q, g);
+    sys.constraint_jacobian(t, q, G, &gt);
+    Eigen::Map<VectorXd> Fq(r, n), Fv(r + n, n), Fg(r + 2 * n, m), Fgv(r + 2 * n + m, m);
+    Fq = qd - v;
+    Fv = sys.mass().cwiseProduct(vd) - f;
+    Fg = g;
+    for (Index j = 0; j < m; ++j) {
+      const auto& rows = sys.constraint_rows()[j];
+      double gv = 0;
+      for (std::size_t k = 0; k < rows.size(); ++k) {
+        Fq[rows[k]] += G[j][k] * mu[j];
+        Fv[rows[k]] += G[j][k] * lambda[j];
+        gv += G[j][k] * v[rows[k]];
+      }
+      Fgv[j] = gv + gt[j];
+    }
+    stats.assembly_seconds += seconds_since(t0);
+    for (Index i = 0; i < 2 * (n + m); ++i)
+      if (!std::isfinite(r[i])) return 1;  // recoverable: IDA retries with a smaller step
+    return 0;
+  }
+
+  int jacobian(double t, double cj, N_Vector yy, N_Vector yp, SUNMatrix J) {
+    const auto t0 = Clock::now();
+    unpack(yy, yp);
+    // A Newton failure since the last Jacobian: the pivot order of the first factorisation may
+    // have gone stale (c_j changed, contact): ask KLU for a fresh factorisation.
+    long nfail = 0;
+    IDAGetNumNonlinSolvConvFails(ida_mem, &nfail);
+    if (nfail > last_newton_failures && stats.jacobian_evals > 0) {
+      SUNLinSol_KLUReInit(LS, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
+      stats.fresh_factorisations++;
+    }
+    last_newton_failures = nfail;
+    stats.jacobian_evals++;
+    // SUNMatZero cleared the index arrays too: copy the pattern back, then the values.
+    std::memcpy(SM_INDEXPTRS_S(J), ggl.p.col_ptr.data(), sizeof(sunindextype) * (ggl.N + 1));
+    std::memcpy(SM_INDEXVALS_S(J), ggl.p.row_ind.data(), sizeof(sunindextype) * ggl.p.nnz());
+    double* val = SM_DATA_S(J);
+    std::fill(val, val + ggl.p.nnz(), 0.0);
+    std::fill(sA.begin(), sA.end(), 0.0);
+    std::fill(sB.begin(), sB.end(), 0.0);
+    std::fill(sC.begin(), sC.end(), 0.0);
+    if (m) {
+      sys.add_constraint_hessian(t, q, mu, 1.0, sA.data());
+      sys.add_constraint_hessian(t, q, lambda, 1.0, sB.data());
+    }
+    sys.add_force_jacobians(t, q, v, sB.data(), sC.data());
+    for (std::size_t k = 0; k < sA.size(); ++k) {
+      val[ggl.qq[k]] += sA[k];
+      val[ggl.vq[k]] += sB[k];
+      val[ggl.vv[k]] += sC[k];
+    }
+    const VectorXd& M = sys.mass();
+    for (Index i = 0; i < n; ++i) {
+      val[ggl.q_diag[i]] += cj;
+      val[ggl.v_diag[i]] += cj * M[i];
+      val[ggl.qv[i]] = -1.0;
+    }
+    if (m) {
+      sys.constraint_jacobian(t, q, G, nullptr);
+      sys.constraint_velocity_jacobian(t, q, v, Gv);
+      for (Index j = 0; j < m; ++j)
+        for (std::size_t k = 0; k < G[j].size(); ++k) {
+          val[ggl.gq[j][k]] += G[j][k];
+          val[ggl.gvv[j][k]] += G[j][k];
+          val[ggl.qmu[j][k]] += G[j][k];
+          val[ggl.vlam[j][k]] += G[j][k];
+          val[ggl.gvq[j][k]] += Gv[j][k];
+        }
+    }
+    stats.assembly_seconds += seconds_since(t0);
+    return 0;
+  }
+};
+
+namespace {
+int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* data) {
+  return static_cast<IdaIntegrator::Impl*>(data)->residual(t, yy, yp, rr);
+}
+int jac_fn(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector, SUNMatrix J, void* data, N_Vector, N_Vector,
+           N_Vector) {
+  return static_cast<IdaIntegrator::Impl*>(data)->jacobian(t, cj, yy, yp, J);
+}
+// Timing wrappers around KLU's setup (factorisation) and solve.
+IdaIntegrator::Impl* g_timed = nullptr;  // one integration at a time per process
+int timed_setup(SUNLinearSolver S, SUNMatrix A) {
+  const auto t0 = Clock::now();
+  const int r = g_timed->klu_setup(S, A);
+  g_timed->stats.factor_seconds += seconds_since(t0);
+  return r;
+}
+int timed_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, realtype tol) {
+  const auto t0 = Clock::now();
+  const int r = g_timed->klu_solve(S, A, x, b, tol);
+  g_timed->stats.solve_seconds += seconds_since(t0);
+  return r;
+}
+}  // namespace
+
+IdaIntegrator::IdaIntegrator(ConstrainedSystem& system, IdaOptions options) : impl_(new Impl(system, std::move(options))) {}
+IdaIntegrator::~IdaIntegrator() { delete impl_; }
+
+void IdaIntegrator::consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, VectorXd& v, VectorXd& a,
+                                             VectorXd& lambda) {
+  const Index n = sys.num_dofs(), m = sys.num_constraints();
+  sys.initial_state(t0, q, v);
+  const VectorXd& M = sys.mass();
+  const VectorXd Minv = M.cwiseInverse();
+  std::vector<std::vector<double>> G(m);
+  for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
+  auto sparse_G = [&]() {
+    std::vector<Eigen::Triplet<double>> tr;
+    for (Index j = 0; j < m; ++j)
+      for (std::size_t k = 0; k < G[j].size(); ++k) tr.emplace_back(j, sys.constraint_rows()[j][k], G[j][k]);
+    Eigen::SparseMatrix<double> S(m, n);
+    S.setFromTriplets(tr.begin(), tr.end());
+    return S;
+  };
+  VectorXd g(m), gt(m);
+  if (m > 0) {
+    // 1. Positions onto g = 0: minimum-norm (mass-weighted) Newton steps.
+    for (int it = 0; it < 50; ++it) {
+      sys.constraint(t0, q, g);
+      sys.constraint_jacobian(t0, q, G, nullptr);
+      if (g.norm() < 1e-14 * (1.0 + q.norm())) break;
+      const Eigen::SparseMatrix<double> S = sparse_G();
+      const Eigen::SparseMatrix<double> A = S * Minv.asDiagonal() * S.transpose();
+      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+      q -= Minv.asDiagonal() * (S.transpose() * ldlt.solve(g));
+    }
+    // 2. Velocities: [M G^T; G 0][v; nu] = [M v0; -g_t].
+    sys.constraint_jacobian(t0, q, G, &gt);
+    const Eigen::SparseMatrix<double> S = sparse_G();
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Eigen::SparseMatrix<double>(S * Minv.asDiagonal() * S.transpose()));
+    v -= Minv.asDiagonal() * (S.transpose() * ldlt.solve(VectorXd(S * v + gt)));
+    // 3. Accelerations: M a + G^T lambda = f, G a = -w, where w = d/dt (G v + g_t) at a = 0,
+    //    taken by a central difference along x(t +- h) = x +- h v (drivers exact).
+    VectorXd f(n);
+    sys.force(t0, q, v, f);
+    const double h = 1e-6 * std::max(1.0, std::abs(t0));
+    auto velocity_constraint = [&](double t, const VectorXd& qq) {
+      std::vector<std::vector<double>> Gh(G);
+      VectorXd gth(m);
+      sys.constraint_jacobian(t, qq, Gh, &gth);
+      VectorXd out = gth;
+      for (Index j = 0; j < m; ++j)
+        for (std::size_t k = 0; k < Gh[j].size(); ++k) out[j] += Gh[j][k] * v[sys.constraint_rows()[j][k]];
+      return out;
+    };
+    const VectorXd w = (velocity_constraint(t0 + h, q + h * v) - velocity_constraint(t0 - h, q - h * v)) / (2 * h);
+    lambda = ldlt.solve(VectorXd(S * Minv.cwiseProduct(f) + w));
+    a = Minv.cwiseProduct(f - S.transpose() * lambda);
+  } else {
+    VectorXd f(n);
+    sys.force(t0, q, v, f);
+    a = Minv.cwiseProduct(f);
+    lambda.resize(0);
+  }
+}
+
+IdaStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallback& on_frame) {
+  Impl& s = *impl_;
+  const auto wall0 = Clock::now();
+  const Index n = s.n, m = s.m, N = 2 * n + 2 * m;
+  const double t0 = times.front();
+  VectorXd q0, v0, a0, l0;
+  consistent_initial_state(s.sys, t0, q0, v0, a0, l0);
+
+  SUNContext_Create(nullptr, &s.ctx);
+  N_Vector yy = N_VNew_Serial(N, s.ctx), yp = N_VNew_Serial(N, s.ctx), id = N_VNew_Serial(N, s.ctx),
+           atol = N_VNew_Serial(N, s.ctx);
+  double* y = N_VGetArrayPointer(yy);
+  double* d = N_VGetArrayPointer(yp);
+  Eigen::Map<VectorXd>(y, N).setZero();
+  Eigen::Map<VectorXd>(d, N).setZero();
+  Eigen::Map<VectorXd>(y, n) = q0;
+  Eigen::Map<VectorXd>(y + n, n) = v0;
+  if (m) Eigen::Map<VectorXd>(y + 2 * n, m) = l0;
+  Eigen::Map<VectorXd>(d, n) = v0;
+  Eigen::Map<VectorXd>(d + n, n) = a0;
+  double* idv = N_VGetArrayPointer(id);
+  double* av = N_VGetArrayPointer(atol);
+  const double atol_v = s.opt.atol_v > 0 ? s.opt.atol_v : 100.0 * s.opt.atol_q;
+  const double atol_l = s.opt.atol_lambda > 0 ? s.opt.atol_lambda : 1e-6 * s.sys.force_scale();
+  for (Index i = 0; i < N; ++i) {
+    idv[i] = i < 2 * n ? 1.0 : 0.0;
+    av[i] = i < n ? s.opt.atol_q : i < 2 * n ? atol_v : atol_l;
+  }
+  // mu multiplies G^T in the velocity equation: its natural scale is atol_v / |G_j|.
+  if (m) {
+    std::vector<std::vector<double>> G(m);
+    for (Index j = 0; j < m; ++j) G[j].resize(s.sys.constraint_rows()[j].size());
+    s.sys.constraint_jacobian(t0, q0, G, nullptr);
+    for (Index j = 0; j < m; ++j) {
+      double nrm = 0;
+      for (double x : G[j]) nrm += x * x;
+      av[2 * n + m + j] = atol_v / std::max(1e-300, std::sqrt(nrm));
+      av[2 * n + j] = atol_l / std::max(1e-300, std::sqrt(nrm));
+    }
+  }
+
+  void* mem = IDACreate(s.ctx);
+  s.ida_mem = mem;
+  IDAInit(mem, res_fn, t0, yy, yp);
+  IDASVtolerances(mem, s.opt.rtol, atol);
+  IDASetUserData(mem, &s);
+  IDASetId(mem, id);
+  IDASetSuppressAlg(mem, SUNTRUE);
+  IDASetMaxOrd(mem, s.opt.max_order);
+  if (s.opt.max_step > 0) IDASetMaxStep(mem, s.opt.max_step);
+  if (s.opt.initial_step > 0) IDASetInitStep(mem, s.opt.initial_step);
+  IDASetStopTime(mem, times.back());
+  IDASetMaxNumSteps(mem, 100000);
+  SUNMatrix J = SUNSparseMatrix(N, N, s.ggl.p.nnz(), CSC_MAT, s.ctx);
+  s.LS = SUNLinSol_KLU(yy, J, s.ctx);
+  if (s.opt.ordering == "metis") {
+    klu_l_common* c = SUNLinSol_KLUGetCommon(s.LS);
+    c->ordering = 3;
+    c->btf = 0;
+    c->user_order = user_order;
+    c->user_data = &s.order;
+  } else {
+    SUNLinSol_KLUSetOrdering(s.LS, s.opt.ordering == "amd" ? 0 : 1);
+  }
+  s.klu_setup = s.LS->ops->setup;
+  s.klu_solve = s.LS->ops->solve;
+  s.LS->ops->setup = timed_setup;
+  s.LS->ops->solve = timed_solve;
+  g_timed = &s;
+  IDASetLinearSolver(mem, s.LS, J);
+  IDASetJacFn(mem, jac_fn);
+
+  auto collect = [&]() {
+    IDAGetNumSteps(mem, &s.stats.steps);
+    IDAGetNumResEvals(mem, &s.stats.residual_evals);
+    IDAGetNumLinSolvSetups(mem, &s.stats.linear_setups);
+    IDAGetNumNonlinSolvIters(mem, &s.stats.newton_iterations);
+    IDAGetNumNonlinSolvConvFails(mem, &s.stats.newton_failures);
+    IDAGetNumErrTestFails(mem, &s.stats.error_test_failures);
+    int order = 0;
+    double h = 0;
+    IDAGetLastOrder(mem, &order);
+    IDAGetLastStep(mem, &h);
+    s.stats.frames.push_back({s.stats.steps, s.stats.newton_iterations, s.stats.error_test_failures,
+                              s.stats.newton_failures, s.stats.jacobian_evals, order, h});
+  };
+  auto cleanup = [&]() {
+    IDAFree(&mem);
+    SUNLinSolFree(s.LS);
+    SUNMatDestroy(J);
+    N_VDestroy(yy);
+    N_VDestroy(yp);
+    N_VDestroy(id);
+    N_VDestroy(atol);
+    SUNContext_Free(&s.ctx);
+    g_timed = nullptr;
+  };
+
+  N_Vector yout = N_VClone(yy);
+  double tcur = t0;
+  std::size_t k = 0;
+  try {
+    while (k < times.size()) {
+      if (times[k] <= tcur) {
+        const double tf = times[k];
+        if (tf == t0 && k == 0) {
+          N_VScale(1.0, yy, yout);
+        } else if (IDAGetDky(mem, tf, 0, yout) < 0) {
+          throw IntegrationError(tf, "IDAGetDky could not interpolate the frame");
+        }
+        const double* yo = N_VGetArrayPointer(yout);
+        collect();
+        on_frame(static_cast<int>(k), tf, Eigen::Map<const VectorXd>(yo, n), Eigen::Map<const VectorXd>(yo + n, n),
+                 Eigen::Map<const VectorXd>(yo + 2 * n, m));
+        ++k;
+        continue;
+      }
+      double tret = tcur;
+      const int flag = IDASolve(mem, times.back(), &tret, yy, yp, IDA_ONE_STEP);
+      if (flag < 0) {
+        char* name = IDAGetReturnFlagName(flag);
+        std::string reason = name ? name : "unknown IDA failure";
+        free(name);
+        throw IntegrationError(tret, reason);
+      }
+      tcur = tret;
+      long steps = 0;
+      IDAGetNumSteps(mem, &steps);
+      if (steps > s.opt.max_steps)
+        throw IntegrationError(tcur, "more than " + std::to_string(s.opt.max_steps) + " steps (integrator.max_steps)");
+    }
+  } catch (...) {
+    N_VDestroy(yout);
+    s.stats.wall_seconds = seconds_since(wall0);
+    cleanup();
+    throw;
+  }
+  N_VDestroy(yout);
+  s.stats.wall_seconds = seconds_since(wall0);
+  cleanup();
+  return s.stats;
+}
+
+}  // namespace isochor
