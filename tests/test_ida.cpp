@@ -98,7 +98,7 @@ TEST(Ida, PendulumErrorFallsWithTheTolerance) {
     o.atol_v = rtol;
     IdaIntegrator ida(p, o);
     double worst = 0;
-    ida.run(times, [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&) {
+    ida.run(times, [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const IdaStats::FrameSample&) {
       const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
       worst = std::max(worst, (q - exact).norm());
     });
@@ -121,7 +121,7 @@ TEST(Ida, PendulumStaysOnTheCircleForTenPeriods) {
   IdaIntegrator ida(p, o);
   double worst = 0;
   int frames = 0;
-  IdaStats st = ida.run(times, [&](int, double, const VectorXd& q, const VectorXd&, const VectorXd& lambda) {
+  IdaStats st = ida.run(times, [&](int, double, const VectorXd& q, const VectorXd&, const VectorXd& lambda, const IdaStats::FrameSample&) {
     worst = std::max(worst, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
     EXPECT_GT(lambda[0], 0.0);  // the rod pulls: tension (lambda > 0 with F_v = M v' - f + G^T lambda)
     frames++;

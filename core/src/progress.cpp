@@ -15,7 +15,7 @@ std::string seconds(double s) {
 }  // namespace
 
 Progress::Progress(std::string label, int total_frames, std::FILE* out)
-    : label_(std::move(label)), total_(total_frames), out_(out), tty_(isatty(fileno(out)) != 0) {
+    : label_(std::move(label)), total_(total_frames), out_(out), tty_(out && isatty(fileno(out)) != 0) {
   start_ = last_ = std::chrono::steady_clock::now();
 }
 
@@ -25,7 +25,7 @@ void Progress::update(int done, double sim_time) {
   const auto now = std::chrono::steady_clock::now();
   const double wall = std::chrono::duration<double>(now - start_).count();
   const double since = std::chrono::duration<double>(now - last_).count();
-  if (wall < 1.0) return;
+  if (!out_ || wall < 1.0) return;
   if (tty_ ? since < 0.1 : (since < 5.0 && shown_)) return;
   last_ = now;
   const double rest = done > 0 ? wall * (total_ - done) / done : 0.0;

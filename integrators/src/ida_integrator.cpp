@@ -13,6 +13,8 @@
 #include <Eigen/SparseCore>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 namespace isochor {
@@ -126,7 +128,7 @@ std::vector<Index> metis_order(const SparsePattern& K, int per_group, Index n, I
   std::vector<Index> order;
   order.reserve(2 * n + 2 * m);
   for (Index k = 0; k < groups; ++k) {
-    const Index g = iperm[k];
+    const Index g = perm[k];
     for (int d = 0; d < per_group; ++d) order.push_back(g * per_group + d);
     for (int d = 0; d < per_group; ++d) order.push_back(n + g * per_group + d);
   }
@@ -228,7 +230,6 @@ struct IdaIntegrator::Impl {
     IDAGetNumNonlinSolvConvFails(ida_mem, &nfail);
     if (nfail > last_newton_failures && stats.jacobian_evals > 0) {
       SUNLinSol_KLUReInit(LS, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
-      stats.fresh_factorisations++;
     }
     last_newton_failures = nfail;
     stats.jacobian_evals++;
@@ -285,8 +286,16 @@ int jac_fn(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector, SUNMatri
 IdaIntegrator::Impl* g_timed = nullptr;  // one integration at a time per process
 int timed_setup(SUNLinearSolver S, SUNMatrix A) {
   const auto t0 = Clock::now();
+  const klu_l_numeric* before = SUNLinSol_KLUGetNumeric(S);
   const int r = g_timed->klu_setup(S, A);
-  g_timed->stats.factor_seconds += seconds_since(t0);
+  const double dt = seconds_since(t0);
+  g_timed->stats.factor_seconds += dt;
+  const klu_l_numeric* num = SUNLinSol_KLUGetNumeric(S);
+  if (num != before) g_timed->stats.fresh_factorisations++;
+  if (num) g_timed->stats.factor_nnz = static_cast<double>(num->lnz + num->unz);
+  if (std::getenv("ISOCHOR_DEBUG_KLU"))
+    std::fprintf(stderr, "klu setup %.3f s, fresh %d, L+U %ld, rcond %.2e\n", dt, num != before,
+                 num ? static_cast<long>(num->lnz + num->unz) : -1L, SUNLinSol_KLUGetCommon(S)->rcond);
   return r;
 }
 int timed_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, realtype tol) {
@@ -471,7 +480,7 @@ IdaStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
         const double* yo = N_VGetArrayPointer(yout);
         collect();
         on_frame(static_cast<int>(k), tf, Eigen::Map<const VectorXd>(yo, n), Eigen::Map<const VectorXd>(yo + n, n),
-                 Eigen::Map<const VectorXd>(yo + 2 * n, m));
+                 Eigen::Map<const VectorXd>(yo + 2 * n, m), s.stats.frames.back());
         ++k;
         continue;
       }

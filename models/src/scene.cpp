@@ -43,12 +43,49 @@ MaterialSpec parse_material(const Section& s) {
   }
   m.beta = s.number("beta", m.beta, Range::non_negative());
   m.epsilon = s.number("epsilon", m.epsilon, {0.0, 1.0, true, false});
+  m.epidermis_lambda = s.number("epidermis_lambda", 0.0, Range::non_negative());
+  m.epidermis_gamma = s.number("epidermis_gamma", 1.0, Range::non_negative());
   return m;
 }
 
-std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section& s, const Mesh& mesh) {
+Driver parse_boundary(const Section& b, const Mesh& mesh) {
+  Driver d;
+  const Section sel = b.table("select");
+  if (!sel.exists()) b.fail("select", "missing, expected the nodes to drive, e.g. { kind = \"set\", name = \"zmin\" }");
+  d.nodes = select_nodes(mesh, Selection::parse(sel));
+  const std::string kind = b.string("kind", "fixed", {"fixed", "ramp", "keyframes", "sinusoid"});
+  if (kind == "ramp") {
+    d.kind = Driver::Kind::ramp;
+    if (!b.has("displacement")) b.fail("displacement", "missing, a ramp needs its end displacement [x, y, z] (m)");
+    d.vector = b.vec3("displacement", {});
+    d.t0 = b.number("t0", 0.0, Range::non_negative());
+    d.t1 = b.number("t1", 1.0, Range::positive());
+    if (d.t1 <= d.t0) b.fail("t1", "expected t1 > t0");
+  } else if (kind == "sinusoid") {
+    d.kind = Driver::Kind::sinusoid;
+    if (!b.has("amplitude")) b.fail("amplitude", "missing, a sinusoid needs its amplitude [x, y, z] (m)");
+    d.vector = b.vec3("amplitude", {});
+    d.frequency = b.number("frequency", 1.0, Range::positive());
+    d.phase = b.number("phase", 0.0);
+  } else if (kind == "keyframes") {
+    const std::string interp = b.string("interpolation", "linear", {"linear", "cubic"});
+    d.kind = interp == "linear" ? Driver::Kind::keyframes_linear : Driver::Kind::keyframes_cubic;
+    d.times = b.numbers("times");
+    const std::vector<double> flat = b.numbers("values");
+    if (d.times.size() < 2) b.fail("times", "expected at least 2 keyframe times (s)");
+    for (std::size_t i = 1; i < d.times.size(); ++i)
+      if (d.times[i] <= d.times[i - 1]) b.fail("times", "expected increasing times");
+    if (flat.size() != 3 * d.times.size())
+      b.fail("values", "expected 3 numbers (a displacement) per keyframe time, " + std::to_string(3 * d.times.size()) +
+                           " in all, got " + std::to_string(flat.size()));
+    for (std::size_t i = 0; i < d.times.size(); ++i) d.values.emplace_back(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
+  }
+  return d;
+}
+
+std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section& s, const Mesh& mesh, bool global) {
   std::vector<std::pair<std::string, std::vector<int>>> zones;
-  if (s.boolean("global", true)) {
+  if (s.boolean("global", global)) {
     std::vector<int> all(mesh.num_tets());
     for (int e = 0; e < mesh.num_tets(); ++e) all[e] = e;
     zones.emplace_back("global", std::move(all));
@@ -77,13 +114,29 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, {}, {}, {}};
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), {}, {}, Eigen::Vector3d::Zero(), {}, {}, {}, {}};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
   sc.mesh = mesh_from_scene(mesh, sc.file);
   sc.material = parse_material(root.table("material"));
-  sc.zones = parse_zones(root.table("zones"), sc.mesh);
+  sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.material.model == "cnh");
+  for (const Section& b : root.tables("boundary")) sc.boundary.push_back(parse_boundary(b, sc.mesh));
+
+  const Section forces = root.table("forces");
+  sc.gravity = forces.vec3("gravity", sc.gravity);
+  const Section contact = root.table("contact");
+  sc.ground.enabled = contact.boolean("ground", false);
+  sc.ground.point = contact.vec3("point", Eigen::Vector3d::Zero());
+  sc.ground.normal = contact.vec3("normal", Eigen::Vector3d::UnitZ());
+  if (sc.ground.normal.norm() == 0) contact.fail("normal", "expected a non-zero vector");
+  sc.ground.normal.normalize();
+  sc.ground.stiffness = contact.number("stiffness", sc.ground.stiffness, Range::positive());
+  sc.ground.thickness = contact.number("thickness", sc.ground.thickness, Range::positive());
+  const Section damping = root.table("damping");
+  sc.damping.alpha = damping.number("alpha", 0.0, Range::non_negative());
+  sc.damping.beta = damping.number("beta", 0.0, Range::non_negative());
+  sc.initial_velocity = root.table("initial").vec3("velocity", Eigen::Vector3d::Zero());
 
   const Section in = root.table("integrator");
   IntegratorSpec& ig = sc.integrator;
@@ -92,6 +145,9 @@ Scene parse_scene(SceneFile file) {
   ig.atol = in.number("atol", ig.atol, Range::positive());
   ig.dt = in.number("dt", ig.dt, Range::positive());
   ig.max_order = static_cast<int>(in.integer("max_order", ig.max_order, 1, 5));
+  ig.max_step = in.number("max_step", 0.0, Range::non_negative());
+  ig.max_steps = in.integer("max_steps", ig.max_steps, 1, 1000000000000L);
+  ig.ordering = in.string("ordering", ig.ordering, {"metis", "colamd", "amd"});
 
   const Section fr = root.table("frames");
   if (fr.has("count") && (fr.has("rate") || fr.has("duration")))

@@ -1,6 +1,6 @@
 // Progress of a long run: on a terminal one line rewritten in place (frame k of F, simulated
 // time, wall time, estimate of the rest); otherwise plain log lines every few seconds. Nothing is
-// shown for runs that finish within a second.
+// shown for runs that finish within a second, or when `out` is null.
 #pragma once
 #include <chrono>
 #include <cstdio>

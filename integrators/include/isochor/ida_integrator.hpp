@@ -32,6 +32,7 @@ struct IdaStats {
   long steps = 0, residual_evals = 0, jacobian_evals = 0, linear_setups = 0, newton_iterations = 0,
        newton_failures = 0, error_test_failures = 0, fresh_factorisations = 0;
   double wall_seconds = 0, assembly_seconds = 0, factor_seconds = 0, solve_seconds = 0;
+  double factor_nnz = 0;  // nnz(L) + nnz(U) of the last factorisation
   struct FrameSample {
     long steps, newton_iterations, error_test_failures, newton_failures, jacobian_evals;
     int order;
@@ -48,8 +49,10 @@ class IntegrationError : public std::runtime_error {
   double time;
 };
 
-// Called at each frame with the frame index, time and the state (q, v, lambda).
-using FrameCallback = std::function<void(int, double, const VectorXd&, const VectorXd&, const VectorXd&)>;
+// Called at each frame with the frame index, time, the state (q, v, lambda) and the solver's
+// cumulative statistics at that frame.
+using FrameCallback = std::function<void(int, double, const VectorXd&, const VectorXd&, const VectorXd&,
+                                         const IdaStats::FrameSample&)>;
 
 class IdaIntegrator {
  public:

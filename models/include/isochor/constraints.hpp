@@ -31,6 +31,9 @@ class VolumeConstraints {
   void gradient(const Points& x, std::vector<std::vector<double>>& rows) const;
   // dg/dt = sum over Dirichlet nodes d of dg/dx_d . v_d (v: velocities of all nodes, 3 N).
   void time_derivative(const Points& x, const Eigen::VectorXd& v, Eigen::VectorXd& gt) const;
+  // rows[j] (layout of row_dofs(j)) = (H_j xdot)^T at the free dofs, xdot the velocity of every
+  // node (3 N, driven nodes included): d(G v + dg/dt)/dq.
+  void hessian_times(const Points& x, const Eigen::VectorXd& xdot, std::vector<std::vector<double>>& rows) const;
   // values[slot] += scale * sum_j lambda_j H_j over the free dofs.
   void add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const;
   // Per-tet pressure from the multipliers: p_e -= lambda_j for every zone j holding tet e (the

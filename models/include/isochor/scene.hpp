@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include "isochor/drivers.hpp"
+#include "isochor/forces.hpp"
 #include "isochor/mesh.hpp"
 #include "isochor/scene_file.hpp"
 
@@ -17,12 +19,17 @@ struct MaterialSpec {
   double mu = 0.0, lambda = 0.0;  // Pa (Lamé parameters, from mu/lambda or E/nu)
   double beta = 1.0;          // CNH penalty shape
   double epsilon = 0.1;       // CNH: J below which alpha~ is extended
+  double epidermis_lambda = 0.0;  // Pa m (surface penalty weight); 0: no epidermis
+  double epidermis_gamma = 1.0;
 };
 
 struct IntegratorSpec {
   std::string kind = "ida";
   double rtol = 1e-6, atol = 1e-8, dt = 1e-3;
   int max_order = 5;
+  double max_step = 0.0;      // s, 0: none
+  long max_steps = 10000000;
+  std::string ordering = "metis";
 };
 
 struct FramesSpec {
@@ -42,6 +49,11 @@ struct Scene {
   SceneFile file;
   Mesh mesh;
   MaterialSpec material;
+  std::vector<Driver> boundary;  // Dirichlet drivers, in file order
+  Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.81);
+  GroundSpec ground;
+  RayleighDamping damping;
+  Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();
   std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tet indices
   IntegratorSpec integrator;
   FramesSpec frames;

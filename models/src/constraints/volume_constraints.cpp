@@ -124,6 +124,22 @@ void VolumeConstraints::time_derivative(const Points& x, const Eigen::VectorXd& 
   }
 }
 
+void VolumeConstraints::hessian_times(const Points& x, const Eigen::VectorXd& xdot,
+                                      std::vector<std::vector<double>>& rows) const {
+  rows.resize(size());
+  for (int j = 0; j < size(); ++j) rows[j].assign(row_dofs_[j].size(), 0.0);
+  for (std::size_t i = 0; i < elements_.size(); ++i) {
+    const Element& e = elements_[i];
+    Mat12 H;
+    tet_volume(element_x(x, e), nullptr, &H);
+    Vec12 ve;
+    for (int k = 0; k < 4; ++k) ve.segment<3>(3 * k) = e.nodes[k] < 0 ? Vec3::Zero() : Vec3(xdot.segment<3>(3 * e.nodes[k]));
+    const Vec12 hv = H * ve;
+    for (int a = 0; a < 12; ++a)
+      if (row_slot_[i][a] >= 0) rows[e.constraint][row_slot_[i][a]] += hv[a];
+  }
+}
+
 void VolumeConstraints::add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const {
   for (const auto& colour : colours_) {
     const int n = static_cast<int>(colour.size());

@@ -1,0 +1,86 @@
+#include "run.hpp"
+
+#include "isochor/error.hpp"
+#include "isochor/mesh_system.hpp"
+#include "isochor/output.hpp"
+#include "isochor/progress.hpp"
+
+namespace isochor {
+
+namespace {
+void write_totals(OutputWriter& w, const IdaStats& s) {
+  w.set_stat("steps", static_cast<double>(s.steps));
+  w.set_stat("residual_evaluations", static_cast<double>(s.residual_evals));
+  w.set_stat("jacobian_evaluations", static_cast<double>(s.jacobian_evals));
+  w.set_stat("linear_setups", static_cast<double>(s.linear_setups));
+  w.set_stat("newton_iterations", static_cast<double>(s.newton_iterations));
+  w.set_stat("rejected_steps_newton", static_cast<double>(s.newton_failures));
+  w.set_stat("rejected_steps_error_test", static_cast<double>(s.error_test_failures));
+  w.set_stat("fresh_factorisations", static_cast<double>(s.fresh_factorisations));
+  w.set_stat("wall_seconds", s.wall_seconds);
+  w.set_stat("assembly_seconds", s.assembly_seconds);
+  w.set_stat("factorisation_seconds", s.factor_seconds);
+  w.set_stat("solve_seconds", s.solve_seconds);
+}
+}  // namespace
+
+RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) {
+  if (sc.integrator.kind != "ida")
+    throw Error(sc.file.name() + ": integrator.kind = \"" + sc.integrator.kind +
+                "\" is not available yet (expected \"ida\")");
+  if (sc.frames.count > 0) throw Error(sc.file.name() + ": frames.count is for statics; a dynamic run needs frames.rate and frames.duration");
+  RunSummary summary;
+  summary.output = output.empty() ? sc.output.path : output;
+  MeshSystem sys(sc);
+  IdaOptions o;
+  o.rtol = sc.integrator.rtol;
+  o.atol_q = sc.integrator.atol;
+  o.max_order = sc.integrator.max_order;
+  o.max_step = sc.integrator.max_step;
+  o.max_steps = sc.integrator.max_steps;
+  o.ordering = sc.integrator.ordering;
+  IdaIntegrator ida(sys, o);
+  OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run"}, sc.output.pressure);
+  const std::vector<double> times = sc.frames.times();
+  Progress bar(sc.file.name(), static_cast<int>(times.size()) - 1, progress ? stderr : nullptr);
+  std::vector<double> pressure;
+  auto on_frame = [&](int k, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
+                      const IdaStats::FrameSample& s) {
+    sys.set_state(t, q, v);
+    Frame f;
+    f.time = t;
+    f.positions = &sys.positions();
+    f.volumes = sys.volumes();
+    f.energy = sys.energies();
+    if (sc.output.pressure) {
+      sys.pressures(lambda, pressure);
+      f.pressure = &pressure;
+    }
+    f.stats = {{"inverted_tets", static_cast<double>(sys.inverted_tets())},
+               {"steps", static_cast<double>(s.steps)},
+               {"newton_iterations", static_cast<double>(s.newton_iterations)},
+               {"jacobian_evaluations", static_cast<double>(s.jacobian_evals)},
+               {"rejected_steps_error_test", static_cast<double>(s.error_test_failures)},
+               {"rejected_steps_newton", static_cast<double>(s.newton_failures)},
+               {"order", static_cast<double>(s.order)},
+               {"step_size", s.step_size}};
+    w.write_frame(f);
+    summary.frames = k + 1;
+    if (progress) bar.update(k, t);
+  };
+  try {
+    summary.stats = ida.run(times, on_frame);
+  } catch (const IntegrationError& e) {
+    w.set_stat("failed_at_time", e.time);
+    w.set_stat("failure", std::string(e.what()));
+    w.close();
+    throw Error(sc.file.name() + ": " + e.what() + "; " + std::to_string(summary.frames) + " frames saved in " +
+                summary.output);
+  }
+  write_totals(w, summary.stats);
+  w.close();
+  bar.finish();
+  return summary;
+}
+
+}  // namespace isochor

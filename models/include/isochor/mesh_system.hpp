@@ -1,0 +1,69 @@
+// A mesh scene as a ConstrainedSystem: free nodes are the unknowns, boundary nodes follow their
+// drivers, forces are elasticity (the material, plus the epidermis), gravity, the ground and
+// Rayleigh damping; the constraints are the scene's zone volumes (none for an unconstrained model).
+#pragma once
+#include <memory>
+
+#include "isochor/assembly.hpp"
+#include "isochor/constrained_system.hpp"
+#include "isochor/constraints.hpp"
+#include "isochor/forces.hpp"
+#include "isochor/scene.hpp"
+
+namespace isochor {
+
+std::shared_ptr<const Material> make_material(const MaterialSpec& m);
+
+class MeshSystem : public ConstrainedSystem {
+ public:
+  explicit MeshSystem(const Scene& scene);
+
+  int num_dofs() const override { return 3 * dofs_.num_free(); }
+  int num_constraints() const override { return constraints_.size(); }
+  const VectorXd& mass() const override { return dof_mass_; }
+  const SparsePattern& pattern() const override { return elastic_->pattern(); }
+  const std::vector<std::vector<Index>>& constraint_rows() const override { return rows_; }
+  void initial_state(double t0, VectorXd& q, VectorXd& v) override;
+  void force(double t, const VectorXd& q, const VectorXd& v, VectorXd& f) override;
+  void add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq, double* neg_dfdv) override;
+  void constraint(double t, const VectorXd& q, VectorXd& g) override;
+  void constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* g_t) override;
+  void add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) override;
+  void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
+                                    std::vector<std::vector<double>>& rows) override;
+  double force_scale() const override { return force_scale_; }
+
+  // Positions and velocities of every node (3 N) for a state of the unknowns at time t
+  // (driven nodes from their drivers, evaluated once per distinct t).
+  void set_state(double t, const VectorXd& q, const VectorXd& v);
+  void set_positions(double t, const VectorXd& q);
+  const Points& positions() const { return x_; }
+  const Eigen::VectorXd& velocities() const { return xdot_; }
+  // Kinetic, elastic and external energy at the current state.
+  std::array<double, 3> energies() const;
+  // Total volume, then each zone's volume, at the current state.
+  std::vector<double> volumes() const;
+  // Per-tet pressure at the current state for multipliers lambda.
+  void pressures(const VectorXd& lambda, std::vector<double>& p) const;
+  int inverted_tets() const { return elastic_->inverted_tets(x_); }
+  const DofMap& dofs() const { return dofs_; }
+
+ private:
+  const Scene& scene_;
+  DofMap dofs_;
+  std::shared_ptr<const Material> material_;
+  std::unique_ptr<ElasticAssembly> elastic_;
+  std::unique_ptr<ExternalPotential> external_;
+  RayleighDamping damping_;
+  VolumeConstraints constraints_;
+  std::vector<int> constraint_tets_;
+  std::vector<std::vector<Index>> rows_;
+  Eigen::VectorXd node_mass_, dof_mass_;
+  double force_scale_ = 1.0;
+  // State cache: positions and velocities of every node.
+  Points x_;
+  Eigen::VectorXd xdot_, grad_;
+  double state_t_ = std::numeric_limits<double>::quiet_NaN();
+};
+
+}  // namespace isochor

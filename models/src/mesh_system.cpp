@@ -1,0 +1,136 @@
+#include "isochor/mesh_system.hpp"
+
+#include <cmath>
+
+#include "isochor/error.hpp"
+
+namespace isochor {
+
+std::shared_ptr<const Material> make_material(const MaterialSpec& m) {
+  if (m.model == "unh") return make_unh(m.mu, m.lambda);
+  if (m.model == "snh") return make_snh(m.mu, m.lambda);
+  if (m.model == "cnh") return make_cnh(m.mu, m.lambda, m.beta, m.epsilon);
+  throw Error("material.model = \"" + m.model + "\" is not a tet material (expected cnh, unh or snh)");
+}
+
+namespace {
+DofMap dofs_of(const Scene& s) {
+  std::vector<int> driven;
+  for (const Driver& d : s.boundary) driven.insert(driven.end(), d.nodes.begin(), d.nodes.end());
+  return DofMap::make(s.mesh.num_nodes(), driven);
+}
+std::vector<std::vector<int>> zone_tets(const Scene& s) {
+  std::vector<std::vector<int>> z;
+  for (const auto& [name, tets] : s.zones) z.push_back(tets);
+  return z;
+}
+}  // namespace
+
+MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(dofs_of(scene)), material_(make_material(scene.material)) {
+  if (dofs_.num_free() == 0) throw Error(scene.file.name() + ": every node is driven by [[boundary]]: nothing to simulate");
+  elastic_ = std::make_unique<ElasticAssembly>(scene.mesh, material_, dofs_,
+                                               EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
+  node_mass_ = lumped_mass(scene.mesh, scene.material.density);
+  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.ground, dofs_, elastic_->pattern());
+  damping_ = scene.damping;
+  const auto zt = zone_tets(scene);
+  constraints_ = VolumeConstraints::zones(scene.mesh, zt, dofs_, elastic_->pattern());
+  constraint_tets_ = VolumeConstraints::element_tets(zt);
+  for (int j = 0; j < constraints_.size(); ++j) {
+    if (constraints_.row_dofs(j).empty())
+      throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first + "\" has only driven nodes: its volume cannot be kept");
+    rows_.push_back(constraints_.row_dofs(j));
+  }
+  dof_mass_.resize(num_dofs());
+  for (int f = 0; f < dofs_.num_free(); ++f) dof_mass_.segment<3>(3 * f).setConstant(node_mass_[dofs_.free_nodes[f]]);
+  const double V = scene.mesh.rest_volume();
+  force_scale_ = std::max(node_mass_.sum() * std::max(scene.gravity.norm(), 1.0), scene.material.mu * std::cbrt(V * V));
+  x_ = scene.mesh.rest_positions();
+  xdot_ = Eigen::VectorXd::Zero(3 * scene.mesh.num_nodes());
+}
+
+void MeshSystem::set_state(double t, const VectorXd& q, const VectorXd& v) {
+  for (int f = 0; f < dofs_.num_free(); ++f) xdot_.segment<3>(3 * dofs_.free_nodes[f]) = v.segment<3>(3 * f);
+  set_positions(t, q);
+}
+
+void MeshSystem::initial_state(double t0, VectorXd& q, VectorXd& v) {
+  q.resize(num_dofs());
+  v.resize(num_dofs());
+  for (int f = 0; f < dofs_.num_free(); ++f) {
+    q.segment<3>(3 * f) = scene_.mesh.rest_positions().col(dofs_.free_nodes[f]);
+    v.segment<3>(3 * f) = scene_.initial_velocity;
+  }
+  state_t_ = std::numeric_limits<double>::quiet_NaN();
+  set_state(t0, q, v);
+}
+
+void MeshSystem::force(double t, const VectorXd& q, const VectorXd& v, VectorXd& f) {
+  set_state(t, q, v);
+  elastic_->gradient(x_, grad_);
+  external_->add_gradient(x_, grad_);
+  grad_ = -grad_;  // forces
+  if (damping_.alpha != 0 || damping_.beta != 0) damping_.add_force(*elastic_, node_mass_, x_, xdot_, grad_);
+  f.resize(num_dofs());
+  for (int k = 0; k < dofs_.num_free(); ++k) f.segment<3>(3 * k) = grad_.segment<3>(3 * dofs_.free_nodes[k]);
+}
+
+void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq, double* neg_dfdv) {
+  set_state(t, q, v);
+  if (neg_dfdq) {
+    elastic_->add_hessian(x_, 1.0, neg_dfdq);
+    external_->add_hessian(x_, 1.0, neg_dfdq);
+  }
+  if (neg_dfdv && (damping_.alpha != 0 || damping_.beta != 0)) damping_.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
+}
+
+void MeshSystem::set_positions(double t, const VectorXd& q) {
+  for (int f = 0; f < dofs_.num_free(); ++f) x_.col(dofs_.free_nodes[f]) = q.segment<3>(3 * f);
+  if (t != state_t_) {
+    for (const Driver& d : scene_.boundary) d.apply(scene_.mesh.rest_positions(), t, x_, &xdot_);
+    state_t_ = t;
+  }
+}
+
+void MeshSystem::constraint(double t, const VectorXd& q, VectorXd& g) {
+  set_positions(t, q);
+  constraints_.value(x_, g);
+}
+
+void MeshSystem::constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* g_t) {
+  set_positions(t, q);  // dg/dt needs only the driven nodes' velocities
+  constraints_.gradient(x_, G);
+  if (g_t) constraints_.time_derivative(x_, xdot_, *g_t);
+}
+
+void MeshSystem::add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) {
+  set_positions(t, q);
+  constraints_.add_hessian(x_, w, scale, values);
+}
+
+void MeshSystem::constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
+                                              std::vector<std::vector<double>>& rows) {
+  set_state(t, q, v);
+  constraints_.hessian_times(x_, xdot_, rows);
+}
+
+std::array<double, 3> MeshSystem::energies() const {
+  double kinetic = 0;
+  for (int n = 0; n < x_.cols(); ++n) kinetic += 0.5 * node_mass_[n] * xdot_.segment<3>(3 * n).squaredNorm();
+  return {kinetic, elastic_->energy(x_), external_->energy(x_)};
+}
+
+std::vector<double> MeshSystem::volumes() const {
+  std::vector<double> v{tets_volume(x_, scene_.mesh.tets())};
+  Eigen::VectorXd z;
+  constraints_.volumes(x_, z);
+  v.insert(v.end(), z.data(), z.data() + z.size());
+  return v;
+}
+
+void MeshSystem::pressures(const VectorXd& lambda, std::vector<double>& p) const {
+  elastic_->pressures(x_, p);
+  if (lambda.size()) constraints_.add_multiplier_pressure(lambda, constraint_tets_, p);
+}
+
+}  // namespace isochor
