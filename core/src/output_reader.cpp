@@ -105,6 +105,13 @@ std::vector<std::vector<double>> RunFile::volumes() const {
   return out;
 }
 
+std::vector<std::array<double, 3>> RunFile::energies() const {
+  auto flat = impl_->read<double>("/frames/energy", H5T_NATIVE_DOUBLE);
+  std::vector<std::array<double, 3>> out(flat.size() / 3);
+  for (std::size_t f = 0; f < out.size(); ++f) out[f] = {flat[3 * f], flat[3 * f + 1], flat[3 * f + 2]};
+  return out;
+}
+
 std::vector<Tri> RunFile::surface() const {
   auto flat = impl_->read<int>("/mesh/surface", H5T_NATIVE_INT);
   std::vector<Tri> out(flat.size() / 3);

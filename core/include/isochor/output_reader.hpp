@@ -1,5 +1,6 @@
 // Reading a run's HDF5 file back: the summary that `isochor info` prints and per-frame positions.
 #pragma once
+#include <array>
 #include <map>
 #include <memory>
 #include <string>
@@ -20,6 +21,7 @@ class RunFile {
   std::map<std::string, std::size_t> zone_sizes() const;
   std::vector<double> times() const;
   std::vector<std::vector<double>> volumes() const;  // per frame: total, then zones
+  std::vector<std::array<double, 3>> energies() const;  // per frame: kinetic, elastic, external
   std::vector<Tri> surface() const;
   Points rest_positions() const;
   Points positions(int frame) const;

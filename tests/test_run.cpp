@@ -1,0 +1,96 @@
+// Whole runs of mesh scenes on IDA: exact solutions and conservation laws.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "isochor/error.hpp"
+#include "isochor/output_reader.hpp"
+#include "run.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+
+namespace {
+Scene scene(const std::string& text, const std::vector<std::string>& overrides = {}) {
+  return parse_scene(SceneFile::parse(text, "test.toml", overrides));
+}
+const char* kBox = R"(
+[mesh]
+shape = "box"
+cells = 3
+size = [0.1, 0.1, 0.1]
+center = [0, 0, 0.5]
+[material]
+model = "cnh"
+E = 46400.0
+nu = 0.45
+[initial]
+velocity = [0.3, -0.2, 1.0]
+[frames]
+rate = 100.0
+duration = 0.3
+[integrator]
+rtol = 1e-8
+atol = 1e-10
+)";
+}  // namespace
+
+TEST(Run, FreeFallFollowsTheParabola) {
+  const auto dir = test::temp_dir();
+  Scene sc = scene(kBox);
+  RunSummary r = run_scene(sc, (dir / "fall.h5").string(), false);
+  RunFile f(r.output);
+  ASSERT_EQ(f.num_frames(), 31);
+  const Points X = f.rest_positions();
+  const Eigen::Vector3d v0(0.3, -0.2, 1.0), g(0, 0, -9.81);
+  double worst = 0;
+  for (int k = 0; k < f.num_frames(); ++k) {
+    const double t = f.times()[k];
+    const Points x = f.positions(k);
+    for (int n = 0; n < x.cols(); ++n)
+      worst = std::max(worst, (x.col(n) - (X.col(n) + v0 * t + 0.5 * g * t * t)).norm());
+  }
+  // The body falls 0.14 m; an undeformed body in free fall is followed to the tolerance asked for.
+  std::printf("free fall: worst position error %.3e m\n", worst);
+  EXPECT_LT(worst, 1e-7) << worst;
+  // Every frame keeps the volume.
+  for (const auto& v : f.volumes()) EXPECT_NEAR(v[0] / 0.001, 1.0, 1e-10);
+}
+
+TEST(Run, UndampedOscillationConservesEnergy) {
+  // A soft box hanging from its top face, released at rest under gravity: it oscillates about its
+  // sagged equilibrium. Fixed nodes do no work, so K + elastic + gravity energy stays constant.
+  const auto dir = test::temp_dir();
+  Scene sc = scene(std::string(kBox) + R"(
+[[boundary]]
+select = { kind = "set", name = "zmax" }
+)", {"initial.velocity=[0.0, 0.0, 0.0]", "frames.duration=1.0", "material.E=4640.0"});
+  RunSummary r = run_scene(sc, (dir / "osc.h5").string(), false);
+  RunFile f(r.output);
+  ASSERT_GT(f.num_frames(), 90);
+  std::vector<std::array<double, 3>> e = f.energies();
+  const double E0 = e[0][0] + e[0][1] + e[0][2];
+  double max_kinetic = 0, drift = 0, scale = 0;
+  for (const auto& row : e) {
+    max_kinetic = std::max(max_kinetic, row[0]);
+    scale = std::max(scale, std::abs(row[2] - e[0][2]));
+    drift = std::max(drift, std::abs(row[0] + row[1] + row[2] - E0));
+  }
+  EXPECT_GT(max_kinetic, 0.0);
+  // Relative to the energy exchanged (the drop of the gravity potential).
+  std::printf("oscillation: energy drift %.3e J of %.3e J exchanged, max kinetic %.3e J\n", drift, scale, max_kinetic);
+  EXPECT_LT(drift / scale, 1e-4) << "drift " << drift << " exchanged " << scale;
+}
+
+TEST(Run, FailuresNameTheTimeAndKeepTheFrames) {
+  const auto dir = test::temp_dir();
+  // Too few steps allowed: the run stops early, with the frames so far on disk.
+  Scene sc = scene(kBox, {"integrator.max_steps=15"});
+  const std::string out = (dir / "fail.h5").string();
+  const std::string msg = test::error_of([&] { run_scene(sc, out, false); });
+  EXPECT_NE(msg.find("test.toml: integration failed at t = "), std::string::npos) << msg;
+  EXPECT_NE(msg.find("integrator.max_steps"), std::string::npos) << msg;
+  RunFile f(out);
+  EXPECT_GT(f.num_frames(), 0);
+  EXPECT_LT(f.num_frames(), 31);
+}
