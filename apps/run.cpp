@@ -39,6 +39,7 @@ RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) 
   o.max_step = sc.integrator.max_step;
   o.max_steps = sc.integrator.max_steps;
   o.ordering = sc.integrator.ordering;
+  o.linear_solver = sc.integrator.linear_solver;
   IdaIntegrator ida(sys, o);
   OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run"}, sc.output.pressure);
   const std::vector<double> times = sc.frames.times();

@@ -34,6 +34,7 @@ TEST(Mesh, BoxVolumeIsExactForBothSplits) {
     EXPECT_EQ(m.num_tets(), 3 * 4 * 5 * split);
     EXPECT_EQ(m.num_nodes(), 4 * 5 * 6);
     EXPECT_NEAR(m.rest_volume(), 1.5, 1e-14);
+    EXPECT_EQ(m.reoriented_tets(), 0);  // the generator writes positive tets
     expect_closed_outward(m);
     // Every cell's surface is two triangles per boundary face of the box.
     EXPECT_EQ(m.surface().size(), 2u * 2 * (3 * 4 + 4 * 5 + 3 * 5));

@@ -29,12 +29,12 @@ Mesh make_box(const Eigen::Vector3d& size, const std::array<long, 3>& cells, con
         for (int b = 0; b < 8; ++b) c[b] = id(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
         if (split == 6) {
           // Kuhn: one tet per path 0 -> 7 along the cube edges; conforming for any neighbour.
-          static constexpr int kPath[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
+          static constexpr int kPath[6][2] = {{1, 3}, {5, 1}, {3, 2}, {2, 6}, {4, 5}, {6, 4}};  // positive
           for (const auto& p : kPath) tets.push_back({c[0], c[p[0]], c[p[1]], c[7]});
         } else {
           // Central tet on the corners of one parity, four corner tets; parity alternates.
-          static constexpr int kEven[5][4] = {{1, 2, 4, 7}, {0, 1, 2, 4}, {3, 1, 2, 7}, {5, 1, 4, 7}, {6, 2, 4, 7}};
-          static constexpr int kOdd[5][4] = {{0, 3, 5, 6}, {1, 0, 3, 5}, {2, 0, 3, 6}, {4, 0, 5, 6}, {7, 3, 5, 6}};
+          static constexpr int kEven[5][4] = {{1, 2, 4, 7}, {0, 1, 2, 4}, {3, 2, 1, 7}, {5, 1, 4, 7}, {6, 4, 2, 7}};
+          static constexpr int kOdd[5][4] = {{0, 5, 3, 6}, {1, 3, 0, 5}, {2, 0, 3, 6}, {4, 5, 0, 6}, {7, 3, 5, 6}};  // all positive
           const auto& t = ((i + j + k) % 2 == 0) ? kEven : kOdd;
           for (const auto& q : t) tets.push_back({c[q[0]], c[q[1]], c[q[2]], c[q[3]]});
         }

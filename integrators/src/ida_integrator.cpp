@@ -1,5 +1,7 @@
 #include "isochor/ida_integrator.hpp"
 
+#include "isochor/ggl.hpp"
+
 #include <ida/ida.h>
 #include <klu.h>
 #include <metis.h>
@@ -23,78 +25,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-// The GGL Jacobian's pattern over y = (q, v, lambda, mu) and the slot of every block entry.
-struct GglPattern {
-  Index N = 0;
-  SparsePattern p;
-  std::vector<Index> qq, vq, vv;          // per stiffness-pattern entry
-  std::vector<Index> q_diag, v_diag, qv;  // per dof
-  std::vector<std::vector<Index>> gq, gvq, gvv, qmu, vlam;  // per constraint row entry
-
-  void build(const SparsePattern& K, const std::vector<std::vector<Index>>& rows, Index n, Index m) {
-    N = 2 * n + 2 * m;
-    std::vector<std::pair<Index, Index>> e;  // (col, row)
-    e.reserve(3 * K.nnz() + n + 5 * 100);
-    for (Index c = 0; c < n; ++c)
-      for (Index k = K.col_ptr[c]; k < K.col_ptr[c + 1]; ++k) {
-        const Index r = K.row_ind[k];
-        e.emplace_back(c, r);
-        e.emplace_back(c, n + r);
-        e.emplace_back(n + c, n + r);
-      }
-    for (Index i = 0; i < n; ++i) e.emplace_back(n + i, i);
-    for (Index j = 0; j < m; ++j)
-      for (Index d : rows[j]) {
-        e.emplace_back(d, 2 * n + j);          // G in F_g
-        e.emplace_back(d, 2 * n + m + j);      // d(Gv)/dq in F_gv
-        e.emplace_back(n + d, 2 * n + m + j);  // G in F_gv
-        e.emplace_back(2 * n + m + j, d);      // G^T mu in F_q
-        e.emplace_back(2 * n + j, n + d);      // G^T lambda in F_v
-      }
-    std::sort(e.begin(), e.end());
-    e.erase(std::unique(e.begin(), e.end()), e.end());
-    p.n = N;
-    p.col_ptr.assign(N + 1, 0);
-    p.row_ind.resize(e.size());
-    for (std::size_t k = 0; k < e.size(); ++k) {
-      p.col_ptr[e[k].first + 1]++;
-      p.row_ind[k] = e[k].second;
-    }
-    for (Index c = 0; c < N; ++c) p.col_ptr[c + 1] += p.col_ptr[c];
-    qq.resize(K.nnz());
-    vq.resize(K.nnz());
-    vv.resize(K.nnz());
-    for (Index c = 0; c < n; ++c)
-      for (Index k = K.col_ptr[c]; k < K.col_ptr[c + 1]; ++k) {
-        const Index r = K.row_ind[k];
-        qq[k] = p.find(r, c);
-        vq[k] = p.find(n + r, c);
-        vv[k] = p.find(n + r, n + c);
-      }
-    q_diag.resize(n);
-    v_diag.resize(n);
-    qv.resize(n);
-    for (Index i = 0; i < n; ++i) {
-      q_diag[i] = p.find(i, i);
-      v_diag[i] = p.find(n + i, n + i);
-      qv[i] = p.find(i, n + i);
-    }
-    auto per_row = [&](std::vector<std::vector<Index>>& out, auto rc) {
-      out.assign(m, {});
-      for (Index j = 0; j < m; ++j)
-        for (Index d : rows[j]) {
-          auto [r, c] = rc(j, d);
-          out[j].push_back(p.find(r, c));
-        }
-    };
-    per_row(gq, [&](Index j, Index d) { return std::make_pair(2 * n + j, d); });
-    per_row(gvq, [&](Index j, Index d) { return std::make_pair(2 * n + m + j, d); });
-    per_row(gvv, [&](Index j, Index d) { return std::make_pair(2 * n + m + j, n + d); });
-    per_row(qmu, [&](Index j, Index d) { return std::make_pair(d, 2 * n + m + j); });
-    per_row(vlam, [&](Index j, Index d) { return std::make_pair(n + d, 2 * n + j); });
-  }
-};
 
 // Nested dissection (METIS) of the group graph, each group's q dofs then its v dofs together,
 // multipliers last. Returns the old index of each new position.
@@ -150,125 +80,47 @@ struct IdaIntegrator::Impl {
   ConstrainedSystem& sys;
   IdaOptions opt;
   Index n = 0, m = 0;
-  GglPattern ggl;
+  GglForm ggl;
+  std::unique_ptr<ReducedSolver> reduced;
   std::vector<Index> order;
-  // Work arrays, allocated once.
-  VectorXd q, v, qd, vd, lambda, mu, f, g, gt;
-  std::vector<std::vector<double>> G, Gv;
-  std::vector<double> sA, sB, sC;
   IdaStats stats;
   SUNContext ctx = nullptr;
   SUNLinearSolver LS = nullptr;
   long last_newton_failures = 0;
-  // The KLU solver's own setup and solve, wrapped to time them.
+  // KLU's own setup and solve, wrapped to time them.
   int (*klu_setup)(SUNLinearSolver, SUNMatrix) = nullptr;
   int (*klu_solve)(SUNLinearSolver, SUNMatrix, N_Vector, N_Vector, realtype) = nullptr;
   void* ida_mem = nullptr;
 
-  Impl(ConstrainedSystem& s, IdaOptions o) : sys(s), opt(std::move(o)) {
+  Impl(ConstrainedSystem& s, IdaOptions o) : sys(s), opt(std::move(o)), ggl(s) {
     n = sys.num_dofs();
     m = sys.num_constraints();
-    ggl.build(sys.pattern(), sys.constraint_rows(), n, m);
-    q.resize(n), v.resize(n), qd.resize(n), vd.resize(n), lambda.resize(m), mu.resize(m), f.resize(n), g.resize(m),
-        gt.resize(m);
-    sA.resize(sys.pattern().nnz());
-    sB.resize(sys.pattern().nnz());
-    sC.resize(sys.pattern().nnz());
-    G.resize(m);
-    Gv.resize(m);
-    for (Index j = 0; j < m; ++j) {
-      G[j].resize(sys.constraint_rows()[j].size());
-      Gv[j].resize(sys.constraint_rows()[j].size());
-    }
-    if (opt.ordering == "metis") order = metis_order(sys.pattern(), sys.dofs_per_group(), n, m);
-  }
-
-  void unpack(N_Vector yy, N_Vector yp) {
-    const double* y = N_VGetArrayPointer(yy);
-    const double* d = N_VGetArrayPointer(yp);
-    q = Eigen::Map<const VectorXd>(y, n);
-    v = Eigen::Map<const VectorXd>(y + n, n);
-    lambda = Eigen::Map<const VectorXd>(y + 2 * n, m);
-    mu = Eigen::Map<const VectorXd>(y + 2 * n + m, m);
-    qd = Eigen::Map<const VectorXd>(d, n);
-    vd = Eigen::Map<const VectorXd>(d + n, n);
+    if (opt.linear_solver == "reduced") reduced = std::make_unique<ReducedSolver>(ggl);
+    else if (opt.ordering == "metis") order = metis_order(sys.pattern(), sys.dofs_per_group(), n, m);
   }
 
   int residual(double t, N_Vector yy, N_Vector yp, N_Vector rr) {
     const auto t0 = Clock::now();
-    unpack(yy, yp);
-    double* r = N_VGetArrayPointer(rr);
-    sys.force(t, q, v, f);
-    sys.constraint(t, q, g);
-    sys.constraint_jacobian(t, q, G, &gt);
-    Eigen::Map<VectorXd> Fq(r, n), Fv(r + n, n), Fg(r + 2 * n, m), Fgv(r + 2 * n + m, m);
-    Fq = qd - v;
-    Fv = sys.mass().cwiseProduct(vd) - f;
-    Fg = g;
-    for (Index j = 0; j < m; ++j) {
-      const auto& rows = sys.constraint_rows()[j];
-      double gv = 0;
-      for (std::size_t k = 0; k < rows.size(); ++k) {
-        Fq[rows[k]] += G[j][k] * mu[j];
-        Fv[rows[k]] += G[j][k] * lambda[j];
-        gv += G[j][k] * v[rows[k]];
-      }
-      Fgv[j] = gv + gt[j];
-    }
+    const bool ok = ggl.residual(t, N_VGetArrayPointer(yy), N_VGetArrayPointer(yp), N_VGetArrayPointer(rr));
     stats.assembly_seconds += seconds_since(t0);
-    for (Index i = 0; i < 2 * (n + m); ++i)
-      if (!std::isfinite(r[i])) return 1;  // recoverable: IDA retries with a smaller step
-    return 0;
+    return ok ? 0 : 1;  // not finite: recoverable, IDA retries with a smaller step
   }
 
   int jacobian(double t, double cj, N_Vector yy, N_Vector yp, SUNMatrix J) {
     const auto t0 = Clock::now();
-    unpack(yy, yp);
-    // A Newton failure since the last Jacobian: the pivot order of the first factorisation may
-    // have gone stale (c_j changed, contact): ask KLU for a fresh factorisation.
-    long nfail = 0;
-    IDAGetNumNonlinSolvConvFails(ida_mem, &nfail);
-    if (nfail > last_newton_failures && stats.jacobian_evals > 0) {
-      SUNLinSol_KLUReInit(LS, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
+    if (!reduced) {
+      // A Newton failure since the last Jacobian: the pivot order of the first factorisation may
+      // have gone stale (c_j changed, contact): ask KLU for a fresh factorisation.
+      long nfail = 0;
+      IDAGetNumNonlinSolvConvFails(ida_mem, &nfail);
+      if (nfail > last_newton_failures && stats.jacobian_evals > 0) SUNLinSol_KLUReInit(LS, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
+      last_newton_failures = nfail;
     }
-    last_newton_failures = nfail;
     stats.jacobian_evals++;
     // SUNMatZero cleared the index arrays too: copy the pattern back, then the values.
-    std::memcpy(SM_INDEXPTRS_S(J), ggl.p.col_ptr.data(), sizeof(sunindextype) * (ggl.N + 1));
-    std::memcpy(SM_INDEXVALS_S(J), ggl.p.row_ind.data(), sizeof(sunindextype) * ggl.p.nnz());
-    double* val = SM_DATA_S(J);
-    std::fill(val, val + ggl.p.nnz(), 0.0);
-    std::fill(sA.begin(), sA.end(), 0.0);
-    std::fill(sB.begin(), sB.end(), 0.0);
-    std::fill(sC.begin(), sC.end(), 0.0);
-    if (m) {
-      sys.add_constraint_hessian(t, q, mu, 1.0, sA.data());
-      sys.add_constraint_hessian(t, q, lambda, 1.0, sB.data());
-    }
-    sys.add_force_jacobians(t, q, v, sB.data(), sC.data());
-    for (std::size_t k = 0; k < sA.size(); ++k) {
-      val[ggl.qq[k]] += sA[k];
-      val[ggl.vq[k]] += sB[k];
-      val[ggl.vv[k]] += sC[k];
-    }
-    const VectorXd& M = sys.mass();
-    for (Index i = 0; i < n; ++i) {
-      val[ggl.q_diag[i]] += cj;
-      val[ggl.v_diag[i]] += cj * M[i];
-      val[ggl.qv[i]] = -1.0;
-    }
-    if (m) {
-      sys.constraint_jacobian(t, q, G, nullptr);
-      sys.constraint_velocity_jacobian(t, q, v, Gv);
-      for (Index j = 0; j < m; ++j)
-        for (std::size_t k = 0; k < G[j].size(); ++k) {
-          val[ggl.gq[j][k]] += G[j][k];
-          val[ggl.gvv[j][k]] += G[j][k];
-          val[ggl.qmu[j][k]] += G[j][k];
-          val[ggl.vlam[j][k]] += G[j][k];
-          val[ggl.gvq[j][k]] += Gv[j][k];
-        }
-    }
+    std::memcpy(SM_INDEXPTRS_S(J), ggl.pattern().col_ptr.data(), sizeof(sunindextype) * (ggl.size() + 1));
+    std::memcpy(SM_INDEXVALS_S(J), ggl.pattern().row_ind.data(), sizeof(sunindextype) * ggl.pattern().nnz());
+    ggl.jacobian(t, cj, N_VGetArrayPointer(yy), N_VGetArrayPointer(yp), SM_DATA_S(J));
     stats.assembly_seconds += seconds_since(t0);
     return 0;
   }
@@ -304,6 +156,35 @@ int timed_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, realtype
   g_timed->stats.solve_seconds += seconds_since(t0);
   return r;
 }
+// The reduced solver as a SUNLinearSolver of direct (matrix-based) type: it reads the filled GGL matrix.
+SUNLinearSolver_Type reduced_type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
+SUNLinearSolver_ID reduced_id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
+int reduced_initialize(SUNLinearSolver) { return SUNLS_SUCCESS; }
+int reduced_setup(SUNLinearSolver S, SUNMatrix A) {
+  auto* s = static_cast<IdaIntegrator::Impl*>(S->content);
+  const auto t0 = Clock::now();
+  double cj = 0;
+  IDAGetCurrentCj(s->ida_mem, &cj);
+  const bool ok = s->reduced->setup(cj, SM_DATA_S(A));
+  s->stats.factor_seconds += seconds_since(t0);
+  s->stats.fresh_factorisations++;
+  s->stats.factor_nnz = s->reduced->factor_nnz();
+  return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;  // not positive definite: retry smaller step
+}
+int reduced_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype) {
+  auto* s = static_cast<IdaIntegrator::Impl*>(S->content);
+  const auto t0 = Clock::now();
+  s->reduced->solve(N_VGetArrayPointer(b), N_VGetArrayPointer(x));
+  s->stats.solve_seconds += seconds_since(t0);
+  return SUNLS_SUCCESS;
+}
+sunindextype reduced_lastflag(SUNLinearSolver) { return 0; }
+int reduced_free(SUNLinearSolver S) {
+  S->content = nullptr;
+  SUNLinSolFreeEmpty(S);
+  return SUNLS_SUCCESS;
+}
+
 }  // namespace
 
 IdaIntegrator::IdaIntegrator(ConstrainedSystem& system, IdaOptions options) : impl_(new Impl(system, std::move(options))) {}
@@ -420,21 +301,33 @@ IdaStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   if (s.opt.initial_step > 0) IDASetInitStep(mem, s.opt.initial_step);
   IDASetStopTime(mem, times.back());
   IDASetMaxNumSteps(mem, 100000);
-  SUNMatrix J = SUNSparseMatrix(N, N, s.ggl.p.nnz(), CSC_MAT, s.ctx);
-  s.LS = SUNLinSol_KLU(yy, J, s.ctx);
-  if (s.opt.ordering == "metis") {
-    klu_l_common* c = SUNLinSol_KLUGetCommon(s.LS);
-    c->ordering = 3;
-    c->btf = 0;
-    c->user_order = user_order;
-    c->user_data = &s.order;
+  SUNMatrix J = SUNSparseMatrix(N, N, s.ggl.pattern().nnz(), CSC_MAT, s.ctx);
+  if (s.reduced) {
+    s.LS = SUNLinSolNewEmpty(s.ctx);
+    s.LS->content = &s;
+    s.LS->ops->gettype = reduced_type;
+    s.LS->ops->getid = reduced_id;
+    s.LS->ops->initialize = reduced_initialize;
+    s.LS->ops->setup = reduced_setup;
+    s.LS->ops->solve = reduced_solve;
+    s.LS->ops->lastflag = reduced_lastflag;
+    s.LS->ops->free = reduced_free;
   } else {
-    SUNLinSol_KLUSetOrdering(s.LS, s.opt.ordering == "amd" ? 0 : 1);
+    s.LS = SUNLinSol_KLU(yy, J, s.ctx);
+    if (s.opt.ordering == "metis") {
+      klu_l_common* c = SUNLinSol_KLUGetCommon(s.LS);
+      c->ordering = 3;
+      c->btf = 0;
+      c->user_order = user_order;
+      c->user_data = &s.order;
+    } else {
+      SUNLinSol_KLUSetOrdering(s.LS, s.opt.ordering == "amd" ? 0 : 1);
+    }
+    s.klu_setup = s.LS->ops->setup;
+    s.klu_solve = s.LS->ops->solve;
+    s.LS->ops->setup = timed_setup;
+    s.LS->ops->solve = timed_solve;
   }
-  s.klu_setup = s.LS->ops->setup;
-  s.klu_solve = s.LS->ops->solve;
-  s.LS->ops->setup = timed_setup;
-  s.LS->ops->solve = timed_solve;
   g_timed = &s;
   IDASetLinearSolver(mem, s.LS, J);
   IDASetJacFn(mem, jac_fn);

@@ -148,6 +148,7 @@ Scene parse_scene(SceneFile file) {
   ig.max_step = in.number("max_step", 0.0, Range::non_negative());
   ig.max_steps = in.integer("max_steps", ig.max_steps, 1, 1000000000000L);
   ig.ordering = in.string("ordering", ig.ordering, {"metis", "colamd", "amd"});
+  ig.linear_solver = in.string("linear_solver", ig.linear_solver, {"klu", "reduced"});
 
   const Section fr = root.table("frames");
   if (fr.has("count") && (fr.has("rate") || fr.has("duration")))

@@ -24,7 +24,9 @@ struct IdaOptions {
   double max_step = 0.0;     // 0: no limit
   double initial_step = 0.0; // 0: IDA's choice
   long max_steps = 10000000; // over the whole run
-  std::string ordering = "metis";  // "metis" (node-grouped nested dissection), "colamd", "amd"
+  std::string ordering = "metis";  // KLU: "metis" (node-grouped nested dissection), "colamd", "amd"
+  // "klu": the whole GGL matrix; "reduced": eliminate dv, factor S with CHOLMOD (ggl.hpp).
+  std::string linear_solver = "klu";
 };
 
 // Statistics of a run; per-frame series are sampled at each frame.

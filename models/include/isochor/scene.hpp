@@ -30,6 +30,7 @@ struct IntegratorSpec {
   double max_step = 0.0;      // s, 0: none
   long max_steps = 10000000;
   std::string ordering = "metis";
+  std::string linear_solver = "klu";
 };
 
 struct FramesSpec {

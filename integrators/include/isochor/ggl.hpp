@@ -1,0 +1,66 @@
+// The stabilised index-2 (GGL) form of a ConstrainedSystem, y = (q, v, lambda, mu):
+//   F_q  = q' - v + G^T mu          F_v  = M v' - f(q, v, t) + G^T lambda
+//   F_g  = g(q, t)                  F_gv = G v + dg/dt
+// its residual, and its Jacobian dF/dy + c_j dF/dy' filled into a pattern built once:
+//            q                      v             lambda   mu
+//   F_q   [ c_j I + sum mu_j H_j    -I            0        G^T ]
+//   F_v   [ -df/dq + sum l_j H_j    c_j M - df/dv G^T      0   ]
+//   F_g   [ G                       0             0        0   ]
+//   F_gv  [ d(G v)/dq               G             0        0   ]
+// and a solver of the Newton system that eliminates dv and factors only the n x n effective
+// stiffness S = c_j^2 M - c_j df/dv - df/dq + sum lambda_j H_j (CHOLMOD), with the 2m borders
+// by a Schur complement.
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "isochor/constrained_system.hpp"
+
+namespace isochor {
+
+class GglForm {
+ public:
+  explicit GglForm(ConstrainedSystem& sys);
+  ConstrainedSystem& system() const { return sys_; }
+  Index n() const { return n_; }
+  Index m() const { return m_; }
+  Index size() const { return 2 * n_ + 2 * m_; }
+  const SparsePattern& pattern() const { return p_; }
+  // F(t, y, y'); false if an entry is not finite.
+  bool residual(double t, const double* y, const double* yp, double* r);
+  // values (in pattern()) = dF/dy + cj dF/dy'.
+  void jacobian(double t, double cj, const double* y, const double* yp, double* values);
+
+  // Slots of the blocks in the value array: per entry k of the system's pattern (q-q, v-q, v-v),
+  // per dof (diagonals), per entry of each constraint row.
+  std::vector<Index> qq, vq, vv, q_diag, v_diag, qv;
+  std::vector<std::vector<Index>> gq, gvq, gvv, qmu, vlam;
+
+ private:
+  void unpack(const double* y, const double* yp);
+  ConstrainedSystem& sys_;
+  Index n_, m_;
+  SparsePattern p_;
+  VectorXd q_, v_, qd_, vd_, lambda_, mu_, f_, g_, gt_;
+  std::vector<std::vector<double>> G_, Gv_;
+  std::vector<double> sA_, sB_, sC_;
+};
+
+// Solves J x = b for a filled GGL Jacobian by the reduction above. The terms sum mu_j H_j are
+// left out of the elimination (mu = 0 at the solution), so the solve is exact when mu = 0 and an
+// approximation otherwise, which Newton's iteration absorbs.
+class ReducedSolver {
+ public:
+  explicit ReducedSolver(const GglForm& form);
+  ~ReducedSolver();
+  // Factors S for this Jacobian; false when S is not positive definite.
+  bool setup(double cj, const double* values);
+  void solve(const double* b, double* x);
+  double factor_nnz() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace isochor

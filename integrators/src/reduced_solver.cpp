@@ -1,0 +1,147 @@
+// The Newton system of the GGL form, reduced to the effective stiffness S.
+// With rhs (r1, r2, r3, r4) and unknowns (dq, dv, dl, dm), V = c M - df/dv, B = d(G v)/dq:
+//   row 1:  dv = (c I + H_mu) dq + G^T dm - r1
+//   row 2:  S dq + V G^T dm + G^T dl = r2 + V r1,   S = -df/dq + H_lambda + c V   (H_mu left out)
+//   row 3:  G dq = r3
+//   row 4:  (B + c G) dq + G G^T dm = r4 + G r1
+// S is factored by CHOLMOD (METIS ordering, supernodal); Z1 = S^-1 G^T and Z2 = S^-1 V G^T turn
+// rows 3 and 4 into a dense 2m x 2m system for (dl, dm).
+#include <cholmod.h>
+
+#include <Eigen/Dense>
+#include <cstring>
+
+#include "isochor/ggl.hpp"
+
+namespace isochor {
+
+struct ReducedSolver::Impl {
+  const GglForm& form;
+  Index n, m;
+  cholmod_common c;
+  cholmod_sparse* S = nullptr;
+  cholmod_factor* L = nullptr;
+  cholmod_dense *B = nullptr, *X = nullptr, *Y = nullptr, *E = nullptr;  // solve2 workspaces
+  Eigen::MatrixXd Gt, W, Z1, Z2, Bt;  // n x m: columns G_j^T, V G_j^T, S^-1 G^T, S^-1 V G^T, B_j^T
+  Eigen::PartialPivLU<Eigen::MatrixXd> small;
+  const double* vals = nullptr;
+  double cj = 0;
+  VectorXd b1, y, dq, tmp;
+
+  explicit Impl(const GglForm& f) : form(f), n(f.n()), m(f.m()) {
+    cholmod_l_start(&c);
+    c.nmethods = 1;
+    c.method[0].ordering = CHOLMOD_METIS;
+    c.postorder = 1;
+    c.supernodal = CHOLMOD_AUTO;
+    c.print = 0;
+    const SparsePattern& K = form.system().pattern();
+    S = cholmod_l_allocate_sparse(n, n, K.nnz(), 1, 1, -1, CHOLMOD_REAL, &c);  // lower part used
+    std::memcpy(S->p, K.col_ptr.data(), sizeof(Index) * (n + 1));
+    std::memcpy(S->i, K.row_ind.data(), sizeof(Index) * K.nnz());
+    B = cholmod_l_allocate_dense(n, 1, n, CHOLMOD_REAL, &c);
+    Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Bt.setZero(n, m);
+    b1.resize(n), y.resize(n), dq.resize(n), tmp.resize(n);
+  }
+  ~Impl() {
+    if (L) cholmod_l_free_factor(&L, &c);
+    cholmod_l_free_sparse(&S, &c);
+    for (cholmod_dense** d : {&B, &X, &Y, &E})
+      if (*d) cholmod_l_free_dense(d, &c);
+    cholmod_l_finish(&c);
+  }
+
+  // out = V x over the K pattern (V from the v-v block of the Jacobian).
+  void times_V(const double* x, double* out) const {
+    const SparsePattern& K = form.system().pattern();
+    std::fill(out, out + n, 0.0);
+    for (Index col = 0; col < n; ++col)
+      for (Index k = K.col_ptr[col]; k < K.col_ptr[col + 1]; ++k) out[K.row_ind[k]] += vals[form.vv[k]] * x[col];
+  }
+  // S^-1 b for one column.
+  void solve_S(const double* b, double* x) {
+    std::memcpy(B->x, b, sizeof(double) * n);
+    cholmod_l_solve2(CHOLMOD_A, L, B, nullptr, &X, nullptr, &Y, &E, &c);
+    std::memcpy(x, X->x, sizeof(double) * n);
+  }
+};
+
+ReducedSolver::ReducedSolver(const GglForm& form) : impl_(std::make_unique<Impl>(form)) {}
+ReducedSolver::~ReducedSolver() = default;
+
+double ReducedSolver::factor_nnz() const {
+  if (!impl_->L) return 0;
+  const cholmod_factor* L = impl_->L;
+  return L->is_super ? static_cast<double>(L->xsize) : static_cast<double>(static_cast<const Index*>(L->p)[L->n]);
+}
+
+bool ReducedSolver::setup(double cj, const double* vals) {
+  Impl& s = *impl_;
+  s.vals = vals;
+  s.cj = cj;
+  const GglForm& f = s.form;
+  const Index n = s.n, m = s.m;
+  double* Sx = static_cast<double*>(s.S->x);
+  for (std::size_t k = 0; k < f.vq.size(); ++k) Sx[k] = vals[f.vq[k]] + cj * vals[f.vv[k]];
+  if (!s.L) s.L = cholmod_l_analyze(s.S, &s.c);
+  cholmod_l_factorize(s.S, s.L, &s.c);
+  if (s.c.status == CHOLMOD_NOT_POSDEF) return false;
+  if (m == 0) return true;
+  const auto& rows = f.system().constraint_rows();
+  s.Gt.setZero();
+  s.Bt.setZero();
+  for (Index j = 0; j < m; ++j)
+    for (std::size_t k = 0; k < rows[j].size(); ++k) {
+      s.Gt(rows[j][k], j) = vals[f.gq[j][k]];
+      s.Bt(rows[j][k], j) = vals[f.gvq[j][k]];
+    }
+  for (Index j = 0; j < m; ++j) {
+    s.times_V(s.Gt.col(j).data(), s.W.col(j).data());
+    s.solve_S(s.Gt.col(j).data(), s.Z1.col(j).data());
+    s.solve_S(s.W.col(j).data(), s.Z2.col(j).data());
+  }
+  const Eigen::MatrixXd BcG = s.Bt + cj * s.Gt;  // (B + c G)^T
+  Eigen::MatrixXd C(2 * m, 2 * m);
+  C.topLeftCorner(m, m) = s.Gt.transpose() * s.Z1;
+  C.topRightCorner(m, m) = s.Gt.transpose() * s.Z2;
+  C.bottomLeftCorner(m, m) = BcG.transpose() * s.Z1;
+  C.bottomRightCorner(m, m) = BcG.transpose() * s.Z2 - s.Gt.transpose() * s.Gt;
+  s.small.compute(C);
+  return true;
+}
+
+void ReducedSolver::solve(const double* b, double* x) {
+  Impl& s = *impl_;
+  const GglForm& f = s.form;
+  const Index n = s.n, m = s.m;
+  Eigen::Map<const VectorXd> r1(b, n), r2(b + n, n), r3(b + 2 * n, m), r4(b + 2 * n + m, m);
+  s.times_V(r1.data(), s.tmp.data());
+  s.b1 = r2 + s.tmp;
+  s.solve_S(s.b1.data(), s.y.data());
+  VectorXd dl = VectorXd::Zero(m), dm = VectorXd::Zero(m);
+  if (m) {
+    VectorXd rhs(2 * m);
+    rhs.head(m) = s.Gt.transpose() * s.y - r3;
+    rhs.tail(m) = (s.Bt + s.cj * s.Gt).transpose() * s.y - r4 - s.Gt.transpose() * r1;
+    const VectorXd z = s.small.solve(rhs);
+    dl = z.head(m);
+    dm = z.tail(m);
+    s.dq = s.y - s.Z1 * dl - s.Z2 * dm;
+  } else {
+    s.dq = s.y;
+  }
+  // Row 1 exactly: dv = (c I + H_mu) dq + G^T dm - r1, with (c I + H_mu) from the q-q block.
+  Eigen::Map<VectorXd> dv(x + n, n);
+  dv = -r1;
+  if (m) dv += s.Gt * dm;
+  const SparsePattern& K = f.system().pattern();
+  for (Index col = 0; col < n; ++col)
+    for (Index k = K.col_ptr[col]; k < K.col_ptr[col + 1]; ++k) dv[K.row_ind[k]] += s.vals[f.qq[k]] * s.dq[col];
+  Eigen::Map<VectorXd>(x, n) = s.dq;
+  if (m) {
+    Eigen::Map<VectorXd>(x + 2 * n, m) = dl;
+    Eigen::Map<VectorXd>(x + 2 * n + m, m) = dm;
+  }
+}
+
+}  // namespace isochor
