@@ -5,7 +5,10 @@
 //   row 3:  G dq = r3
 //   row 4:  (B + c G) dq + G G^T dm = r4 + G r1
 // S is factored by CHOLMOD (METIS ordering, supernodal); Z1 = S^-1 G^T and Z2 = S^-1 V G^T turn
-// rows 3 and 4 into a dense 2m x 2m system for (dl, dm).
+// rows 3 and 4 into a dense 2m x 2m system for (dl, dm). Computed directly, (B + c G) Z2 - G G^T
+// cancels to O(1/c) of its terms (Z2 ~ G^T / c for large c); with A = S - c V and
+// Z3 = S^-1 A G^T, Z2 = (G^T - Z3) / c and the block is ((B G^T - B Z3) / c - G Z3), free of
+// that cancellation.
 #include <cholmod.h>
 
 #include <Eigen/Dense>
@@ -22,7 +25,7 @@ struct ReducedSolver::Impl {
   cholmod_sparse* S = nullptr;
   cholmod_factor* L = nullptr;
   cholmod_dense *B = nullptr, *X = nullptr, *Y = nullptr, *E = nullptr;  // solve2 workspaces
-  Eigen::MatrixXd Gt, W, Z1, Z2, Bt;  // n x m: columns G_j^T, V G_j^T, S^-1 G^T, S^-1 V G^T, B_j^T
+  Eigen::MatrixXd Gt, W, Z1, Z2, Z3, Bt;  // n x m: G^T, A G^T, S^-1 G^T, S^-1 V G^T, S^-1 A G^T, B^T
   Eigen::PartialPivLU<Eigen::MatrixXd> small;
   const double* vals = nullptr;
   double cj = 0;
@@ -40,7 +43,7 @@ struct ReducedSolver::Impl {
     std::memcpy(S->p, K.col_ptr.data(), sizeof(Index) * (n + 1));
     std::memcpy(S->i, K.row_ind.data(), sizeof(Index) * K.nnz());
     B = cholmod_l_allocate_dense(n, 1, n, CHOLMOD_REAL, &c);
-    Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Bt.setZero(n, m);
+    Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);
     b1.resize(n), y.resize(n), dq.resize(n), tmp.resize(n);
   }
   ~Impl() {
@@ -51,12 +54,12 @@ struct ReducedSolver::Impl {
     cholmod_l_finish(&c);
   }
 
-  // out = V x over the K pattern (V from the v-v block of the Jacobian).
-  void times_V(const double* x, double* out) const {
+  // out = X x over the K pattern, X the block of the Jacobian at `slots` (v-v: V, v-q: A).
+  void times(const std::vector<Index>& slots, const double* x, double* out) const {
     const SparsePattern& K = form.system().pattern();
     std::fill(out, out + n, 0.0);
     for (Index col = 0; col < n; ++col)
-      for (Index k = K.col_ptr[col]; k < K.col_ptr[col + 1]; ++k) out[K.row_ind[k]] += vals[form.vv[k]] * x[col];
+      for (Index k = K.col_ptr[col]; k < K.col_ptr[col + 1]; ++k) out[K.row_ind[k]] += vals[slots[k]] * x[col];
   }
   // S^-1 b for one column.
   void solve_S(const double* b, double* x) {
@@ -96,26 +99,41 @@ bool ReducedSolver::setup(double cj, const double* vals) {
       s.Bt(rows[j][k], j) = vals[f.gvq[j][k]];
     }
   for (Index j = 0; j < m; ++j) {
-    s.times_V(s.Gt.col(j).data(), s.W.col(j).data());
+    s.times(f.vq, s.Gt.col(j).data(), s.W.col(j).data());
     s.solve_S(s.Gt.col(j).data(), s.Z1.col(j).data());
-    s.solve_S(s.W.col(j).data(), s.Z2.col(j).data());
+    s.solve_S(s.W.col(j).data(), s.Z3.col(j).data());
   }
-  const Eigen::MatrixXd BcG = s.Bt + cj * s.Gt;  // (B + c G)^T
+  s.Z2 = (s.Gt - s.Z3) / cj;
+  const Eigen::MatrixXd GtG = s.Gt.transpose() * s.Gt;
   Eigen::MatrixXd C(2 * m, 2 * m);
   C.topLeftCorner(m, m) = s.Gt.transpose() * s.Z1;
-  C.topRightCorner(m, m) = s.Gt.transpose() * s.Z2;
-  C.bottomLeftCorner(m, m) = BcG.transpose() * s.Z1;
-  C.bottomRightCorner(m, m) = BcG.transpose() * s.Z2 - s.Gt.transpose() * s.Gt;
+  C.topRightCorner(m, m) = (GtG - s.Gt.transpose() * s.Z3) / cj;
+  C.bottomLeftCorner(m, m) = (s.Bt + cj * s.Gt).transpose() * s.Z1;
+  C.bottomRightCorner(m, m) = (s.Bt.transpose() * s.Gt - s.Bt.transpose() * s.Z3) / cj - s.Gt.transpose() * s.Z3;
   s.small.compute(C);
   return true;
 }
 
-void ReducedSolver::solve(const double* b, double* x) {
+void ReducedSolver::solve(const double* b, double* x, int refine) {
+  solve_once(b, x);
+  if (refine <= 0) return;
+  const SparsePattern& p = impl_->form.pattern();
+  VectorXd r(p.n), dx(p.n);
+  for (int it = 0; it < refine; ++it) {
+    r = Eigen::Map<const VectorXd>(b, p.n);
+    for (Index c = 0; c < p.n; ++c)
+      for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k) r[p.row_ind[k]] -= impl_->vals[k] * x[c];
+    solve_once(r.data(), dx.data());
+    Eigen::Map<VectorXd>(x, p.n) += dx;
+  }
+}
+
+void ReducedSolver::solve_once(const double* b, double* x) {
   Impl& s = *impl_;
   const GglForm& f = s.form;
   const Index n = s.n, m = s.m;
   Eigen::Map<const VectorXd> r1(b, n), r2(b + n, n), r3(b + 2 * n, m), r4(b + 2 * n + m, m);
-  s.times_V(r1.data(), s.tmp.data());
+  s.times(f.vv, r1.data(), s.tmp.data());
   s.b1 = r2 + s.tmp;
   s.solve_S(s.b1.data(), s.y.data());
   VectorXd dl = VectorXd::Zero(m), dm = VectorXd::Zero(m);

@@ -55,10 +55,13 @@ class ReducedSolver {
   ~ReducedSolver();
   // Factors S for this Jacobian; false when S is not positive definite.
   bool setup(double cj, const double* values);
-  void solve(const double* b, double* x);
+  // x = J^-1 b, then `refine` steps of iterative refinement with the exact J (each one more
+  // sparse product and reduced solve).
+  void solve(const double* b, double* x, int refine = 0);
   double factor_nnz() const;
 
  private:
+  void solve_once(const double* b, double* x);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
