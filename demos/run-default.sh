@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# The default demo: the coarse ball of the CNH paper, meshed and summarised.
+# The default demo: the coarse ball of the CNH paper hitting the ground, on IDA with the reduced
+# solver (about two minutes on two cores), then its report: cost per frame and volume error.
 set -euo pipefail
 build=${1:-build}
 cd "$(dirname "$0")/.."
-"$build/isochor" mesh demos/ball_drop.toml
-"$build/isochor" info out/ball_drop_mesh.h5
+"$build/isochor" run demos/ball_drop.toml --set integrator.rtol=1e-4 --set integrator.atol=1e-6
+/usr/bin/python3 tools/run_report.py out/ball_drop.h5
+"$build/isochor" info out/ball_drop.h5

@@ -5,6 +5,7 @@
 
 #include "isochor/error.hpp"
 #include "isochor/output_reader.hpp"
+#include "isochor/scene.hpp"
 #include "run.hpp"
 #include "test_util.hpp"
 
@@ -118,4 +119,34 @@ select = { kind = "set", name = "zmax" }
   // Both are solutions to rtol 1e-8 / atol 1e-10: they agree far below the motion.
   EXPECT_LT(worst, 1e-6 * sag);
   for (const auto& v : fb.volumes()) EXPECT_NEAR(v[0] / 0.001, 1.0, 1e-10);
+}
+
+// The coarse ball of the CNH paper (demos/ball_drop.toml) through impact and rebound start.
+TEST(BallDrop, CnhKeepsTheVolumeAtEveryFrame) {
+  const auto dir = test::temp_dir();
+  Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/ball_drop.toml", {"frames.duration=0.1"});
+  ASSERT_GT(sc.mesh.num_tets(), 4000);
+  RunFile f(run_scene(sc, (dir / "cnh.h5").string(), false).output);
+  ASSERT_EQ(f.num_frames(), 101);
+  double worst = 0, lowest_z = 1;
+  for (int k = 0; k < f.num_frames(); ++k) {
+    worst = std::max(worst, std::abs(f.volumes()[k][0] / f.volumes()[0][0] - 1.0));
+    lowest_z = std::min(lowest_z, f.positions(k).row(2).minCoeff());
+  }
+  std::printf("coarse ball, cnh: worst volume error %.3e over %d frames, lowest point z = %.4f m\n", worst,
+              f.num_frames(), lowest_z);
+  EXPECT_LT(lowest_z, 0.002);  // it did reach the ground (contact layer 2 mm)
+  EXPECT_LT(worst, 1e-8);
+}
+
+TEST(BallDrop, UnhAtNu045LosesMoreThanAFifthAtImpact) {
+  const auto dir = test::temp_dir();
+  Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/ball_drop.toml",
+                        {"frames.duration=0.1", "material.model=unh", "integrator.rtol=1e-4", "integrator.atol=1e-6"});
+  EXPECT_TRUE(sc.zones.empty());
+  RunFile f(run_scene(sc, (dir / "unh.h5").string(), false).output);
+  double lowest = 1;
+  for (const auto& v : f.volumes()) lowest = std::min(lowest, v[0] / f.volumes()[0][0]);
+  std::printf("coarse ball, unh nu = 0.45: lowest volume %.4f of V0\n", lowest);
+  EXPECT_LT(lowest, 0.8);
 }
