@@ -8,25 +8,7 @@
 
 using namespace isochor;
 
-namespace {
-
-void expect_closed_outward(const Mesh& m) {
-  SurfaceCheck c = check_surface(m.surface());
-  EXPECT_TRUE(c.closed);
-  EXPECT_TRUE(c.oriented);
-  EXPECT_EQ(c.euler_characteristic, 2);
-  // Outward: the divergence-theorem volume equals the sum of tet volumes.
-  const double vs = surface_volume(m.rest_positions(), m.surface());
-  EXPECT_NEAR(vs / m.rest_volume(), 1.0, 1e-12);
-  double sum = 0;
-  for (double v : m.rest_volumes()) {
-    EXPECT_GT(v, 0.0);
-    sum += v;
-  }
-  EXPECT_NEAR(sum / m.rest_volume(), 1.0, 1e-14);
-}
-
-}  // namespace
+using test::expect_closed_outward;
 
 TEST(Mesh, BoxVolumeIsExactForBothSplits) {
   for (int split : {5, 6}) {

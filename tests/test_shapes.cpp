@@ -3,18 +3,11 @@
 #include <cmath>
 
 #include "isochor/meshing.hpp"
+#include "test_util.hpp"
 
 using namespace isochor;
 
-namespace {
-void expect_closed_outward(const Mesh& m) {
-  SurfaceCheck c = check_surface(m.surface());
-  EXPECT_TRUE(c.closed);
-  EXPECT_TRUE(c.oriented);
-  EXPECT_EQ(c.euler_characteristic, 2);
-  EXPECT_NEAR(surface_volume(m.rest_positions(), m.surface()) / m.rest_volume(), 1.0, 1e-12);
-}
-}  // namespace
+using test::expect_closed_outward;
 
 TEST(Shapes, SphereVolumeWithinTwoPercentAndConverging) {
   const double r = 0.1, exact = 4.0 / 3.0 * M_PI * r * r * r;

@@ -6,6 +6,9 @@
 #include <fstream>
 #include <string>
 
+#include "isochor/error.hpp"
+#include "isochor/mesh.hpp"
+
 namespace isochor::test {
 
 inline std::filesystem::path temp_dir() {
@@ -31,6 +34,22 @@ std::string error_of(F&& f) {
     return e.what();
   }
   return "";
+}
+
+// A mesh's surface is closed (each edge in two triangles), consistently and outward oriented
+// (its divergence-theorem volume equals the sum of tet volumes), with Euler characteristic 2.
+inline void expect_closed_outward(const isochor::Mesh& m) {
+  const isochor::SurfaceCheck c = isochor::check_surface(m.surface());
+  EXPECT_TRUE(c.closed);
+  EXPECT_TRUE(c.oriented);
+  EXPECT_EQ(c.euler_characteristic, 2);
+  EXPECT_NEAR(isochor::surface_volume(m.rest_positions(), m.surface()) / m.rest_volume(), 1.0, 1e-12);
+  double sum = 0;
+  for (double v : m.rest_volumes()) {
+    EXPECT_GT(v, 0.0);
+    sum += v;
+  }
+  EXPECT_NEAR(sum / m.rest_volume(), 1.0, 1e-14);
 }
 
 }  // namespace isochor::test
