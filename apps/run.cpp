@@ -1,5 +1,6 @@
 #include "run.hpp"
 
+#include "isochor/backward_euler.hpp"
 #include "isochor/error.hpp"
 #include "isochor/mesh_system.hpp"
 #include "isochor/output.hpp"
@@ -25,9 +26,10 @@ void write_totals(OutputWriter& w, const IdaStats& s) {
 }  // namespace
 
 RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) {
-  if (sc.integrator.kind != "ida")
-    throw Error(sc.file.name() + ": integrator.kind = \"" + sc.integrator.kind +
-                "\" is not available yet (expected \"ida\")");
+  const std::string& kind = sc.integrator.kind;
+  if (kind != "ida" && kind != "backward_euler" && kind != "semi_implicit")
+    throw Error(sc.file.name() + ": integrator.kind = \"" + kind +
+                "\" is not available yet (expected \"ida\", \"backward_euler\" or \"semi_implicit\")");
   if (sc.frames.count > 0) throw Error(sc.file.name() + ": frames.count is for statics; a dynamic run needs frames.rate and frames.duration");
   RunSummary summary;
   summary.output = output.empty() ? sc.output.path : output;
@@ -40,7 +42,10 @@ RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) 
   o.max_steps = sc.integrator.max_steps;
   o.ordering = sc.integrator.ordering;
   o.linear_solver = sc.integrator.linear_solver;
-  IdaIntegrator ida(sys, o);
+  BackwardEulerOptions be;
+  be.dt = sc.integrator.dt;
+  be.semi_implicit = kind == "semi_implicit";
+  be.max_steps = sc.integrator.max_steps;
   OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run"}, sc.output.pressure);
   const std::vector<double> times = sc.frames.times();
   Progress bar(sc.file.name(), static_cast<int>(times.size()) - 1, progress ? stderr : nullptr);
@@ -70,7 +75,8 @@ RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) 
     if (progress) bar.update(k, t);
   };
   try {
-    summary.stats = ida.run(times, on_frame);
+    if (kind == "ida") summary.stats = IdaIntegrator(sys, o).run(times, on_frame);
+    else summary.stats = BackwardEuler(sys, be).run(times, on_frame);
   } catch (const IntegrationError& e) {
     w.set_stat("failed_at_time", e.time);
     w.set_stat("failure", std::string(e.what()));

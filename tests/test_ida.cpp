@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "isochor/backward_euler.hpp"
 #include "isochor/ida_integrator.hpp"
 
 using namespace isochor;
@@ -143,4 +144,30 @@ TEST(Ida, ConsistentInitialStateSatisfiesPositionVelocityAndAccelerationLevels) 
   EXPECT_NEAR(v.squaredNorm() + q.dot(a), 0.0, 1e-8);
   const Eigen::Vector2d residual = kMass * a - Eigen::Vector2d(0, -kMass * kG) + q * lambda[0];
   EXPECT_LT(residual.norm(), 1e-10);
+}
+
+TEST(BackwardEuler, PendulumConvergesWithOrderOne) {
+  const auto times = frame_times(1.0, 0.05);
+  const auto ref = reference_angles(times);
+  std::vector<double> errors;
+  for (double h : {5e-3, 2.5e-3, 1.25e-3, 6.25e-4}) {  // frames every 0.05 s fall on steps
+    Pendulum p;
+    BackwardEulerOptions o;
+    o.dt = h;
+    BackwardEuler be(p, o);
+    double worst = 0, worst_g = 0;
+    be.run(times, [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const IdaStats::FrameSample&) {
+      const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
+      worst = std::max(worst, (q - exact).norm());
+      worst_g = std::max(worst_g, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
+    });
+    EXPECT_LT(worst_g, 1e-9) << h;  // the constraint holds at every step, whatever the step
+    errors.push_back(worst);
+  }
+  for (std::size_t i = 1; i < errors.size(); ++i) {
+    const double ratio = errors[i - 1] / errors[i];
+    std::printf("backward Euler: h halved, error %.3e -> %.3e, ratio %.2f\n", errors[i - 1], errors[i], ratio);
+    EXPECT_GT(ratio, 1.7);
+    EXPECT_LT(ratio, 2.3);
+  }
 }

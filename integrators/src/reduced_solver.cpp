@@ -4,54 +4,34 @@
 //   row 2:  S dq + V G^T dm + G^T dl = r2 + V r1,   S = -df/dq + H_lambda + c V   (H_mu left out)
 //   row 3:  G dq = r3
 //   row 4:  (B + c G) dq + G G^T dm = r4 + G r1
-// S is factored by CHOLMOD (METIS ordering, supernodal); Z1 = S^-1 G^T and Z2 = S^-1 V G^T turn
+// S is factored by CHOLMOD (SymmetricFactor: METIS ordering, supernodal, LDL^T if indefinite); Z1 = S^-1 G^T and Z2 = S^-1 V G^T turn
 // rows 3 and 4 into a dense 2m x 2m system for (dl, dm). Computed directly, (B + c G) Z2 - G G^T
 // cancels to O(1/c) of its terms (Z2 ~ G^T / c for large c); with A = S - c V and
 // Z3 = S^-1 A G^T, Z2 = (G^T - Z3) / c and the block is ((B G^T - B Z3) / c - G Z3), free of
 // that cancellation.
-#include <cholmod.h>
-
 #include <Eigen/Dense>
 #include <cstring>
 
 #include "isochor/ggl.hpp"
+#include "isochor/sparse_factor.hpp"
 
 namespace isochor {
 
 struct ReducedSolver::Impl {
   const GglForm& form;
   Index n, m;
-  cholmod_common c;
-  cholmod_sparse* S = nullptr;
-  cholmod_factor* L = nullptr;
-  cholmod_dense *B = nullptr, *X = nullptr, *Y = nullptr, *E = nullptr;  // solve2 workspaces
+  SymmetricFactor S;
+  std::vector<double> Sx;  // values of S in the system's pattern
   Eigen::MatrixXd Gt, W, Z1, Z2, Z3, Bt;  // n x m: G^T, A G^T, S^-1 G^T, S^-1 V G^T, S^-1 A G^T, B^T
   Eigen::PartialPivLU<Eigen::MatrixXd> small;
   const double* vals = nullptr;
   double cj = 0;
   VectorXd b1, y, dq, tmp;
 
-  explicit Impl(const GglForm& f) : form(f), n(f.n()), m(f.m()) {
-    cholmod_l_start(&c);
-    c.nmethods = 1;
-    c.method[0].ordering = CHOLMOD_METIS;
-    c.postorder = 1;
-    c.supernodal = CHOLMOD_AUTO;
-    c.print = 0;
-    const SparsePattern& K = form.system().pattern();
-    S = cholmod_l_allocate_sparse(n, n, K.nnz(), 1, 1, -1, CHOLMOD_REAL, &c);  // lower part used
-    std::memcpy(S->p, K.col_ptr.data(), sizeof(Index) * (n + 1));
-    std::memcpy(S->i, K.row_ind.data(), sizeof(Index) * K.nnz());
-    B = cholmod_l_allocate_dense(n, 1, n, CHOLMOD_REAL, &c);
+  explicit Impl(const GglForm& f) : form(f), n(f.n()), m(f.m()), S(f.system().pattern()) {
+    Sx.resize(f.system().pattern().nnz());
     Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);
     b1.resize(n), y.resize(n), dq.resize(n), tmp.resize(n);
-  }
-  ~Impl() {
-    if (L) cholmod_l_free_factor(&L, &c);
-    cholmod_l_free_sparse(&S, &c);
-    for (cholmod_dense** d : {&B, &X, &Y, &E})
-      if (*d) cholmod_l_free_dense(d, &c);
-    cholmod_l_finish(&c);
   }
 
   // out = X x over the K pattern, X the block of the Jacobian at `slots` (v-v: V, v-q: A).
@@ -61,22 +41,13 @@ struct ReducedSolver::Impl {
     for (Index col = 0; col < n; ++col)
       for (Index k = K.col_ptr[col]; k < K.col_ptr[col + 1]; ++k) out[K.row_ind[k]] += vals[slots[k]] * x[col];
   }
-  // S^-1 b for one column.
-  void solve_S(const double* b, double* x) {
-    std::memcpy(B->x, b, sizeof(double) * n);
-    cholmod_l_solve2(CHOLMOD_A, L, B, nullptr, &X, nullptr, &Y, &E, &c);
-    std::memcpy(x, X->x, sizeof(double) * n);
-  }
+  void solve_S(const double* b, double* x) { S.solve(b, x); }
 };
 
 ReducedSolver::ReducedSolver(const GglForm& form) : impl_(std::make_unique<Impl>(form)) {}
 ReducedSolver::~ReducedSolver() = default;
 
-double ReducedSolver::factor_nnz() const {
-  if (!impl_->L) return 0;
-  const cholmod_factor* L = impl_->L;
-  return L->is_super ? static_cast<double>(L->xsize) : static_cast<double>(static_cast<const Index*>(L->p)[L->n]);
-}
+double ReducedSolver::factor_nnz() const { return impl_->S.factor_nnz(); }
 
 bool ReducedSolver::setup(double cj, const double* vals) {
   Impl& s = *impl_;
@@ -84,11 +55,8 @@ bool ReducedSolver::setup(double cj, const double* vals) {
   s.cj = cj;
   const GglForm& f = s.form;
   const Index n = s.n, m = s.m;
-  double* Sx = static_cast<double*>(s.S->x);
-  for (std::size_t k = 0; k < f.vq.size(); ++k) Sx[k] = vals[f.vq[k]] + cj * vals[f.vv[k]];
-  if (!s.L) s.L = cholmod_l_analyze(s.S, &s.c);
-  cholmod_l_factorize(s.S, s.L, &s.c);
-  if (s.c.status == CHOLMOD_NOT_POSDEF) return false;
+  for (std::size_t k = 0; k < f.vq.size(); ++k) s.Sx[k] = vals[f.vq[k]] + cj * vals[f.vv[k]];
+  if (!s.S.factor(s.Sx.data())) return false;
   if (m == 0) return true;
   const auto& rows = f.system().constraint_rows();
   s.Gt.setZero();

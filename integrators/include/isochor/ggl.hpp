@@ -53,7 +53,7 @@ class ReducedSolver {
  public:
   explicit ReducedSolver(const GglForm& form);
   ~ReducedSolver();
-  // Factors S for this Jacobian; false when S is not positive definite.
+  // Factors S for this Jacobian (LDL^T once S is found indefinite); false when it is singular.
   bool setup(double cj, const double* values);
   // x = J^-1 b, then `refine` steps of iterative refinement with the exact J (each one more
   // sparse product and reduced solve).

@@ -1,0 +1,34 @@
+// Backward Euler with a fixed step h, the time stepping of the CNH paper: per step the KKT system
+//   M (q - q_n - h v_n) / h^2 - f(q, (q - q_n)/h, t) + G^T lambda = 0,   g(q, t) = 0,
+// solved by Newton with the matrix [M/h^2 + K + D/h + sum lambda_j H_j, G^T; G, 0]
+// (K = -df/dq, D = -df/dv), the symmetric block by CHOLMOD and the m borders by a Schur
+// complement. "Semi-implicit": exactly one Newton iteration per step, from q = q_n + h v_n.
+#pragma once
+#include <memory>
+
+#include "isochor/ida_integrator.hpp"
+
+namespace isochor {
+
+struct BackwardEulerOptions {
+  double dt = 1e-3;
+  bool semi_implicit = false;
+  int max_newton = 30;
+  double newton_tol = 1e-10;  // Newton stops when |dq|_inf <= newton_tol * (size of the body or 1)
+  long max_steps = 100000000;
+};
+
+class BackwardEuler {
+ public:
+  BackwardEuler(ConstrainedSystem& system, BackwardEulerOptions options);
+  ~BackwardEuler();
+  // Steps from frame_times.front(); frames between steps are interpolated linearly. Throws
+  // IntegrationError (time, reason) after delivering every frame reached.
+  IdaStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace isochor

@@ -1,0 +1,163 @@
+#include "isochor/backward_euler.hpp"
+
+#include <Eigen/Dense>
+#include <chrono>
+#include <algorithm>
+#include <cmath>
+
+#include "isochor/sparse_factor.hpp"
+
+namespace isochor {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+}  // namespace
+
+struct BackwardEuler::Impl {
+  ConstrainedSystem& sys;
+  BackwardEulerOptions opt;
+  Index n, m;
+  SymmetricFactor S;
+  std::vector<double> K, D, Sv;
+  std::vector<Index> diag;
+  std::vector<std::vector<double>> G;
+  IdaStats stats;
+
+  Impl(ConstrainedSystem& s, BackwardEulerOptions o)
+      : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()), S(s.pattern()) {
+    const SparsePattern& p = sys.pattern();
+    K.resize(p.nnz());
+    D.resize(p.nnz());
+    Sv.resize(p.nnz());
+    diag.resize(n);
+    for (Index i = 0; i < n; ++i) diag[i] = p.find(i, i);
+    G.resize(m);
+    for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
+  }
+
+  // One step from (qn, vn) at t to t + h: q, v, lambda on return. False with a reason on failure.
+  bool step(double t, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v, VectorXd& lambda,
+            std::string& reason) {
+    const double h = opt.dt, t1 = t + h;
+    const VectorXd& M = sys.mass();
+    q = qn + h * vn;  // predictor
+    VectorXd f(n), R1(n), R2(m), g(m), y(n), dq(n), rhs(n);
+    Eigen::MatrixXd Z(n, m), Gt(n, m);
+    const double scale = std::max(1.0, qn.cwiseAbs().maxCoeff());
+    const int iterations = opt.semi_implicit ? 1 : opt.max_newton;
+    for (int it = 0; it < iterations; ++it) {
+      const auto ta = Clock::now();
+      v = (q - qn) / h;
+      sys.force(t1, q, v, f);
+      R1 = M.cwiseProduct(q - qn - h * vn) / (h * h) - f;
+      if (m) {
+        sys.constraint(t1, q, g);
+        sys.constraint_jacobian(t1, q, G, nullptr);
+        Gt.setZero();
+        for (Index j = 0; j < m; ++j)
+          for (std::size_t k = 0; k < G[j].size(); ++k) Gt(sys.constraint_rows()[j][k], j) = G[j][k];
+        R1 += Gt * lambda;
+        R2 = g;
+      }
+      if (!R1.allFinite()) {
+        reason = "the forces are not finite (an element inverted or exploded)";
+        return false;
+      }
+      std::fill(K.begin(), K.end(), 0.0);
+      std::fill(D.begin(), D.end(), 0.0);
+      sys.add_force_jacobians(t1, q, v, K.data(), D.data());
+      if (m) sys.add_constraint_hessian(t1, q, lambda, 1.0, K.data());
+      for (std::size_t k = 0; k < Sv.size(); ++k) Sv[k] = K[k] + D[k] / h;
+      for (Index i = 0; i < n; ++i) Sv[diag[i]] += M[i] / (h * h);
+      stats.assembly_seconds += since(ta);
+      const auto tf = Clock::now();
+      const bool ok = S.factor(Sv.data());
+      stats.factor_seconds += since(tf);
+      stats.jacobian_evals++;
+      if (!ok) {
+        reason = "the step matrix is singular";
+        return false;
+      }
+      const auto ts = Clock::now();
+      rhs = -R1;
+      S.solve(rhs.data(), y.data());
+      if (m) {
+        for (Index j = 0; j < m; ++j) S.solve(Gt.col(j).data(), Z.col(j).data());
+        // (G Z) dl = R2 - G S^-1 R1 = R2 + G y;  dq = y - Z dl.
+        const VectorXd dl = (Gt.transpose() * Z).partialPivLu().solve(R2 + Gt.transpose() * y);
+        dq = y - Z * dl;
+        lambda += dl;
+      } else {
+        dq = y;
+      }
+      stats.solve_seconds += since(ts);
+      q += dq;
+      stats.newton_iterations++;
+      if (!q.allFinite()) {
+        reason = "Newton produced a non-finite state";
+        return false;
+      }
+      if (dq.cwiseAbs().maxCoeff() <= opt.newton_tol * scale) {
+        v = (q - qn) / h;
+        return true;
+      }
+    }
+    v = (q - qn) / h;
+    if (opt.semi_implicit) return true;
+    reason = "Newton did not converge in " + std::to_string(opt.max_newton) + " iterations";
+    stats.newton_failures++;
+    return false;
+  }
+};
+
+BackwardEuler::BackwardEuler(ConstrainedSystem& system, BackwardEulerOptions options)
+    : impl_(std::make_unique<Impl>(system, options)) {}
+BackwardEuler::~BackwardEuler() = default;
+
+IdaStats BackwardEuler::run(const std::vector<double>& times, const FrameCallback& on_frame) {
+  Impl& s = *impl_;
+  const auto wall0 = Clock::now();
+  const double h = s.opt.dt;
+  VectorXd q, v, a, lambda;
+  IdaIntegrator::consistent_initial_state(s.sys, times.front(), q, v, a, lambda);
+  VectorXd q1, v1, l1 = lambda;
+  double t = times.front();
+  std::size_t k = 0;
+  long steps = 0;
+  auto sample = [&]() {
+    s.stats.steps = steps;
+    s.stats.frames.push_back({steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 1, h});
+    return s.stats.frames.back();
+  };
+  while (k < times.size() && times[k] <= t + 1e-12 * h) {
+    on_frame(static_cast<int>(k), times[k], q, v, lambda, sample());
+    ++k;
+  }
+  while (k < times.size()) {
+    std::string reason;
+    if (!s.step(t, q, v, q1, v1, l1, reason)) {
+      s.stats.wall_seconds = since(wall0);
+      throw IntegrationError(t + h, reason + " (step " + std::to_string(steps + 1) + ", h = " + std::to_string(h) + " s)");
+    }
+    const double t1 = t + h;
+    ++steps;
+    if (steps > s.opt.max_steps) throw IntegrationError(t1, "more than " + std::to_string(s.opt.max_steps) + " steps");
+    // Frames inside (t, t1]: linear interpolation (exact at step times).
+    while (k < times.size() && times[k] <= t1 + 1e-9 * h) {
+      const double w = std::clamp((times[k] - t) / h, 0.0, 1.0);
+      const VectorXd qf = (1 - w) * q + w * q1, vf = (1 - w) * v + w * v1;
+      on_frame(static_cast<int>(k), times[k], qf, vf, l1, sample());
+      ++k;
+    }
+    q.swap(q1);
+    v.swap(v1);
+    lambda = l1;
+    t = t1;
+  }
+  s.stats.steps = steps;
+  s.stats.wall_seconds = since(wall0);
+  return s.stats;
+}
+
+}  // namespace isochor

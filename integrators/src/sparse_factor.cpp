@@ -1,0 +1,74 @@
+#include "isochor/sparse_factor.hpp"
+
+#include <cholmod.h>
+
+#include <cstring>
+
+namespace isochor {
+
+struct SymmetricFactor::Impl {
+  Index n;
+  cholmod_common c;
+  cholmod_sparse* A = nullptr;
+  cholmod_factor* L = nullptr;
+  cholmod_dense *B = nullptr, *X = nullptr, *Y = nullptr, *E = nullptr;
+  bool ldlt = false;
+
+  explicit Impl(const SparsePattern& p) : n(p.n) {
+    cholmod_l_start(&c);
+    c.nmethods = 1;
+    c.method[0].ordering = CHOLMOD_METIS;
+    c.postorder = 1;
+    c.supernodal = CHOLMOD_AUTO;
+    c.print = 0;
+    c.error_handler = nullptr;
+    A = cholmod_l_allocate_sparse(n, n, p.nnz(), 1, 1, -1, CHOLMOD_REAL, &c);
+    std::memcpy(A->p, p.col_ptr.data(), sizeof(Index) * (n + 1));
+    std::memcpy(A->i, p.row_ind.data(), sizeof(Index) * p.nnz());
+    B = cholmod_l_allocate_dense(n, 1, n, CHOLMOD_REAL, &c);
+  }
+  ~Impl() {
+    if (L) cholmod_l_free_factor(&L, &c);
+    cholmod_l_free_sparse(&A, &c);
+    for (cholmod_dense** d : {&B, &X, &Y, &E})
+      if (*d) cholmod_l_free_dense(d, &c);
+    cholmod_l_finish(&c);
+  }
+};
+
+SymmetricFactor::SymmetricFactor(const SparsePattern& p) : impl_(std::make_unique<Impl>(p)) {}
+SymmetricFactor::~SymmetricFactor() = default;
+
+bool SymmetricFactor::factor(const double* values) {
+  Impl& s = *impl_;
+  std::memcpy(s.A->x, values, sizeof(double) * s.A->nzmax);
+  if (!s.L) s.L = cholmod_l_analyze(s.A, &s.c);
+  cholmod_l_factorize(s.A, s.L, &s.c);
+  if (s.c.status == CHOLMOD_NOT_POSDEF && !s.ldlt) {
+    // Indefinite: from now on a simplicial LDL^T (no pivoting, fine while no pivot is zero).
+    s.ldlt = true;
+    cholmod_l_free_factor(&s.L, &s.c);
+    s.c.supernodal = CHOLMOD_SIMPLICIAL;
+    s.c.final_ll = 0;
+    s.L = cholmod_l_analyze(s.A, &s.c);
+    cholmod_l_factorize(s.A, s.L, &s.c);
+  }
+  return s.c.status == CHOLMOD_OK;
+}
+
+void SymmetricFactor::solve(const double* b, double* x) {
+  Impl& s = *impl_;
+  std::memcpy(s.B->x, b, sizeof(double) * s.n);
+  cholmod_l_solve2(CHOLMOD_A, s.L, s.B, nullptr, &s.X, nullptr, &s.Y, &s.E, &s.c);
+  std::memcpy(x, s.X->x, sizeof(double) * s.n);
+}
+
+bool SymmetricFactor::used_ldlt() const { return impl_->ldlt; }
+
+double SymmetricFactor::factor_nnz() const {
+  const cholmod_factor* L = impl_->L;
+  if (!L) return 0;
+  return L->is_super ? static_cast<double>(L->xsize) : static_cast<double>(static_cast<const Index*>(L->p)[L->n]);
+}
+
+}  // namespace isochor
