@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The default demo: the coarse ball of the CNH paper hitting the ground, on IDA with the reduced
-# solver (about two minutes on two cores), then its report: cost per frame and volume error.
+# solver (about four minutes on two cores), then its report: cost per frame and volume error.
 set -euo pipefail
 build=${1:-build}
 cd "$(dirname "$0")/.."
