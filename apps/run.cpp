@@ -5,6 +5,7 @@
 #include "isochor/mesh_system.hpp"
 #include "isochor/output.hpp"
 #include "isochor/progress.hpp"
+#include "isochor/statics.hpp"
 
 namespace isochor {
 
@@ -27,10 +28,12 @@ void write_totals(OutputWriter& w, const IdaStats& s) {
 
 RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) {
   const std::string& kind = sc.integrator.kind;
-  if (kind != "ida" && kind != "backward_euler" && kind != "semi_implicit")
+  if (kind != "ida" && kind != "backward_euler" && kind != "semi_implicit" && kind != "static")
     throw Error(sc.file.name() + ": integrator.kind = \"" + kind +
-                "\" is not available yet (expected \"ida\", \"backward_euler\" or \"semi_implicit\")");
-  if (sc.frames.count > 0) throw Error(sc.file.name() + ": frames.count is for statics; a dynamic run needs frames.rate and frames.duration");
+                "\" is not available yet (expected \"ida\", \"backward_euler\", \"semi_implicit\" or \"static\")");
+  if ((kind == "static") != (sc.frames.count > 0))
+    throw Error(sc.file.name() + (kind == "static" ? ": a static run needs frames.count (load increments)"
+                                                   : ": frames.count is for statics; a dynamic run needs frames.rate and frames.duration"));
   RunSummary summary;
   summary.output = output.empty() ? sc.output.path : output;
   MeshSystem sys(sc);
@@ -76,6 +79,7 @@ RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) 
   };
   try {
     if (kind == "ida") summary.stats = IdaIntegrator(sys, o).run(times, on_frame);
+    else if (kind == "static") summary.stats = StaticSolver(sys, StaticOptions{}).run(times, on_frame);
     else summary.stats = BackwardEuler(sys, be).run(times, on_frame);
   } catch (const IntegrationError& e) {
     w.set_stat("failed_at_time", e.time);

@@ -16,8 +16,9 @@ std::pair<double, double> lame_from_young(double E, double nu) {
 
 std::vector<double> FramesSpec::times() const {
   std::vector<double> t;
-  if (count > 0) {
-    for (int k = 0; k < count; ++k) t.push_back(k);
+  if (count > 0) {  // statics: pseudo-time 0 .. 1 over the load increments
+    if (count == 1) return {1.0};
+    for (int k = 0; k < count; ++k) t.push_back(static_cast<double>(k) / (count - 1));
     return t;
   }
   const long n = std::lround(std::floor(duration * rate + 1e-9));

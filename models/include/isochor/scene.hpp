@@ -37,7 +37,7 @@ struct FramesSpec {
   double rate = 100.0;     // frames per second
   double duration = 1.0;   // s
   int count = 0;           // statics: number of frames (load increments)
-  // Frame times 0, 1/rate, ..., duration (or 0..count-1 for statics).
+  // Frame times 0, 1/rate, ..., duration; statics: pseudo-times 0, 1/(count-1), ..., 1.
   std::vector<double> times() const;
 };
 

@@ -1,0 +1,32 @@
+// Statics with KINSOL: for each frame's (pseudo-)time t, unknowns (q, lambda) with
+//   -f(q, 0, t) + G^T lambda = 0,   g(q, t) = 0,
+// Newton with a line search, KKT Jacobian [K + sum lambda_j H_j, G^T; G, 0] in a pattern built
+// once and factored by KLU. Each frame starts from the previous solution, so drivers that move
+// with t apply their displacement in increments.
+#pragma once
+#include <memory>
+
+#include "isochor/ida_integrator.hpp"
+
+namespace isochor {
+
+struct StaticOptions {
+  double residual_tol = 1e-9;  // KINSOL's scaled residual norm (forces over the system's force scale)
+  long max_iterations = 200;   // Newton iterations per frame
+};
+
+class StaticSolver {
+ public:
+  StaticSolver(ConstrainedSystem& system, StaticOptions options);
+  ~StaticSolver();
+  // Solves at every frame time; the frame sample's `newton_iterations` is cumulative, and
+  // `step_size` holds the final scaled residual norm of that frame's solve.
+  IdaStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame);
+
+  struct Impl;  // public so that the C callbacks can reach it
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace isochor

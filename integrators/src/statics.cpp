@@ -1,0 +1,202 @@
+#include "isochor/statics.hpp"
+
+#include <kinsol/kinsol.h>
+#include <klu.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+
+namespace isochor {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+}  // namespace
+
+struct StaticSolver::Impl {
+  ConstrainedSystem& sys;
+  StaticOptions opt;
+  Index n, m;
+  SparsePattern p;                               // (n + m) KKT pattern
+  std::vector<Index> kk;                         // slot of each stiffness-pattern entry
+  std::vector<std::vector<Index>> gcol, grow;    // slots of G^T (column n + j) and G (row n + j)
+  std::vector<double> K, D;
+  std::vector<std::vector<double>> G;
+  VectorXd q, v0, lambda, f, g;
+  double t = 0;
+  IdaStats stats;
+
+  Impl(ConstrainedSystem& s, StaticOptions o) : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()) {
+    const SparsePattern& S = sys.pattern();
+    const auto& rows = sys.constraint_rows();
+    std::vector<std::pair<Index, Index>> e;  // (col, row)
+    for (Index c = 0; c < n; ++c)
+      for (Index k = S.col_ptr[c]; k < S.col_ptr[c + 1]; ++k) e.emplace_back(c, S.row_ind[k]);
+    for (Index j = 0; j < m; ++j)
+      for (Index d : rows[j]) {
+        e.emplace_back(n + j, d);
+        e.emplace_back(d, n + j);
+      }
+    std::sort(e.begin(), e.end());
+    p.n = n + m;
+    p.col_ptr.assign(p.n + 1, 0);
+    p.row_ind.resize(e.size());
+    for (std::size_t k = 0; k < e.size(); ++k) {
+      p.col_ptr[e[k].first + 1]++;
+      p.row_ind[k] = e[k].second;
+    }
+    for (Index c = 0; c < p.n; ++c) p.col_ptr[c + 1] += p.col_ptr[c];
+    kk.resize(S.nnz());
+    for (Index c = 0; c < n; ++c)
+      for (Index k = S.col_ptr[c]; k < S.col_ptr[c + 1]; ++k) kk[k] = p.find(S.row_ind[k], c);
+    gcol.resize(m);
+    grow.resize(m);
+    G.resize(m);
+    for (Index j = 0; j < m; ++j) {
+      for (Index d : rows[j]) {
+        gcol[j].push_back(p.find(d, n + j));
+        grow[j].push_back(p.find(n + j, d));
+      }
+      G[j].resize(rows[j].size());
+    }
+    K.resize(S.nnz());
+    D.resize(S.nnz());
+    v0 = VectorXd::Zero(n);
+    f.resize(n);
+    g.resize(m);
+  }
+
+  int residual(N_Vector u, N_Vector fv) {
+    const auto t0 = Clock::now();
+    const double* x = N_VGetArrayPointer(u);
+    double* r = N_VGetArrayPointer(fv);
+    q = Eigen::Map<const VectorXd>(x, n);
+    lambda = Eigen::Map<const VectorXd>(x + n, m);
+    sys.force(t, q, v0, f);
+    Eigen::Map<VectorXd> Rq(r, n), Rg(r + n, m);
+    Rq = -f;
+    if (m) {
+      sys.constraint(t, q, g);
+      sys.constraint_jacobian(t, q, G, nullptr);
+      for (Index j = 0; j < m; ++j)
+        for (std::size_t k = 0; k < G[j].size(); ++k) Rq[sys.constraint_rows()[j][k]] += G[j][k] * lambda[j];
+      Rg = g;
+    }
+    stats.residual_evals++;
+    stats.assembly_seconds += since(t0);
+    return Rq.allFinite() ? 0 : 1;
+  }
+
+  int jacobian(N_Vector u, SUNMatrix J) {
+    const auto t0 = Clock::now();
+    const double* x = N_VGetArrayPointer(u);
+    q = Eigen::Map<const VectorXd>(x, n);
+    lambda = Eigen::Map<const VectorXd>(x + n, m);
+    std::memcpy(SM_INDEXPTRS_S(J), p.col_ptr.data(), sizeof(sunindextype) * (p.n + 1));
+    std::memcpy(SM_INDEXVALS_S(J), p.row_ind.data(), sizeof(sunindextype) * p.nnz());
+    double* val = SM_DATA_S(J);
+    std::fill(val, val + p.nnz(), 0.0);
+    std::fill(K.begin(), K.end(), 0.0);
+    sys.add_force_jacobians(t, q, v0, K.data(), nullptr);
+    if (m) sys.add_constraint_hessian(t, q, lambda, 1.0, K.data());
+    for (std::size_t k = 0; k < K.size(); ++k) val[kk[k]] += K[k];
+    if (m) {
+      sys.constraint_jacobian(t, q, G, nullptr);
+      for (Index j = 0; j < m; ++j)
+        for (std::size_t k = 0; k < G[j].size(); ++k) {
+          val[gcol[j][k]] += G[j][k];
+          val[grow[j][k]] += G[j][k];
+        }
+    }
+    stats.jacobian_evals++;
+    stats.assembly_seconds += since(t0);
+    return 0;
+  }
+};
+
+namespace {
+int kin_res(N_Vector u, N_Vector f, void* data) { return static_cast<StaticSolver::Impl*>(data)->residual(u, f); }
+int kin_jac(N_Vector u, N_Vector, SUNMatrix J, void* data, N_Vector, N_Vector) {
+  return static_cast<StaticSolver::Impl*>(data)->jacobian(u, J);
+}
+}  // namespace
+
+StaticSolver::StaticSolver(ConstrainedSystem& system, StaticOptions options)
+    : impl_(std::make_unique<Impl>(system, options)) {}
+StaticSolver::~StaticSolver() = default;
+
+IdaStats StaticSolver::run(const std::vector<double>& times, const FrameCallback& on_frame) {
+  Impl& s = *impl_;
+  const auto wall0 = Clock::now();
+  const Index N = s.n + s.m;
+  SUNContext ctx = nullptr;
+  SUNContext_Create(nullptr, &ctx);
+  N_Vector u = N_VNew_Serial(N, ctx), uscale = N_VNew_Serial(N, ctx), fscale = N_VNew_Serial(N, ctx);
+  VectorXd q0, v0dummy;
+  s.sys.initial_state(times.front(), q0, v0dummy);
+  double* x = N_VGetArrayPointer(u);
+  Eigen::Map<VectorXd>(x, N).setZero();
+  Eigen::Map<VectorXd>(x, s.n) = q0;
+  N_VConst(1.0, uscale);
+  // Forces are measured against the system's force scale; constraint rows as they are.
+  double* fs = N_VGetArrayPointer(fscale);
+  for (Index i = 0; i < N; ++i) fs[i] = i < s.n ? 1.0 / s.sys.force_scale() : 1.0;
+  void* mem = KINCreate(ctx);
+  KINInit(mem, kin_res, u);
+  KINSetUserData(mem, &s);
+  KINSetFuncNormTol(mem, s.opt.residual_tol);
+  KINSetScaledStepTol(mem, 1e-14);
+  KINSetMaxSetupCalls(mem, 1);  // exact Newton: a fresh Jacobian every iteration
+  KINSetNumMaxIters(mem, s.opt.max_iterations);
+  KINSetMaxNewtonStep(mem, 1e10);
+  SUNMatrix J = SUNSparseMatrix(N, N, s.p.nnz(), CSC_MAT, ctx);
+  SUNLinearSolver LS = SUNLinSol_KLU(u, J, ctx);
+  KINSetLinearSolver(mem, LS, J);
+  KINSetJacFn(mem, kin_jac);
+  auto cleanup = [&]() {
+    KINFree(&mem);
+    SUNLinSolFree(LS);
+    SUNMatDestroy(J);
+    N_VDestroy(u);
+    N_VDestroy(uscale);
+    N_VDestroy(fscale);
+    SUNContext_Free(&ctx);
+  };
+  try {
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      s.t = times[k];
+      const int flag = KINSol(mem, u, KIN_LINESEARCH, uscale, fscale);
+      long iters = 0;
+      double fnorm = 0;
+      KINGetNumNonlinSolvIters(mem, &iters);
+      KINGetFuncNorm(mem, &fnorm);
+      s.stats.newton_iterations += iters;
+      s.stats.steps++;
+      if (flag < 0) {
+        char* name = KINGetReturnFlagName(flag);
+        std::string reason = std::string(name ? name : "KINSOL failure") + " after " + std::to_string(iters) +
+                             " iterations, scaled residual " + std::to_string(fnorm);
+        free(name);
+        throw IntegrationError(s.t, reason);
+      }
+      s.stats.frames.push_back({s.stats.steps, s.stats.newton_iterations, 0, 0, s.stats.jacobian_evals, 0, fnorm});
+      const double* y = N_VGetArrayPointer(u);
+      on_frame(static_cast<int>(k), s.t, Eigen::Map<const VectorXd>(y, s.n), s.v0,
+               Eigen::Map<const VectorXd>(y + s.n, s.m), s.stats.frames.back());
+    }
+  } catch (...) {
+    s.stats.wall_seconds = since(wall0);
+    cleanup();
+    throw;
+  }
+  s.stats.wall_seconds = since(wall0);
+  cleanup();
+  return s.stats;
+}
+
+}  // namespace isochor
