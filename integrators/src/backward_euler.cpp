@@ -1,18 +1,13 @@
 #include "isochor/backward_euler.hpp"
+#include "timing.hpp"
 
 #include <Eigen/Dense>
-#include <chrono>
 #include <algorithm>
 #include <cmath>
 
 #include "isochor/sparse_factor.hpp"
 
 namespace isochor {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-}  // namespace
 
 struct BackwardEuler::Impl {
   ConstrainedSystem& sys;
@@ -70,10 +65,10 @@ struct BackwardEuler::Impl {
       if (m) sys.add_constraint_hessian(t1, q, lambda, 1.0, K.data());
       for (std::size_t k = 0; k < Sv.size(); ++k) Sv[k] = K[k] + D[k] / h;
       for (Index i = 0; i < n; ++i) Sv[diag[i]] += M[i] / (h * h);
-      stats.assembly_seconds += since(ta);
+      stats.assembly_seconds += seconds_since(ta);
       const auto tf = Clock::now();
       const bool ok = S.factor(Sv.data());
-      stats.factor_seconds += since(tf);
+      stats.factor_seconds += seconds_since(tf);
       stats.jacobian_evals++;
       if (!ok) {
         reason = "the step matrix is singular";
@@ -91,7 +86,7 @@ struct BackwardEuler::Impl {
       } else {
         dq = y;
       }
-      stats.solve_seconds += since(ts);
+      stats.solve_seconds += seconds_since(ts);
       q += dq;
       stats.newton_iterations++;
       if (!q.allFinite()) {
@@ -137,7 +132,7 @@ IdaStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
   while (k < times.size()) {
     std::string reason;
     if (!s.step(t, q, v, q1, v1, l1, reason)) {
-      s.stats.wall_seconds = since(wall0);
+      s.stats.wall_seconds = seconds_since(wall0);
       throw IntegrationError(t + h, reason + " (step " + std::to_string(steps + 1) + ", h = " + std::to_string(h) + " s)");
     }
     const double t1 = t + h;
@@ -156,7 +151,7 @@ IdaStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
     t = t1;
   }
   s.stats.steps = steps;
-  s.stats.wall_seconds = since(wall0);
+  s.stats.wall_seconds = seconds_since(wall0);
   return s.stats;
 }
 

@@ -1,4 +1,5 @@
 #include "isochor/ida_integrator.hpp"
+#include "timing.hpp"
 
 #include "isochor/ggl.hpp"
 
@@ -13,7 +14,6 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -22,9 +22,6 @@
 namespace isochor {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // Nested dissection (METIS) of the group graph, each group's q dofs then its v dofs together,
 // multipliers last. Returns the old index of each new position.

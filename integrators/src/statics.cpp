@@ -1,4 +1,5 @@
 #include "isochor/statics.hpp"
+#include "timing.hpp"
 
 #include <kinsol/kinsol.h>
 #include <klu.h>
@@ -8,15 +9,9 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstring>
 
 namespace isochor {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-}  // namespace
 
 struct StaticSolver::Impl {
   ConstrainedSystem& sys;
@@ -88,7 +83,7 @@ struct StaticSolver::Impl {
       Rg = g;
     }
     stats.residual_evals++;
-    stats.assembly_seconds += since(t0);
+    stats.assembly_seconds += seconds_since(t0);
     return Rq.allFinite() ? 0 : 1;
   }
 
@@ -114,7 +109,7 @@ struct StaticSolver::Impl {
         }
     }
     stats.jacobian_evals++;
-    stats.assembly_seconds += since(t0);
+    stats.assembly_seconds += seconds_since(t0);
     return 0;
   }
 };
@@ -190,11 +185,11 @@ IdaStats StaticSolver::run(const std::vector<double>& times, const FrameCallback
                Eigen::Map<const VectorXd>(y + s.n, s.m), s.stats.frames.back());
     }
   } catch (...) {
-    s.stats.wall_seconds = since(wall0);
+    s.stats.wall_seconds = seconds_since(wall0);
     cleanup();
     throw;
   }
-  s.stats.wall_seconds = since(wall0);
+  s.stats.wall_seconds = seconds_since(wall0);
   cleanup();
   return s.stats;
 }
