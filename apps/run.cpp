@@ -72,7 +72,7 @@ RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) 
                {"rejected_steps_error_test", static_cast<double>(s.error_test_failures)},
                {"rejected_steps_newton", static_cast<double>(s.newton_failures)},
                {"order", static_cast<double>(s.order)},
-               {"step_size", s.step_size}};
+               {kind == "static" ? "residual_norm" : "step_size", s.step_size}};
     w.write_frame(f);
     summary.frames = k + 1;
     if (progress) bar.update(k, t);
