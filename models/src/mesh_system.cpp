@@ -10,7 +10,8 @@ std::shared_ptr<const Material> make_material(const MaterialSpec& m) {
   if (m.model == "unh") return make_unh(m.mu, m.lambda);
   if (m.model == "snh") return make_snh(m.mu, m.lambda);
   if (m.model == "cnh") return make_cnh(m.mu, m.lambda, m.beta, m.epsilon);
-  throw Error("material.model = \"" + m.model + "\" is not a tet material (expected cnh, unh or snh)");
+  if (m.model == "snh_simple") return make_xpbd_pair(m.mu, m.lambda);
+  throw Error("material.model = \"" + m.model + "\" is not a tet material (expected cnh, unh, snh or snh_simple)");
 }
 
 namespace {

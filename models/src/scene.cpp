@@ -30,7 +30,7 @@ namespace {
 
 MaterialSpec parse_material(const Section& s) {
   MaterialSpec m;
-  m.model = s.string("model", m.model, {"cnh", "unh", "snh", "mass_spring"});
+  m.model = s.string("model", m.model, {"cnh", "unh", "snh", "snh_simple", "mass_spring"});
   m.density = s.number("density", m.density, Range::positive());
   const bool lame = s.has("mu") || s.has("lambda"), young = s.has("E") || s.has("nu");
   if (lame && young) s.fail(s.has("E") ? "E" : "nu", "give either mu and lambda or E and nu, not both");
