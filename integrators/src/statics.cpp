@@ -2,7 +2,6 @@
 #include "timing.hpp"
 
 #include <kinsol/kinsol.h>
-#include <klu.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_klu.h>

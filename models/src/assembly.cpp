@@ -142,91 +142,76 @@ double ElasticAssembly::energy(const Points& x) const {
 
 double ElasticAssembly::gradient(const Points& x, Eigen::VectorXd& grad) const {
   grad.setZero(3 * x.cols());
-  double E = 0.0;
-  for (const auto& colour : tet_colours_) {
-    const int n = static_cast<int>(colour.size());
-#pragma omp parallel for reduction(+ : E) schedule(static)
-    for (int i = 0; i < n; ++i) {
-      const int e = colour[i];
-      const Tet& t = mesh_.tets()[e];
-      Vec12 g;
-      E += tet_energy(*material_, shapes_[e], gather(x, t), &g, nullptr);
-      for (int k = 0; k < 4; ++k) grad.segment<3>(3 * t[k]) += g.segment<3>(3 * k);
-    }
-  }
-  for (const auto& colour : tri_colours_) {
-    const int n = static_cast<int>(colour.size());
-#pragma omp parallel for reduction(+ : E) schedule(static)
-    for (int i = 0; i < n; ++i) {
-      const int f = colour[i];
-      const Tri& t = mesh_.surface()[f];
-      Vec9n g;
-      E += epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), &g, nullptr);
-      for (int k = 0; k < 3; ++k) grad.segment<3>(3 * t[k]) += g.segment<3>(3 * k);
-    }
-  }
-  return E;
+  const double tets = for_each_coloured(tet_colours_, [&](int e) {
+    const Tet& t = mesh_.tets()[e];
+    Vec12 g;
+    const double E = tet_energy(*material_, shapes_[e], gather(x, t), &g, nullptr);
+    for (int k = 0; k < 4; ++k) grad.segment<3>(3 * t[k]) += g.segment<3>(3 * k);
+    return E;
+  });
+  const double tris = for_each_coloured(tri_colours_, [&](int f) {
+    const Tri& t = mesh_.surface()[f];
+    Vec9n g;
+    const double E = epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), &g, nullptr);
+    for (int k = 0; k < 3; ++k) grad.segment<3>(3 * t[k]) += g.segment<3>(3 * k);
+    return E;
+  });
+  return tets + tris;
 }
 
-void ElasticAssembly::add_hessian(const Points& x, double scale, double* values) const {
-  for (const auto& colour : tet_colours_) {
-    const int n = static_cast<int>(colour.size());
-#pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; ++i) {
-      const int e = colour[i];
-      Mat12 H;
-      tet_energy(*material_, shapes_[e], gather(x, mesh_.tets()[e]), nullptr, &H);
-      const Index* s = tet_slots_.data() + 144 * static_cast<std::size_t>(e);
-      for (int a = 0; a < 12; ++a)
-        for (int b = 0; b < 12; ++b)
-          if (s[a * 12 + b] >= 0) values[s[a * 12 + b]] += scale * H(a, b);
+namespace {
+// values[s] += scale * H for every local entry with a slot (and the same into values2).
+template <int N>
+void scatter(const Eigen::Matrix<double, N, N>& H, const Index* slots, double scale, double* values, double scale2,
+             double* values2) {
+  for (int a = 0; a < N; ++a)
+    for (int b = 0; b < N; ++b) {
+      const Index s = slots[a * N + b];
+      if (s < 0) continue;
+      values[s] += scale * H(a, b);
+      if (values2) values2[s] += scale2 * H(a, b);
     }
-  }
-  for (const auto& colour : tri_colours_) {
-    const int n = static_cast<int>(colour.size());
-#pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; ++i) {
-      const int f = colour[i];
-      Mat9n H;
-      epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, mesh_.surface()[f]), nullptr, &H);
-      const Index* s = tri_slots_.data() + 81 * static_cast<std::size_t>(f);
-      for (int a = 0; a < 9; ++a)
-        for (int b = 0; b < 9; ++b)
-          if (s[a * 9 + b] >= 0) values[s[a * 9 + b]] += scale * H(a, b);
-    }
-  }
+}
+}  // namespace
+
+void ElasticAssembly::add_hessian(const Points& x, double scale, double* values, double scale2,
+                                  double* values2) const {
+  for_each_coloured(tet_colours_, [&](int e) {
+    Mat12 H;
+    tet_energy(*material_, shapes_[e], gather(x, mesh_.tets()[e]), nullptr, &H);
+    scatter<12>(H, tet_slots_.data() + 144 * static_cast<std::size_t>(e), scale, values, scale2, values2);
+    return 0.0;
+  });
+  for_each_coloured(tri_colours_, [&](int f) {
+    Mat9n H;
+    epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, mesh_.surface()[f]), nullptr, &H);
+    scatter<9>(H, tri_slots_.data() + 81 * static_cast<std::size_t>(f), scale, values, scale2, values2);
+    return 0.0;
+  });
 }
 
 void ElasticAssembly::add_hessian_times(const Points& x, const Eigen::VectorXd& v, double scale,
                                         Eigen::VectorXd& out) const {
-  for (const auto& colour : tet_colours_) {
-    const int n = static_cast<int>(colour.size());
-#pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; ++i) {
-      const int e = colour[i];
-      const Tet& t = mesh_.tets()[e];
-      Mat12 H;
-      tet_energy(*material_, shapes_[e], gather(x, t), nullptr, &H);
-      Vec12 ve;
-      for (int k = 0; k < 4; ++k) ve.segment<3>(3 * k) = v.segment<3>(3 * t[k]);
-      const Vec12 r = scale * H * ve;
-      for (int k = 0; k < 4; ++k) out.segment<3>(3 * t[k]) += r.segment<3>(3 * k);
-    }
-  }
-  for (const auto& colour : tri_colours_) {
-    const int n = static_cast<int>(colour.size());
-#pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; ++i) {
-      const int f = colour[i];
-      const Tri& t = mesh_.surface()[f];
-      Mat9n H;
-      epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), nullptr, &H);
-      Vec9n ve;
-      for (int k = 0; k < 3; ++k) ve.segment<3>(3 * k) = v.segment<3>(3 * t[k]);
-      const Vec9n r = scale * H * ve;
-      for (int k = 0; k < 3; ++k) out.segment<3>(3 * t[k]) += r.segment<3>(3 * k);
-    }
-  }
+  for_each_coloured(tet_colours_, [&](int e) {
+    const Tet& t = mesh_.tets()[e];
+    Mat12 H;
+    tet_energy(*material_, shapes_[e], gather(x, t), nullptr, &H);
+    Vec12 ve;
+    for (int k = 0; k < 4; ++k) ve.segment<3>(3 * k) = v.segment<3>(3 * t[k]);
+    const Vec12 r = scale * H * ve;
+    for (int k = 0; k < 4; ++k) out.segment<3>(3 * t[k]) += r.segment<3>(3 * k);
+    return 0.0;
+  });
+  for_each_coloured(tri_colours_, [&](int f) {
+    const Tri& t = mesh_.surface()[f];
+    Mat9n H;
+    epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), nullptr, &H);
+    Vec9n ve;
+    for (int k = 0; k < 3; ++k) ve.segment<3>(3 * k) = v.segment<3>(3 * t[k]);
+    const Vec9n r = scale * H * ve;
+    for (int k = 0; k < 3; ++k) out.segment<3>(3 * t[k]) += r.segment<3>(3 * k);
+    return 0.0;
+  });
 }
 
 void ElasticAssembly::pressures(const Points& x, std::vector<double>& p) const {

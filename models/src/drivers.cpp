@@ -23,6 +23,12 @@ int segment(const std::vector<double>& times, double t, double& s) {
   s = (t - times[i]) / (times[i + 1] - times[i]);
   return std::min(i, n - 2);
 }
+// Catmull-Rom tangent at keyframe k (one-sided at the ends).
+Eigen::Vector3d tangent(const std::vector<double>& times, const std::vector<Eigen::Vector3d>& values, int k) {
+  const int n = static_cast<int>(times.size());
+  const int a = std::max(k - 1, 0), b = std::min(k + 1, n - 1);
+  return (values[b] - values[a]) / (times[b] - times[a]);
+}
 }  // namespace
 
 Eigen::Vector3d Driver::displacement(double t) const {
@@ -38,15 +44,10 @@ Eigen::Vector3d Driver::displacement(double t) const {
   if (i == -2) return values.back();
   if (kind == Kind::keyframes_linear) return (1 - s) * values[i] + s * values[i + 1];
   // Cubic Hermite on [t_i, t_i+1] with Catmull-Rom tangents (one-sided at the ends).
-  const int n = static_cast<int>(times.size());
-  auto tangent = [&](int k) -> Eigen::Vector3d {
-    const int a = std::max(k - 1, 0), b = std::min(k + 1, n - 1);
-    return (values[b] - values[a]) / (times[b] - times[a]);
-  };
   const double h = times[i + 1] - times[i];
   const double h00 = 2 * s * s * s - 3 * s * s + 1, h10 = s * s * s - 2 * s * s + s, h01 = -2 * s * s * s + 3 * s * s,
                h11 = s * s * s - s * s;
-  return h00 * values[i] + h10 * h * tangent(i) + h01 * values[i + 1] + h11 * h * tangent(i + 1);
+  return h00 * values[i] + h10 * h * tangent(times, values, i) + h01 * values[i + 1] + h11 * h * tangent(times, values, i + 1);
 }
 
 Eigen::Vector3d Driver::velocity(double t) const {
@@ -61,13 +62,8 @@ Eigen::Vector3d Driver::velocity(double t) const {
   if (i < 0) return Eigen::Vector3d::Zero();
   const double h = times[i + 1] - times[i];
   if (kind == Kind::keyframes_linear) return (values[i + 1] - values[i]) / h;
-  const int n = static_cast<int>(times.size());
-  auto tangent = [&](int k) -> Eigen::Vector3d {
-    const int a = std::max(k - 1, 0), b = std::min(k + 1, n - 1);
-    return (values[b] - values[a]) / (times[b] - times[a]);
-  };
   const double d00 = 6 * s * s - 6 * s, d10 = 3 * s * s - 4 * s + 1, d01 = -6 * s * s + 6 * s, d11 = 3 * s * s - 2 * s;
-  return (d00 * values[i] + d01 * values[i + 1]) / h + d10 * tangent(i) + d11 * tangent(i + 1);
+  return (d00 * values[i] + d01 * values[i + 1]) / h + d10 * tangent(times, values, i) + d11 * tangent(times, values, i + 1);
 }
 
 void Driver::apply(const Points& rest, double t, Points& x, Eigen::VectorXd* v) const {

@@ -78,11 +78,15 @@ void MeshSystem::force(double t, const VectorXd& q, const VectorXd& v, VectorXd&
 
 void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq, double* neg_dfdv) {
   set_state(t, q, v);
+  // -df/dv = alpha M + beta K: the element Hessians of K are computed once for both outputs.
+  double* damped = neg_dfdv && damping_.beta != 0 ? neg_dfdv : nullptr;
   if (neg_dfdq) {
-    elastic_->add_hessian(x_, 1.0, neg_dfdq);
+    elastic_->add_hessian(x_, 1.0, neg_dfdq, damping_.beta, damped);
     external_->add_hessian(x_, 1.0, neg_dfdq);
+  } else if (damped) {
+    elastic_->add_hessian(x_, damping_.beta, damped);
   }
-  if (neg_dfdv && (damping_.alpha != 0 || damping_.beta != 0)) damping_.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
+  if (neg_dfdv && damping_.alpha != 0) RayleighDamping{damping_.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
 }
 
 void MeshSystem::set_positions(double t, const VectorXd& q) {

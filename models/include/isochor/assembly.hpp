@@ -37,6 +37,19 @@ std::vector<Index> slot_map(const Pattern& p, const DofMap& dofs, const int* nod
 // Greedy colouring of elements such that no two elements of one colour share a node.
 std::vector<std::vector<int>> colour_elements(int num_nodes, const std::vector<std::vector<int>>& elements);
 
+// Calls f(element) for every element, colour after colour, in parallel within a colour (so f may
+// scatter into nodes without races), and returns the sum of what f returns.
+template <class F>
+double for_each_coloured(const std::vector<std::vector<int>>& colours, F&& f) {
+  double sum = 0.0;
+  for (const auto& colour : colours) {
+    const int n = static_cast<int>(colour.size());
+#pragma omp parallel for reduction(+ : sum) schedule(static)
+    for (int i = 0; i < n; ++i) sum += f(colour[i]);
+  }
+  return sum;
+}
+
 struct EpidermisSpec {
   double lambda_e = 0.0, gamma = 1.0;  // off when lambda_e = 0
 };
@@ -52,8 +65,10 @@ class ElasticAssembly {
   double energy(const Points& x) const;
   // Energy and its gradient with respect to every node (3 N, Dirichlet nodes included).
   double gradient(const Points& x, Eigen::VectorXd& grad) const;
-  // values[slot] += scale * Hessian over the free dofs (values sized pattern().nnz()).
-  void add_hessian(const Points& x, double scale, double* values) const;
+  // values[slot] += scale * Hessian over the free dofs (values sized pattern().nnz()); with
+  // values2, also values2[slot] += scale2 * Hessian from the same element Hessians.
+  void add_hessian(const Points& x, double scale, double* values, double scale2 = 0.0,
+                   double* values2 = nullptr) const;
   // out += scale * K(x) v over all nodes (Rayleigh damping; v of every node, 3 N).
   void add_hessian_times(const Points& x, const Eigen::VectorXd& v, double scale, Eigen::VectorXd& out) const;
   // Per-tet pressure of the material, -tr(sigma)/3 (for CNH: -lambda U'(J) plus the deviatoric

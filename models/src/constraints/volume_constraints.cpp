@@ -141,20 +141,17 @@ void VolumeConstraints::hessian_times(const Points& x, const Eigen::VectorXd& xd
 }
 
 void VolumeConstraints::add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const {
-  for (const auto& colour : colours_) {
-    const int n = static_cast<int>(colour.size());
-#pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; ++i) {
-      const Element& e = elements_[colour[i]];
-      const double w = scale * lambda[e.constraint];
-      if (w == 0.0) continue;
-      Mat12 H;
-      tet_volume(element_x(x, e), nullptr, &H);
-      const Index* s = slots_.data() + 144 * static_cast<std::size_t>(colour[i]);
-      for (int a = 0; a < 144; ++a)
-        if (s[a] >= 0) values[s[a]] += w * H(a / 12, a % 12);
-    }
-  }
+  for_each_coloured(colours_, [&](int i) {
+    const Element& e = elements_[i];
+    const double w = scale * lambda[e.constraint];
+    if (w == 0.0) return 0.0;
+    Mat12 H;
+    tet_volume(element_x(x, e), nullptr, &H);
+    const Index* s = slots_.data() + 144 * static_cast<std::size_t>(i);
+    for (int a = 0; a < 144; ++a)
+      if (s[a] >= 0) values[s[a]] += w * H(a / 12, a % 12);
+    return 0.0;
+  });
 }
 
 void VolumeConstraints::add_multiplier_pressure(const Eigen::VectorXd& lambda, const std::vector<int>& tet_of_element,
