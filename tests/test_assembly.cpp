@@ -215,6 +215,21 @@ TEST(VolumeConstraints, OneRingZonePerFreeVertex) {
   EXPECT_EQ(zones[dofs.free_index[2 + 5 * (2 + 5 * 2)]].size(), 24u);  // interior Kuhn vertex
 }
 
+TEST(VolumeConstraints, PatchesPartitionTheTets) {
+  Mesh m = make_box(Eigen::Vector3d::Ones(), {12, 8, 8}, Eigen::Vector3d::Constant(0.5), 6);
+  std::size_t previous = m.num_tets() + 1;
+  for (int k : {1, 2, 3}) {
+    const auto patches = patch_zones(m, k);
+    std::vector<int> count(m.num_tets(), 0);
+    for (const auto& p : patches)
+      for (int e : p) count[e]++;
+    for (int c : count) EXPECT_EQ(c, 1);  // every tet in exactly one patch
+    std::printf("k = %d: %zu patches\n", k, patches.size());
+    EXPECT_LT(patches.size(), previous);  // larger k: fewer, larger patches
+    previous = patches.size();
+  }
+}
+
 TEST(Drivers, VelocityIsTheTimeDerivativeOfPosition) {
   std::vector<Driver> drivers(5);
   drivers[0].kind = Driver::Kind::fixed;

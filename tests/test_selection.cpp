@@ -30,6 +30,20 @@ TEST(Selection, NodesByEachKind) {
   EXPECT_EQ(select_nodes(m, parse("{ kind = \"set\", name = \"zmin\" }")).size(), 25u);
 }
 
+TEST(Selection, CylinderAndDisc) {
+  // 4x4x4 cells on [0,1]^3. Axis along z through (0.5, 0.5): radius 0.25 holds the centre line
+  // and its 4 edge neighbours in each of the 5 node layers.
+  Mesh m = make_box(Eigen::Vector3d::Ones(), {4, 4, 4}, Eigen::Vector3d::Constant(0.5), 6);
+  EXPECT_EQ(select_nodes(m, parse("{ kind = \"cylinder\", center = [0.5, 0.5, 0], radius = 0.25 }")).size(), 25u);
+  // Radius 0.36 adds the 4 diagonal nodes (distance 0.354).
+  EXPECT_EQ(select_nodes(m, parse("{ kind = \"cylinder\", center = [0.5, 0.5, 0], radius = 0.36 }")).size(), 45u);
+  // length = 0: the disc in the plane z = 1 only.
+  EXPECT_EQ(select_nodes(m, parse("{ kind = \"cylinder\", center = [0.5, 0.5, 1], radius = 0.25, length = 0 }")).size(), 5u);
+  // Along x, length 0.5 about x = 0.5: the layers x = 0.25, 0.5, 0.75 of the line y = z = 0.5.
+  EXPECT_EQ(select_nodes(m, parse("{ kind = \"cylinder\", center = [0.5, 0.5, 0.5], axis = [2, 0, 0], radius = 0.1, length = 0.5 }")).size(), 3u);
+  EXPECT_NE(test::error_of([&] { parse("{ kind = \"cylinder\", center = [0, 0, 0] }"); }).find("radius: missing"), std::string::npos);
+}
+
 TEST(Selection, TetsByEachKind) {
   Mesh m = make_box(Eigen::Vector3d::Ones(), {4, 4, 4}, Eigen::Vector3d::Constant(0.5), 6);
   EXPECT_EQ(select_tets(m, parse("{ kind = \"all\" }")).size(), 384u);

@@ -31,6 +31,13 @@ class GmshSession {
     gmsh::option::setNumber("General.NumThreads", 1);
     gmsh::option::setNumber("Mesh.RandomSeed", 1);
     gmsh::option::setNumber("Mesh.Algorithm3D", 1);
+    // Options one mesher sets must not leak into the next (Gmsh 4.8 cannot restore defaults):
+    // every option any of them sets is put back to Gmsh's default here.
+    gmsh::option::setNumber("Mesh.MeshSizeMin", 0);
+    gmsh::option::setNumber("Mesh.MeshSizeMax", 1e22);
+    gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
+    gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 1);
+    gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 1);
     gmsh::logger::start();
     gmsh::model::add(model);
   }
@@ -208,6 +215,16 @@ Mesh make_cylinder(double radius, double height, int resolution, const Eigen::Ve
 
 Mesh read_msh(const std::string& path) {
   check_readable(path, "a Gmsh .msh file");
+  // Gmsh 4.8 falls back to its .geo parser on a file that is not a mesh, and a syntax error there
+  // leaves Gmsh locked ("I'm busy!"): every later mesh of the process comes out empty. So the
+  // header is checked here first; binary and ASCII .msh files both begin with $MeshFormat.
+  {
+    std::ifstream in(path, std::ios::binary);
+    std::string first;
+    std::getline(in, first);
+    if (first.rfind("$MeshFormat", 0) != 0)
+      throw Error(path + ": is not a readable Gmsh mesh (expected a .msh file, version 2 or 4, starting with $MeshFormat)");
+  }
   GmshSession session("file");
   return guarded(path, "is not a readable Gmsh mesh (expected a .msh file, version 2 or 4)", [&] {
   gmsh::open(path);

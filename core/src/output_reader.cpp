@@ -124,21 +124,36 @@ Points RunFile::rest_positions() const {
   return Eigen::Map<Points>(flat.data(), 3, static_cast<Eigen::Index>(flat.size() / 3));
 }
 
-Points RunFile::positions(int frame) const {
-  const int n = num_nodes();
-  if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
-  Points x(3, n);
-  hid_t ds = H5Dopen2(impl_->file, "/frames/positions", H5P_DEFAULT);
+namespace {
+// Reads row `frame` (cols values) of a 2-D (F, cols) or 3-D (F, rows, 3) frame series.
+void read_frame_row(hid_t file, const std::string& path, const char* name, int frame, int rank, hsize_t rows,
+                    double* out) {
+  hid_t ds = H5Dopen2(file, name, H5P_DEFAULT);
+  if (ds < 0) throw Error(path + ": " + name + " is not in this run");
   hid_t fs = H5Dget_space(ds);
-  hsize_t start[3] = {static_cast<hsize_t>(frame), 0, 0}, count[3] = {1, static_cast<hsize_t>(n), 3};
+  hsize_t start[3] = {static_cast<hsize_t>(frame), 0, 0}, count[3] = {1, rows, 3};
   H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, nullptr, count, nullptr);
-  hid_t ms = H5Screate_simple(3, count, nullptr);
-  herr_t st = H5Dread(ds, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, x.data());
+  hid_t ms = H5Screate_simple(rank, count, nullptr);
+  herr_t st = H5Dread(ds, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, out);
   H5Sclose(ms);
   H5Sclose(fs);
   H5Dclose(ds);
-  if (st < 0) throw Error(impl_->path + ": cannot read the positions of frame " + std::to_string(frame));
+  if (st < 0) throw Error(path + ": cannot read " + name + " of frame " + std::to_string(frame));
+}
+}  // namespace
+
+Points RunFile::positions(int frame) const {
+  if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
+  Points x(3, num_nodes());
+  read_frame_row(impl_->file, impl_->path, "/frames/positions", frame, 3, static_cast<hsize_t>(num_nodes()), x.data());
   return x;
+}
+
+std::vector<double> RunFile::pressures(int frame) const {
+  if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
+  std::vector<double> p(num_tets());
+  read_frame_row(impl_->file, impl_->path, "/frames/pressure", frame, 2, static_cast<hsize_t>(num_tets()), p.data());
+  return p;
 }
 
 std::map<std::string, std::string> RunFile::attributes() const {

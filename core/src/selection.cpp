@@ -1,6 +1,7 @@
 #include "isochor/selection.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "isochor/error.hpp"
 #include "isochor/scene_file.hpp"
@@ -10,8 +11,9 @@ namespace isochor {
 Selection Selection::parse(const Section& s) {
   Selection sel;
   sel.where = s.where("kind");
-  const std::string kind = s.string("kind", "", {"all", "box", "half_space", "surface", "indices", "k_ring", "set"});
-  if (kind.empty()) s.fail("kind", "missing, expected one of \"all\", \"box\", \"half_space\", \"surface\", \"indices\", \"k_ring\", \"set\"");
+  const std::string kind = s.string("kind", "", {"all", "box", "half_space", "cylinder", "surface", "indices", "k_ring", "set"});
+  if (kind.empty())
+    s.fail("kind", "missing, expected one of \"all\", \"box\", \"half_space\", \"cylinder\", \"surface\", \"indices\", \"k_ring\", \"set\"");
   if (kind == "all") sel.kind = Kind::all;
   if (kind == "surface") sel.kind = Kind::surface;
   if (kind == "box") {
@@ -29,6 +31,16 @@ Selection Selection::parse(const Section& s) {
     sel.normal = s.vec3("normal", {});
     if (sel.normal.norm() == 0) s.fail("normal", "expected a non-zero vector");
     sel.normal.normalize();
+  }
+  if (kind == "cylinder") {
+    sel.kind = Kind::cylinder;
+    if (!s.has("radius")) s.fail("radius", "missing, a cylinder selection needs a radius (m)");
+    sel.point = s.vec3("center", Eigen::Vector3d::Zero());
+    sel.normal = s.vec3("axis", Eigen::Vector3d::UnitZ());
+    if (sel.normal.norm() == 0) s.fail("axis", "expected a non-zero vector");
+    sel.normal.normalize();
+    sel.radius = s.number("radius", 0.0, Range::positive());
+    sel.length = s.has("length") ? s.number("length", 0.0, Range::non_negative()) : -1.0;
   }
   if (kind == "indices") {
     sel.kind = Kind::indices;
@@ -58,8 +70,19 @@ std::vector<int> finish(std::vector<int> v, const Selection& sel, const char* wh
   return v;
 }
 
-bool in_box(const Eigen::Vector3d& p, const Selection& s, double tol) {
-  return (p.array() >= s.min.array() - tol).all() && (p.array() <= s.max.array() + tol).all();
+// For the geometric kinds (box, half_space, cylinder): is p inside (boundaries inclusive)?
+bool contains(const Selection& s, const Eigen::Vector3d& p, double tol) {
+  switch (s.kind) {
+    case Selection::Kind::box:
+      return (p.array() >= s.min.array() - tol).all() && (p.array() <= s.max.array() + tol).all();
+    case Selection::Kind::half_space: return (p - s.point).dot(s.normal) >= -tol;
+    case Selection::Kind::cylinder: {
+      const double along = (p - s.point).dot(s.normal);
+      const double across = (p - s.point - along * s.normal).norm();
+      return across <= s.radius + tol && (s.length < 0 || std::abs(along) <= s.length / 2 + tol);
+    }
+    default: return false;
+  }
 }
 
 double tolerance(const Mesh& m) {
@@ -86,12 +109,10 @@ std::vector<int> select_nodes(const Mesh& mesh, const Selection& sel) {
       for (int i = 0; i < mesh.num_nodes(); ++i) out.push_back(i);
       break;
     case Selection::Kind::box:
-      for (int i = 0; i < mesh.num_nodes(); ++i)
-        if (in_box(X.col(i), sel, tol)) out.push_back(i);
-      break;
     case Selection::Kind::half_space:
+    case Selection::Kind::cylinder:
       for (int i = 0; i < mesh.num_nodes(); ++i)
-        if ((X.col(i) - sel.point).dot(sel.normal) >= -tol) out.push_back(i);
+        if (contains(sel, X.col(i), tol)) out.push_back(i);
       break;
     case Selection::Kind::surface: out = mesh.surface_nodes(); break;
     case Selection::Kind::indices: out = checked_indices(sel, mesh.num_nodes(), "node"); break;
@@ -128,12 +149,10 @@ std::vector<int> select_tets(const Mesh& mesh, const Selection& sel) {
       for (int e = 0; e < mesh.num_tets(); ++e) out.push_back(e);
       break;
     case Selection::Kind::box:
-      for (int e = 0; e < mesh.num_tets(); ++e)
-        if (in_box(centroid(tets[e]), sel, tol)) out.push_back(e);
-      break;
     case Selection::Kind::half_space:
+    case Selection::Kind::cylinder:
       for (int e = 0; e < mesh.num_tets(); ++e)
-        if ((centroid(tets[e]) - sel.point).dot(sel.normal) >= -tol) out.push_back(e);
+        if (contains(sel, centroid(tets[e]), tol)) out.push_back(e);
       break;
     case Selection::Kind::surface:
       for (int v : mesh.surface_nodes())

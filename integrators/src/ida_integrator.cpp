@@ -1,11 +1,11 @@
 #include "isochor/ida_integrator.hpp"
+#include "klu_order.hpp"
 #include "timing.hpp"
 
 #include "isochor/ggl.hpp"
 
 #include <ida/ida.h>
 #include <klu.h>
-#include <metis.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_klu.h>
@@ -22,55 +22,6 @@
 namespace isochor {
 
 namespace {
-
-// Nested dissection (METIS) of the group graph, each group's q dofs then its v dofs together,
-// multipliers last. Returns the old index of each new position.
-std::vector<Index> metis_order(const SparsePattern& K, int per_group, Index n, Index m) {
-  const Index groups = n / per_group;
-  std::vector<std::vector<idx_t>> adj(groups);
-  for (Index c = 0; c < n; ++c)
-    for (Index k = K.col_ptr[c]; k < K.col_ptr[c + 1]; ++k) {
-      const Index a = c / per_group, b = K.row_ind[k] / per_group;
-      if (a != b) adj[a].push_back(static_cast<idx_t>(b));
-    }
-  std::vector<idx_t> xadj{0}, adjncy;
-  for (auto& l : adj) {
-    std::sort(l.begin(), l.end());
-    l.erase(std::unique(l.begin(), l.end()), l.end());
-    adjncy.insert(adjncy.end(), l.begin(), l.end());
-    xadj.push_back(static_cast<idx_t>(adjncy.size()));
-  }
-  std::vector<idx_t> perm(groups), iperm(groups);
-  idx_t nv = static_cast<idx_t>(groups);
-  if (groups > 1 && !adjncy.empty()) {
-    idx_t options[METIS_NOPTIONS];
-    METIS_SetDefaultOptions(options);
-    options[METIS_OPTION_SEED] = 1;
-    if (METIS_NodeND(&nv, xadj.data(), adjncy.data(), nullptr, options, perm.data(), iperm.data()) != METIS_OK)
-      for (Index g = 0; g < groups; ++g) perm[g] = static_cast<idx_t>(g);
-  } else {
-    for (Index g = 0; g < groups; ++g) perm[g] = static_cast<idx_t>(g);
-  }
-  // KLU wants the old index of each new position. Measured on the coarse ball, METIS_NodeND's
-  // perm (not iperm) is that: iperm gave 4x the fill and factorisation time.
-  std::vector<Index> order;
-  order.reserve(2 * n + 2 * m);
-  for (Index k = 0; k < groups; ++k) {
-    const Index g = perm[k];
-    for (int d = 0; d < per_group; ++d) order.push_back(g * per_group + d);
-    for (int d = 0; d < per_group; ++d) order.push_back(n + g * per_group + d);
-  }
-  for (Index j = 0; j < 2 * m; ++j) order.push_back(2 * n + j);
-  return order;
-}
-
-SuiteSparse_long user_order(SuiteSparse_long n, SuiteSparse_long*, SuiteSparse_long*, SuiteSparse_long* perm,
-                            klu_l_common* common) {
-  const auto* order = static_cast<const std::vector<Index>*>(common->user_data);
-  if (!order || static_cast<SuiteSparse_long>(order->size()) != n) return 0;
-  for (SuiteSparse_long k = 0; k < n; ++k) perm[k] = (*order)[k];
-  return -1;  // no estimate of nnz(L): KLU sizes L from nnz(A)
-}
 
 }  // namespace
 
@@ -94,7 +45,7 @@ struct IdaIntegrator::Impl {
     n = sys.num_dofs();
     m = sys.num_constraints();
     if (opt.linear_solver == "reduced") reduced = std::make_unique<ReducedSolver>(ggl);
-    else if (opt.ordering == "metis") order = metis_order(sys.pattern(), sys.dofs_per_group(), n, m);
+    else if (opt.ordering == "metis") order = metis_order(sys.pattern(), sys.dofs_per_group(), n, 2, sys.constraint_rows(), 2);
   }
 
   int residual(double t, N_Vector yy, N_Vector yp, N_Vector rr) {
@@ -313,11 +264,7 @@ IdaStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   } else {
     s.LS = SUNLinSol_KLU(yy, J, s.ctx);
     if (s.opt.ordering == "metis") {
-      klu_l_common* c = SUNLinSol_KLUGetCommon(s.LS);
-      c->ordering = 3;
-      c->btf = 0;
-      c->user_order = user_order;
-      c->user_data = &s.order;
+      use_klu_order(s.LS, &s.order);
     } else {
       SUNLinSol_KLUSetOrdering(s.LS, s.opt.ordering == "amd" ? 0 : 1);
     }

@@ -54,7 +54,7 @@ bool ReducedSolver::setup(double cj, const double* vals) {
   s.vals = vals;
   s.cj = cj;
   const GglForm& f = s.form;
-  const Index n = s.n, m = s.m;
+  const Index m = s.m;
   for (std::size_t k = 0; k < f.vq.size(); ++k) s.Sx[k] = vals[f.vq[k]] + cj * vals[f.vv[k]];
   if (!s.S.factor(s.Sx.data())) return false;
   if (m == 0) return true;

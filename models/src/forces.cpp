@@ -18,8 +18,9 @@ ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, GroundS
 
 double ExternalPotential::energy(const Points& x) const {
   double E = 0.0;
+  const Vec3 gravity = g();
   for (int i = 0; i < x.cols(); ++i) {
-    E -= mass_[i] * gravity_.dot(x.col(i));
+    E -= mass_[i] * gravity.dot(x.col(i));
     if (ground_.enabled)
       E += ground_energy(ground_.stiffness, ground_.thickness, ground_.point, ground_.normal, x.col(i), nullptr, nullptr);
   }
@@ -28,9 +29,10 @@ double ExternalPotential::energy(const Points& x) const {
 
 double ExternalPotential::add_gradient(const Points& x, Eigen::VectorXd& grad) const {
   double E = 0.0;
+  const Vec3 gravity = g();
   for (int i = 0; i < x.cols(); ++i) {
-    E -= mass_[i] * gravity_.dot(x.col(i));
-    grad.segment<3>(3 * i) -= mass_[i] * gravity_;
+    E -= mass_[i] * gravity.dot(x.col(i));
+    grad.segment<3>(3 * i) -= mass_[i] * gravity;
     if (ground_.enabled) {
       Vec3 g;
       E += ground_energy(ground_.stiffness, ground_.thickness, ground_.point, ground_.normal, x.col(i), &g, nullptr);

@@ -1,5 +1,6 @@
 #include "isochor/mesh_system.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "isochor/error.hpp"
@@ -42,6 +43,9 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(dofs_of(scene)
       throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first + "\" has only driven nodes: its volume cannot be kept");
     rows_.push_back(constraints_.row_dofs(j));
   }
+  Eigen::VectorXd z0;
+  constraints_.volumes(scene.mesh.rest_positions(), z0);
+  zone_rest_volume_.assign(z0.data(), z0.data() + z0.size());
   dof_mass_.resize(num_dofs());
   for (int f = 0; f < dofs_.num_free(); ++f) dof_mass_.segment<3>(3 * f).setConstant(node_mass_[dofs_.free_nodes[f]]);
   const double V = scene.mesh.rest_volume();
@@ -93,6 +97,7 @@ void MeshSystem::set_positions(double t, const VectorXd& q) {
   for (int f = 0; f < dofs_.num_free(); ++f) x_.col(dofs_.free_nodes[f]) = q.segment<3>(3 * f);
   if (t != state_t_) {
     for (const Driver& d : scene_.boundary) d.apply(scene_.mesh.rest_positions(), t, x_, &xdot_);
+    if (scene_.gravity_ramp > 0) external_->set_gravity_scale(std::clamp(t / scene_.gravity_ramp, 0.0, 1.0));
     state_t_ = t;
   }
 }

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <set>
 
 #include "isochor/constraints.hpp"
 #include "isochor/error.hpp"
@@ -94,8 +95,16 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
   if (const long k = s.integer("rings", 0, 0, 100); k > 0) {
     // One zone per node: the tets of its k-ring (Irving et al. 2007 for k = 1).
     const DofMap all = DofMap::make(mesh.num_nodes(), {});
+    // Nodes whose rings hold the same tets (large k on a small mesh) give one zone, not
+    // several identical constraints (which would make the KKT matrix singular).
     const auto rings = ring_zones(mesh, static_cast<int>(k), all);
-    for (std::size_t v = 0; v < rings.size(); ++v) zones.emplace_back("ring" + std::to_string(k) + "_" + std::to_string(v), rings[v]);
+    std::set<std::vector<int>> seen;
+    for (std::size_t v = 0; v < rings.size(); ++v)
+      if (seen.insert(rings[v]).second) zones.emplace_back("ring" + std::to_string(k) + "_" + std::to_string(v), rings[v]);
+  }
+  if (const long k = s.integer("patches", 0, 0, 100); k > 0) {
+    const auto patches = patch_zones(mesh, static_cast<int>(k));
+    for (std::size_t p = 0; p < patches.size(); ++p) zones.emplace_back("patch" + std::to_string(k) + "_" + std::to_string(p), patches[p]);
   }
   if (s.boolean("from_mesh", false))
     for (const auto& [name, tets] : mesh.zones) zones.emplace_back(name, tets);
@@ -115,17 +124,28 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), {}, {}, Eigen::Vector3d::Zero(), {}, {}, {}, {}};
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, Eigen::Vector3d::Zero(), {}, {}, {}, {}};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
   sc.mesh = mesh_from_scene(mesh, sc.file);
   sc.material = parse_material(root.table("material"));
   sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.material.model == "cnh");
-  for (const Section& b : root.tables("boundary")) sc.boundary.push_back(parse_boundary(b, sc.mesh));
+  std::vector<int> driven_by(sc.mesh.num_nodes(), -1);
+  for (const Section& b : root.tables("boundary")) {
+    sc.boundary.push_back(parse_boundary(b, sc.mesh));
+    const int k = static_cast<int>(sc.boundary.size());
+    for (int v : sc.boundary.back().nodes) {
+      if (driven_by[v] >= 0)
+        b.fail("select", "node " + std::to_string(v) + " is already driven by [[boundary]] number " +
+                             std::to_string(driven_by[v]) + " (expected each node in at most one [[boundary]])");
+      driven_by[v] = k;
+    }
+  }
 
   const Section forces = root.table("forces");
   sc.gravity = forces.vec3("gravity", sc.gravity);
+  sc.gravity_ramp = forces.number("gravity_ramp", 0.0, Range::non_negative());
   const Section contact = root.table("contact");
   sc.ground.enabled = contact.boolean("ground", false);
   sc.ground.point = contact.vec3("point", Eigen::Vector3d::Zero());

@@ -25,6 +25,7 @@ class RunFile {
   std::vector<Tri> surface() const;
   Points rest_positions() const;
   Points positions(int frame) const;
+  std::vector<double> pressures(int frame) const;  // per tet; the run must have output.pressure = true
   std::map<std::string, std::string> attributes() const;       // root attributes (strings)
   std::map<std::string, double> stat_totals() const;           // numeric attributes of /stats
   std::map<std::string, std::vector<double>> stat_series() const;  // datasets under /stats

@@ -17,10 +17,11 @@ namespace isochor {
 class Section;
 
 struct Selection {
-  enum class Kind { all, box, half_space, surface, indices, k_ring, set };
+  enum class Kind { all, box, half_space, cylinder, surface, indices, k_ring, set };
   Kind kind = Kind::all;
   Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();
-  Eigen::Vector3d point = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d point = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::UnitZ();  // half_space; cylinder axis
+  double radius = 0.0, length = -1.0;  // cylinder (length < 0: unbounded along the axis)
   std::vector<int> indices;
   int node = 0;
   int k = 1;

@@ -47,6 +47,9 @@ class ConstrainedSystem {
                                             std::vector<std::vector<double>>& rows) = 0;
   // Typical size of a force, in force units, for the tolerances of the multipliers.
   virtual double force_scale() const { return 1.0; }
+  // Typical size of constraint j's value (a zone's rest volume), so that solvers measure g_j
+  // relative to it.
+  virtual double constraint_scale(int /*j*/) const { return 1.0; }
 };
 
 }  // namespace isochor

@@ -63,5 +63,11 @@ class VolumeConstraints {
 
 // One zone per free vertex: the tets of its k-ring (Irving et al. 2007 for k = 1).
 std::vector<std::vector<int>> ring_zones(const Mesh& mesh, int k, const DofMap& dofs);
+// A partition of the tets into patches about the size of a k-ring: seed nodes at least 2k edges
+// apart (greedy, in node order), every node joins its nearest seed (breadth first, ties to the
+// earlier seed), so a patch reaches about k edges from its seed; every tet joins the patch of its
+// lowest-numbered node. Patches do not overlap, so
+// their volumes add up to the total.
+std::vector<std::vector<int>> patch_zones(const Mesh& mesh, int k);
 
 }  // namespace isochor

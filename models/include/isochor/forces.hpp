@@ -24,10 +24,14 @@ class ExternalPotential {
   // values += scale * Hessian over the free dofs (the ground's 3x3 diagonal blocks).
   void add_hessian(const Points& x, double scale, double* values) const;
   const Eigen::VectorXd& mass() const { return mass_; }
+  // Gravity is multiplied by this factor (loads applied in increments); 1 by default.
+  void set_gravity_scale(double s) { gravity_scale_ = s; }
 
  private:
+  Vec3 g() const { return gravity_scale_ * gravity_; }
   Eigen::VectorXd mass_;
   Vec3 gravity_;
+  double gravity_scale_ = 1.0;
   GroundSpec ground_;
   DofMap dofs_;
   std::vector<Index> diag_slots_;  // 9 per free node

@@ -32,6 +32,7 @@ class MeshSystem : public ConstrainedSystem {
   void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
                                     std::vector<std::vector<double>>& rows) override;
   double force_scale() const override { return force_scale_; }
+  double constraint_scale(int j) const override { return zone_rest_volume_[j]; }
 
   // Positions and velocities of every node (3 N) for a state of the unknowns at time t
   // (driven nodes from their drivers, evaluated once per distinct t).
@@ -59,6 +60,7 @@ class MeshSystem : public ConstrainedSystem {
   std::vector<int> constraint_tets_;
   std::vector<std::vector<Index>> rows_;
   Eigen::VectorXd node_mass_, dof_mass_;
+  std::vector<double> zone_rest_volume_;
   double force_scale_ = 1.0;
   // State cache: positions and velocities of every node.
   Points x_;

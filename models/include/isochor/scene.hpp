@@ -52,6 +52,7 @@ struct Scene {
   MaterialSpec material;
   std::vector<Driver> boundary;  // Dirichlet drivers, in file order
   Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.81);
+  double gravity_ramp = 0.0;  // s (pseudo-time in statics): gravity grows linearly to full at this time; 0: full at once
   GroundSpec ground;
   RayleighDamping damping;
   Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();

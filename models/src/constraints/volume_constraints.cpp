@@ -1,3 +1,4 @@
+#include <limits>
 #include <algorithm>
 
 #include "isochor/constraints.hpp"
@@ -168,6 +169,53 @@ std::vector<int> VolumeConstraints::element_tets(const std::vector<std::vector<i
 std::vector<std::vector<int>> ring_zones(const Mesh& mesh, int k, const DofMap& dofs) {
   std::vector<std::vector<int>> zones;
   for (int v : dofs.free_nodes) zones.push_back(mesh.tet_ring(v, k));
+  return zones;
+}
+
+std::vector<std::vector<int>> patch_zones(const Mesh& mesh, int k) {
+  const int N = mesh.num_nodes();
+  const Adjacency& nb = mesh.node_nodes();
+  std::vector<int> owner(N, -1), seeds;
+  // Seeds: a node with no seed within 2k - 1 edges (near: distance to the nearest seed so far).
+  std::vector<int> near(N, std::numeric_limits<int>::max());
+  for (int v = 0; v < N; ++v) {
+    if (near[v] < 2 * k) continue;
+    seeds.push_back(v);
+    std::vector<int> frontier{v};
+    near[v] = 0;
+    for (int d = 1; d < 2 * k && !frontier.empty(); ++d) {
+      std::vector<int> next;
+      for (int a : frontier)
+        for (const int* b = nb.begin(a); b != nb.end(a); ++b)
+          if (near[*b] > d) {
+            near[*b] = d;
+            next.push_back(*b);
+          }
+      frontier.swap(next);
+    }
+  }
+  // Every node to its nearest seed: breadth first from all seeds at once.
+  std::vector<int> frontier;
+  for (std::size_t s = 0; s < seeds.size(); ++s) {
+    owner[seeds[s]] = static_cast<int>(s);
+    frontier.push_back(seeds[s]);
+  }
+  while (!frontier.empty()) {
+    std::vector<int> next;
+    for (int a : frontier)
+      for (const int* b = nb.begin(a); b != nb.end(a); ++b)
+        if (owner[*b] < 0) {
+          owner[*b] = owner[a];
+          next.push_back(*b);
+        }
+    frontier.swap(next);
+  }
+  std::vector<std::vector<int>> zones(seeds.size());
+  for (int e = 0; e < mesh.num_tets(); ++e) {
+    const Tet& t = mesh.tets()[e];
+    zones[owner[*std::min_element(t.begin(), t.end())]].push_back(e);
+  }
+  std::erase_if(zones, [](const std::vector<int>& z) { return z.empty(); });
   return zones;
 }
 

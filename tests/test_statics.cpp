@@ -1,0 +1,197 @@
+// The CNH paper's static scenes (demos/cantilever_zones, pressure_cube, puck) solved with KINSOL:
+// the orderings and bounds the paper reports, measured on the demo scenes themselves.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "isochor/output_reader.hpp"
+#include "isochor/scene.hpp"
+#include "run.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+
+namespace {
+
+std::string demo(const char* name) { return std::string(ISOCHOR_SOURCE_DIR) + "/demos/" + name; }
+
+struct Result {
+  RunFile file;
+  double seconds;
+};
+
+Result run(const char* scene, const std::vector<std::string>& overrides, const std::string& out) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Scene sc = load_scene(demo(scene), overrides);
+  RunSummary r = run_scene(sc, out, false);
+  return {RunFile(r.output), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()};
+}
+
+// Mean downward displacement of the free end (the x = max face) at the last frame.
+double tip_deflection(const RunFile& f) {
+  const Points X = f.rest_positions(), x = f.positions(f.num_frames() - 1);
+  const double xmax = X.row(0).maxCoeff();
+  double sum = 0;
+  int count = 0;
+  for (int n = 0; n < X.cols(); ++n)
+    if (X(0, n) > xmax - 1e-9) {
+      sum += X(2, n) - x(2, n);
+      ++count;
+    }
+  return sum / count;
+}
+
+}  // namespace
+
+// Figure 5: the larger the volume zones, the softer the beam; the global zone with the local
+// penalty behaves like Irving's 1-ring zones; nu = 0.499 locks.
+TEST(Statics, CantileverZonesOrderTheTipDeflection) {
+  const auto dir = test::temp_dir();
+  const char* scene = "cantilever_zones.toml";
+  auto global = run(scene, {}, (dir / "a.h5").string());
+  auto patches2 = run(scene, {"zones.global=false", "zones.patches=2"}, (dir / "b.h5").string());
+  auto patches1 = run(scene, {"zones.global=false", "zones.patches=1"}, (dir / "c.h5").string());
+  auto ring1 = run(scene, {"zones.global=false", "zones.rings=1"}, (dir / "d.h5").string());
+  auto penalty = run(scene, {"material.lambda=9e6"}, (dir / "e.h5").string());  // nu = 0.45 with mu = 1e6
+  auto locked = run(scene, {"material.model=unh", "material.lambda=4.99e8"}, (dir / "f.h5").string());  // nu = 0.499
+  const double a = tip_deflection(global.file), b = tip_deflection(patches2.file), c = tip_deflection(patches1.file),
+               d = tip_deflection(ring1.file), e = tip_deflection(penalty.file), f = tip_deflection(locked.file);
+  std::printf("cantilever tip deflection (m): global %.4f, 2-ring patches %.4f, 1-ring patches %.4f, 1-rings %.4f, "
+              "global+penalty %.4f, unh nu=0.499 %.4f\n", a, b, c, d, e, f);
+  std::printf("cantilever wall seconds: 1-ring %.2f, global+penalty %.2f (ratio %.1f)\n", ring1.seconds, penalty.seconds,
+              ring1.seconds / penalty.seconds);
+  EXPECT_GT(a, b);
+  EXPECT_GT(b, c);
+  EXPECT_GT(c, d);
+  EXPECT_GT(d, f);
+  EXPECT_LT(std::abs(e - d) / d, 0.25);
+  // Each tet is in four 1-rings, so the 1-ring zones keep the total volume too.
+  for (const auto* r : {&global.file, &ring1.file})
+    for (const auto& v : r->volumes()) EXPECT_NEAR(v[0] / r->volumes()[0][0], 1.0, 1e-9);
+}
+
+namespace {
+// RMS deviation of the last frame's per-tet pressure from its least-squares line in the height
+// of the tet centroids, and that line's slope.
+std::pair<double, double> pressure_roughness(const RunFile& f, const Mesh& mesh, double* range) {
+  const Points x = f.positions(f.num_frames() - 1);
+  const std::vector<double> p = f.pressures(f.num_frames() - 1);
+  const int T = mesh.num_tets();
+  Eigen::MatrixXd A(T, 2);
+  Eigen::VectorXd b(T);
+  for (int e = 0; e < T; ++e) {
+    const Tet& t = mesh.tets()[e];
+    A(e, 0) = (x(2, t[0]) + x(2, t[1]) + x(2, t[2]) + x(2, t[3])) / 4;
+    A(e, 1) = 1.0;
+    b[e] = p[e];
+  }
+  const Eigen::Vector2d c = A.colPivHouseholderQr().solve(b);
+  *range = b.maxCoeff() - b.minCoeff();
+  return {std::sqrt((A * c - b).squaredNorm() / T), c[0]};
+}
+}  // namespace
+
+// Figure 7: per-tet pressure of a cube standing under gravity. UNH at nu = 0.495 locks and its
+// pressures scatter; Irving's 1-ring zones show a checkerboard; CNH's field is the smoothest.
+// Gravity in one increment (the equilibrium is the same as the demo's five).
+TEST(Statics, PressureCubeIsSmoothestWithCnh) {
+  const auto dir = test::temp_dir();
+  const char* scene = "pressure_cube.toml";
+  const Scene sc = load_scene(demo(scene));
+  struct Case {
+    const char* name;
+    std::vector<std::string> overrides;
+    double rms = 0, slope = 0, range = 0;
+  };
+  std::vector<Case> cases = {{"cnh", {}},
+                             {"unh_0.495", {"material.model=unh", "material.lambda=990"}},
+                             {"1-ring", {"zones.global=false", "zones.rings=1", "material.lambda=0"}}};
+  const double rho_g_h = 1.0 * 9.81 * 1.0;  // the hydrostatic pressure difference over the height
+  for (Case& c : cases) {
+    c.overrides.push_back("frames.count=2");
+    auto r = run(scene, c.overrides, (dir / (std::string(c.name) + ".h5")).string());
+    std::tie(c.rms, c.slope) = pressure_roughness(r.file, sc.mesh, &c.range);
+    std::printf("pressure cube %-9s: rms deviation %.3f Pa = %.3f rho g H = %.4f of its range %.2f Pa; slope %.2f Pa/m\n",
+                c.name, c.rms, c.rms / rho_g_h, c.rms / c.range, c.range, c.slope);
+  }
+  // Smallest for CNH, whether measured against the hydrostatic pressure difference or against
+  // each field's own range.
+  EXPECT_LT(cases[0].rms, cases[1].rms);
+  EXPECT_LT(cases[0].rms, cases[2].rms);
+  EXPECT_LT(cases[0].rms / cases[0].range, cases[1].rms / cases[1].range);
+  EXPECT_LT(cases[0].rms / cases[0].range, cases[2].rms / cases[2].range);
+  // Every model carries the weight: pressure falls with height at roughly rho g (a sagging
+  // cube is lower than 1 m, so the slope is somewhat steeper).
+  for (const Case& c : cases) {
+    EXPECT_LT(c.slope, -0.5 * rho_g_h);
+    EXPECT_GT(c.slope, -1.5 * rho_g_h);
+  }
+}
+
+namespace {
+double worst_volume_error(const RunFile& f) {
+  double worst = 0;
+  for (const auto& v : f.volumes()) worst = std::max(worst, std::abs(v[0] / f.volumes()[0][0] - 1));
+  return worst;
+}
+double max_stat(const RunFile& f, const char* name) {
+  const auto s = f.stat_series().at(name);
+  return *std::max_element(s.begin(), s.end());
+}
+}  // namespace
+
+// Section 8.4: the puck indented to 50% of its height (in 5% increments here, 1% in the demo).
+TEST(Statics, PuckCnhKeepsTheVolumeWithoutInvertedTets) {
+  const auto dir = test::temp_dir();
+  auto cnh = run("puck.toml", {"frames.count=11"}, (dir / "cnh.h5").string());
+  const double worst = worst_volume_error(cnh.file);
+  std::printf("puck cnh beta=9: worst volume error %.2e, inverted tets (max over frames) %g\n", worst,
+              max_stat(cnh.file, "inverted_tets"));
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_EQ(max_stat(cnh.file, "inverted_tets"), 0.0);
+  // The indenter (top nodes within 0.4 of the axis) went down by half the height, 0.3 m.
+  const Points X = cnh.file.rest_positions(), x = cnh.file.positions(10);
+  int indenter = 0;
+  for (int n = 0; n < X.cols(); ++n)
+    if (X(2, n) > 0.6 - 1e-9 && X.col(n).head<2>().norm() <= 0.4) {
+      EXPECT_NEAR(x(2, n), 0.3, 1e-12);
+      ++indenter;
+    }
+  EXPECT_GT(indenter, 10);
+}
+
+TEST(Statics, PuckUnhLosesLessVolumeAsNuGrows) {
+  const auto dir = test::temp_dir();
+  double previous = 1.0;
+  for (const auto& [nu, lambda] : {std::pair{0.4, "40"}, {0.45, "90"}, {0.495, "990"}}) {
+    auto r = run("puck.toml", {"frames.count=11", "material.model=unh", std::string("material.lambda=") + lambda},
+                 (dir / ("unh" + std::string(lambda) + ".h5")).string());
+    const auto& v = r.file.volumes();
+    const double loss = 1 - v.back()[0] / v.front()[0];
+    std::printf("puck unh nu=%.3f: volume loss at 50%% indentation %.2f%%\n", nu, 100 * loss);
+    EXPECT_GT(loss, 0.005);  // visibly lost (the paper: 22%, 5.1%, 1.8%)
+    EXPECT_LT(loss, previous);
+    previous = loss;
+  }
+}
+
+// forces.gravity_ramp: gravity in increments. Under a small load the response is linear, so the
+// tip deflection at pseudo-time t is t times the final one; frame 0 carries no load at all.
+TEST(Statics, GravityRampAppliesTheLoadInIncrements) {
+  const auto dir = test::temp_dir();
+  auto r = run("cantilever_zones.toml", {"material.model=unh", "material.lambda=4e6", "forces.gravity=[0, 0, -0.01]",
+                                         "frames.count=5"},
+               (dir / "ramp.h5").string());
+  std::vector<double> tip;
+  const Points X = r.file.rest_positions();
+  for (int k = 0; k < r.file.num_frames(); ++k) {
+    const Points x = r.file.positions(k);
+    tip.push_back((X - x).row(2).maxCoeff());
+  }
+  EXPECT_EQ(tip[0], 0.0);
+  for (int k = 1; k < 5; ++k) EXPECT_NEAR(tip[k] / tip[4], k / 4.0, 1e-3) << k;
+  EXPECT_GT(tip[4], 1e-5);
+}
