@@ -1,5 +1,7 @@
 #include "run.hpp"
 
+#include <chrono>
+
 #include "isochor/backward_euler.hpp"
 #include "isochor/error.hpp"
 #include "isochor/mesh_system.hpp"
@@ -47,12 +49,14 @@ RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) 
   o.linear_solver = sc.integrator.linear_solver;
   BackwardEulerOptions be;
   be.dt = sc.integrator.dt;
+  be.newton_tol = sc.integrator.newton_tol;
   be.semi_implicit = kind == "semi_implicit";
   be.max_steps = sc.integrator.max_steps;
   OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run"}, sc.output.pressure);
   const std::vector<double> times = sc.frames.times();
   Progress bar(sc.file.name(), static_cast<int>(times.size()) - 1, progress ? stderr : nullptr);
   std::vector<double> pressure;
+  const auto start = std::chrono::steady_clock::now();
   auto on_frame = [&](int k, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
                       const IdaStats::FrameSample& s) {
     sys.set_state(t, q, v);
@@ -72,7 +76,8 @@ RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) 
                {"rejected_steps_error_test", static_cast<double>(s.error_test_failures)},
                {"rejected_steps_newton", static_cast<double>(s.newton_failures)},
                {"order", static_cast<double>(s.order)},
-               {kind == "static" ? "residual_norm" : "step_size", s.step_size}};
+               {kind == "static" ? "residual_norm" : "step_size", s.step_size},
+               {"wall_seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};
     w.write_frame(f);
     summary.frames = k + 1;
     if (progress) bar.update(k, t);

@@ -152,3 +152,22 @@ TEST(Elements, GroundContactIsC2) {
   EXPECT_LT(g.norm(), 1e-11);
   EXPECT_LT(H.norm(), 1e-4);
 }
+
+// H d computed without forming H equals the Hessian times d.
+TEST(Elements, HessianTimesDirectionWithoutTheHessian) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const TetShape s = TetShape::make(Vec3(0, 0, 0), Vec3(1, 0.1, 0), Vec3(0.2, 1, 0), Vec3(0.1, 0.3, 1.2));
+  Vec12 x, d;
+  for (int i = 0; i < 12; ++i) {
+    x[i] = (i % 3 == 0 ? 1.1 : 1.0) * std::array<double, 12>{0, 0, 0, 1, 0.1, 0, 0.2, 1, 0, 0.1, 0.3, 1.2}[i] + 0.05 * u(rng);
+    d[i] = u(rng);
+  }
+  for (const auto& m : {make_unh(3, 20), make_snh(3, 20), make_cnh(3, 20, 2, 0.1), make_xpbd_pair(3, 20)}) {
+    Mat12 H;
+    Vec12 Hd;
+    tet_energy(*m, s, x, nullptr, &H, nullptr, nullptr);
+    tet_energy(*m, s, x, nullptr, nullptr, &d, &Hd);
+    EXPECT_LT((H * d - Hd).norm(), 1e-12 * (H * d).norm()) << m->name();
+  }
+}

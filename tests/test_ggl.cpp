@@ -156,3 +156,26 @@ TEST(Ggl, ReducedSolveEqualsADenseSolveWhenMuIsZero) {
     }
   }
 }
+
+// The one-pass force_and_jacobians (elements visited once for the gradient, K, beta K and the
+// damping force beta K v) equals force() and add_force_jacobians() called separately.
+TEST(MeshSystem, OnePassForceAndJacobiansEqualTheSeparateCalls) {
+  Fixture f;
+  const Index n = f.form.n();
+  const VectorXd q = f.y.head(n), v = f.y.segment(n, n);
+  const std::size_t nnz = f.sys.pattern().nnz();
+  VectorXd f1, f2;
+  std::vector<double> K1(nnz, 0.0), D1(nnz, 0.0), K2(nnz, 0.0), D2(nnz, 0.0);
+  f.sys.force(0.1, q, v, f1);
+  f.sys.add_force_jacobians(0.1, q, v, K1.data(), D1.data());
+  f.sys.force_and_jacobians(0.1, q, v, f2, K2.data(), D2.data());
+  EXPECT_LT((f1 - f2).norm(), 1e-12 * f1.norm());
+  double dk = 0, dd = 0, sk = 0;
+  for (std::size_t k = 0; k < nnz; ++k) {
+    dk = std::max(dk, std::abs(K1[k] - K2[k]));
+    dd = std::max(dd, std::abs(D1[k] - D2[k]));
+    sk = std::max(sk, std::abs(K1[k]));
+  }
+  EXPECT_LT(dk, 1e-12 * sk);
+  EXPECT_LT(dd, 1e-12 * sk);
+}

@@ -31,20 +31,51 @@ struct BackwardEuler::Impl {
     for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
   }
 
+  bool factored = false;  // S holds a factorisation of some earlier step matrix
+  bool refresh = true;    // factor the next step matrix afresh
+  VectorXd v_previous;    // the velocity at the start of the previous step
+  bool have_previous = false;
+
   // One step from (qn, vn) at t to t + h: q, v, lambda on return. False with a reason on failure.
+  // Newton with the step matrix factored only when needed: a factorisation is reused across
+  // iterations and steps while the iterations contract well (rate below 1/4); a slow or failing
+  // iteration refreshes it, and a step that fails with a reused factorisation is redone with
+  // fresh ones. The semi-implicit variant takes exactly one iteration with a fresh matrix.
   bool step(double t, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v, VectorXd& lambda,
             std::string& reason) {
+    const VectorXd lambda0 = lambda;
+    bool ok = step_once(t, qn, vn, q, v, lambda, reason, false);
+    if (!ok && !opt.semi_implicit) {
+      lambda = lambda0;
+      refresh = true;
+      have_previous = false;
+      ok = step_once(t, qn, vn, q, v, lambda, reason, true);
+    }
+    v_previous = vn;
+    have_previous = true;
+    return ok;
+  }
+
+  bool step_once(double t, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v, VectorXd& lambda,
+                 std::string& reason, bool always_fresh) {
     const double h = opt.dt, t1 = t + h;
     const VectorXd& M = sys.mass();
-    q = qn + h * vn;  // predictor
+    // Predictor: the velocity extrapolated linearly from the last two steps (the first step and
+    // the semi-implicit variant, whose single iteration starts from it, use q_n + h v_n).
+    if (have_previous && !opt.semi_implicit) q = qn + h * (2 * vn - v_previous);
+    else q = qn + h * vn;
     VectorXd f(n), R1(n), R2(m), g(m), y(n), dq(n), rhs(n);
     Eigen::MatrixXd Z(n, m), Gt(n, m);
-    const double scale = std::max(1.0, qn.cwiseAbs().maxCoeff());
+    const double tol = opt.newton_tol * std::max(1.0, qn.cwiseAbs().maxCoeff());
     const int iterations = opt.semi_implicit ? 1 : opt.max_newton;
+    double previous = 0;
     for (int it = 0; it < iterations; ++it) {
       const auto ta = Clock::now();
       v = (q - qn) / h;
-      sys.force(t1, q, v, f);
+      const bool fresh = always_fresh || refresh || !factored || opt.semi_implicit;
+      std::fill(K.begin(), K.end(), 0.0);
+      std::fill(D.begin(), D.end(), 0.0);
+      sys.force_and_jacobians(t1, q, v, f, fresh ? K.data() : nullptr, fresh ? D.data() : nullptr);
       R1 = M.cwiseProduct(q - qn - h * vn) / (h * h) - f;
       if (m) {
         sys.constraint(t1, q, g);
@@ -59,20 +90,24 @@ struct BackwardEuler::Impl {
         reason = "the forces are not finite (an element inverted or exploded)";
         return false;
       }
-      std::fill(K.begin(), K.end(), 0.0);
-      std::fill(D.begin(), D.end(), 0.0);
-      sys.add_force_jacobians(t1, q, v, K.data(), D.data());
-      if (m) sys.add_constraint_hessian(t1, q, lambda, 1.0, K.data());
-      for (std::size_t k = 0; k < Sv.size(); ++k) Sv[k] = K[k] + D[k] / h;
-      for (Index i = 0; i < n; ++i) Sv[diag[i]] += M[i] / (h * h);
+      if (fresh) {
+        if (m) sys.add_constraint_hessian(t1, q, lambda, 1.0, K.data());
+        for (std::size_t k = 0; k < Sv.size(); ++k) Sv[k] = K[k] + D[k] / h;
+        for (Index i = 0; i < n; ++i) Sv[diag[i]] += M[i] / (h * h);
+      }
       stats.assembly_seconds += seconds_since(ta);
-      const auto tf = Clock::now();
-      const bool ok = S.factor(Sv.data());
-      stats.factor_seconds += seconds_since(tf);
-      stats.jacobian_evals++;
-      if (!ok) {
-        reason = "the step matrix is singular";
-        return false;
+      if (fresh) {
+        const auto tf = Clock::now();
+        const bool ok = S.factor(Sv.data());
+        stats.factor_seconds += seconds_since(tf);
+        stats.jacobian_evals++;
+        stats.fresh_factorisations++;
+        factored = ok;
+        refresh = false;
+        if (!ok) {
+          reason = "the step matrix is singular";
+          return false;
+        }
       }
       const auto ts = Clock::now();
       rhs = -R1;
@@ -93,7 +128,10 @@ struct BackwardEuler::Impl {
         reason = "Newton produced a non-finite state";
         return false;
       }
-      if (dq.cwiseAbs().maxCoeff() <= opt.newton_tol * scale) {
+      const double size = dq.cwiseAbs().maxCoeff();
+      if (it > 0 && size > 0.25 * previous) refresh = true;  // slow contraction: a fresh matrix next
+      previous = size;
+      if (size <= tol) {
         v = (q - qn) / h;
         return true;
       }

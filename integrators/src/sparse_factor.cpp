@@ -2,6 +2,8 @@
 
 #include <cholmod.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 namespace isochor {
@@ -53,6 +55,9 @@ bool SymmetricFactor::factor(const double* values) {
     s.L = cholmod_l_analyze(s.A, &s.c);
     cholmod_l_factorize(s.A, s.L, &s.c);
   }
+  if (std::getenv("ISOCHOR_DEBUG_CHOLMOD"))
+    std::fprintf(stderr, "cholmod: %s %s, nnz(L) %.0f, flops %.3g, status %d\n", s.L->is_super ? "supernodal" : "simplicial",
+                 s.ldlt ? "LDLt" : "LLt", factor_nnz(), s.c.fl, s.c.status);
   return s.c.status == CHOLMOD_OK;
 }
 

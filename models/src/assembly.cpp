@@ -140,25 +140,6 @@ double ElasticAssembly::energy(const Points& x) const {
   return E;
 }
 
-double ElasticAssembly::gradient(const Points& x, Eigen::VectorXd& grad) const {
-  grad.setZero(3 * x.cols());
-  const double tets = for_each_coloured(tet_colours_, [&](int e) {
-    const Tet& t = mesh_.tets()[e];
-    Vec12 g;
-    const double E = tet_energy(*material_, shapes_[e], gather(x, t), &g, nullptr);
-    for (int k = 0; k < 4; ++k) grad.segment<3>(3 * t[k]) += g.segment<3>(3 * k);
-    return E;
-  });
-  const double tris = for_each_coloured(tri_colours_, [&](int f) {
-    const Tri& t = mesh_.surface()[f];
-    Vec9n g;
-    const double E = epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), &g, nullptr);
-    for (int k = 0; k < 3; ++k) grad.segment<3>(3 * t[k]) += g.segment<3>(3 * k);
-    return E;
-  });
-  return tets + tris;
-}
-
 namespace {
 // values[s] += scale * H for every local entry with a slot (and the same into values2).
 template <int N>
@@ -172,46 +153,73 @@ void scatter(const Eigen::Matrix<double, N, N>& H, const Index* slots, double sc
       if (values2) values2[s] += scale2 * H(a, b);
     }
 }
+
+// One element's share of an ElementPass, for elements of N nodes. eval(g, H, d, Hd) computes
+// the energy and, when asked, its gradient g, Hessian H and H d.
+template <int N, class Nodes, class Eval>
+double element_pass(const ElementPass& p, const Nodes& nodes, const Index* slots, Eval&& eval) {
+  constexpr int D = 3 * N;
+  using Vec = Eigen::Matrix<double, D, 1>;
+  Vec g, ve, Hv;
+  Eigen::Matrix<double, D, D> H;
+  const bool hess = p.values || p.values2;
+  if (p.Kv)
+    for (int k = 0; k < N; ++k) ve.template segment<3>(3 * k) = p.v->template segment<3>(3 * nodes[k]);
+  const double E = eval(p.grad ? &g : nullptr, hess ? &H : nullptr, p.Kv ? &ve : nullptr, p.Kv ? &Hv : nullptr);
+  if (p.grad)
+    for (int k = 0; k < N; ++k) p.grad->template segment<3>(3 * nodes[k]) += g.template segment<3>(3 * k);
+  if (p.values) scatter<D>(H, slots, p.scale, p.values, p.scale2, p.values2);
+  else if (p.values2) scatter<D>(H, slots, p.scale2, p.values2, 0.0, nullptr);
+  if (p.Kv)
+    for (int k = 0; k < N; ++k) p.Kv->template segment<3>(3 * nodes[k]) += p.v_scale * Hv.template segment<3>(3 * k);
+  return E;
+}
 }  // namespace
+
+double ElasticAssembly::evaluate(const Points& x, const ElementPass& p) const {
+  const double tets = for_each_coloured(tet_colours_, [&](int e) {
+    const Tet& t = mesh_.tets()[e];
+    return element_pass<4>(p, t, tet_slots_.data() + 144 * static_cast<std::size_t>(e), [&](Vec12* g, Mat12* H, const Vec12* d, Vec12* Hd) {
+      return tet_energy(*material_, shapes_[e], gather(x, t), g, H, d, Hd);
+    });
+  });
+  const double tris = for_each_coloured(tri_colours_, [&](int f) {
+    const Tri& t = mesh_.surface()[f];
+    return element_pass<3>(p, t, tri_slots_.data() + 81 * static_cast<std::size_t>(f), [&](Vec9n* g, Mat9n* H, const Vec9n* d, Vec9n* Hd) {
+      Mat9n Hl;
+      Mat9n* Hp = H ? H : (Hd ? &Hl : nullptr);
+      const double E = epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), g, Hp);
+      if (Hd) *Hd = *Hp * *d;
+      return E;
+    });
+  });
+  return tets + tris;
+}
+
+double ElasticAssembly::gradient(const Points& x, Eigen::VectorXd& grad) const {
+  grad.setZero(3 * x.cols());
+  ElementPass p;
+  p.grad = &grad;
+  return evaluate(x, p);
+}
 
 void ElasticAssembly::add_hessian(const Points& x, double scale, double* values, double scale2,
                                   double* values2) const {
-  for_each_coloured(tet_colours_, [&](int e) {
-    Mat12 H;
-    tet_energy(*material_, shapes_[e], gather(x, mesh_.tets()[e]), nullptr, &H);
-    scatter<12>(H, tet_slots_.data() + 144 * static_cast<std::size_t>(e), scale, values, scale2, values2);
-    return 0.0;
-  });
-  for_each_coloured(tri_colours_, [&](int f) {
-    Mat9n H;
-    epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, mesh_.surface()[f]), nullptr, &H);
-    scatter<9>(H, tri_slots_.data() + 81 * static_cast<std::size_t>(f), scale, values, scale2, values2);
-    return 0.0;
-  });
+  ElementPass p;
+  p.values = values;
+  p.scale = scale;
+  p.values2 = values2;
+  p.scale2 = scale2;
+  evaluate(x, p);
 }
 
 void ElasticAssembly::add_hessian_times(const Points& x, const Eigen::VectorXd& v, double scale,
                                         Eigen::VectorXd& out) const {
-  for_each_coloured(tet_colours_, [&](int e) {
-    const Tet& t = mesh_.tets()[e];
-    Mat12 H;
-    tet_energy(*material_, shapes_[e], gather(x, t), nullptr, &H);
-    Vec12 ve;
-    for (int k = 0; k < 4; ++k) ve.segment<3>(3 * k) = v.segment<3>(3 * t[k]);
-    const Vec12 r = scale * H * ve;
-    for (int k = 0; k < 4; ++k) out.segment<3>(3 * t[k]) += r.segment<3>(3 * k);
-    return 0.0;
-  });
-  for_each_coloured(tri_colours_, [&](int f) {
-    const Tri& t = mesh_.surface()[f];
-    Mat9n H;
-    epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), nullptr, &H);
-    Vec9n ve;
-    for (int k = 0; k < 3; ++k) ve.segment<3>(3 * k) = v.segment<3>(3 * t[k]);
-    const Vec9n r = scale * H * ve;
-    for (int k = 0; k < 3; ++k) out.segment<3>(3 * t[k]) += r.segment<3>(3 * k);
-    return 0.0;
-  });
+  ElementPass p;
+  p.v = &v;
+  p.v_scale = scale;
+  p.Kv = &out;
+  evaluate(x, p);
 }
 
 void ElasticAssembly::pressures(const Points& x, std::vector<double>& p) const {

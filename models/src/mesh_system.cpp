@@ -93,6 +93,36 @@ void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd
   if (neg_dfdv && damping_.alpha != 0) RayleighDamping{damping_.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
 }
 
+void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd& v, VectorXd& f, double* neg_dfdq,
+                                     double* neg_dfdv) {
+  set_state(t, q, v);
+  // One pass over the elements: gradient, K into -df/dq, beta K into -df/dv, and beta K v.
+  ElementPass p;
+  grad_.setZero(3 * x_.cols());
+  p.grad = &grad_;
+  p.values = neg_dfdq;
+  if (neg_dfdv && damping_.beta != 0) {
+    p.values2 = neg_dfdv;
+    p.scale2 = damping_.beta;
+  }
+  if (damping_.beta != 0) {
+    kv_.setZero(3 * x_.cols());
+    p.v = &xdot_;
+    p.v_scale = damping_.beta;
+    p.Kv = &kv_;
+  }
+  elastic_->evaluate(x_, p);
+  external_->add_gradient(x_, grad_);
+  if (neg_dfdq) external_->add_hessian(x_, 1.0, neg_dfdq);
+  if (damping_.beta != 0) grad_ += kv_;
+  f.resize(num_dofs());
+  for (int k = 0; k < dofs_.num_free(); ++k) {
+    const int n = dofs_.free_nodes[k];
+    f.segment<3>(3 * k) = -grad_.segment<3>(3 * n) - damping_.alpha * node_mass_[n] * xdot_.segment<3>(3 * n);
+  }
+  if (neg_dfdv && damping_.alpha != 0) RayleighDamping{damping_.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
+}
+
 void MeshSystem::set_positions(double t, const VectorXd& q) {
   for (int f = 0; f < dofs_.num_free(); ++f) x_.col(dofs_.free_nodes[f]) = q.segment<3>(3 * f);
   if (t != state_t_) {

@@ -165,6 +165,7 @@ Scene parse_scene(SceneFile file) {
   ig.rtol = in.number("rtol", ig.rtol, Range::positive());
   ig.atol = in.number("atol", ig.atol, Range::positive());
   ig.dt = in.number("dt", ig.dt, Range::positive());
+  ig.newton_tol = in.number("newton_tol", ig.newton_tol, Range::positive());
   ig.max_order = static_cast<int>(in.integer("max_order", ig.max_order, 1, 5));
   ig.max_step = in.number("max_step", 0.0, Range::non_negative());
   ig.max_steps = in.integer("max_steps", ig.max_steps, 1, 1000000000000L);

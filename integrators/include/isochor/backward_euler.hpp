@@ -2,7 +2,8 @@
 //   M (q - q_n - h v_n) / h^2 - f(q, (q - q_n)/h, t) + G^T lambda = 0,   g(q, t) = 0,
 // solved by Newton with the matrix [M/h^2 + K + D/h + sum lambda_j H_j, G^T; G, 0]
 // (K = -df/dq, D = -df/dv), the symmetric block by CHOLMOD and the m borders by a Schur
-// complement. "Semi-implicit": exactly one Newton iteration per step, from q = q_n + h v_n.
+// complement; a factorisation is reused while Newton contracts fast. "Semi-implicit": exactly one
+// Newton iteration per step, from q = q_n + h v_n, with a fresh matrix.
 #pragma once
 #include <memory>
 
@@ -14,7 +15,7 @@ struct BackwardEulerOptions {
   double dt = 1e-3;
   bool semi_implicit = false;
   int max_newton = 30;
-  double newton_tol = 1e-10;  // Newton stops when |dq|_inf <= newton_tol * (size of the body or 1)
+  double newton_tol = 1e-8;  // Newton stops when |dq|_inf <= newton_tol * max(1, |q_n|_inf) (m)
   long max_steps = 100000000;
 };
 

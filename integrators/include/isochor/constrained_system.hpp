@@ -34,6 +34,13 @@ class ConstrainedSystem {
   // neg_dfdq += -df/dq and neg_dfdv += -df/dv, both in pattern() (either may be null).
   virtual void add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq,
                                    double* neg_dfdv) = 0;
+  // f and both Jacobians at once (a model may share work between them, e.g. one pass over its
+  // elements); the same as force() then add_force_jacobians().
+  virtual void force_and_jacobians(double t, const VectorXd& q, const VectorXd& v, VectorXd& f, double* neg_dfdq,
+                                   double* neg_dfdv) {
+    force(t, q, v, f);
+    add_force_jacobians(t, q, v, neg_dfdq, neg_dfdv);
+  }
   // g(q, t).
   virtual void constraint(double t, const VectorXd& q, VectorXd& g) = 0;
   // Rows of G (values in the layout of constraint_rows()) and, when asked, dg/dt.

@@ -54,6 +54,20 @@ struct EpidermisSpec {
   double lambda_e = 0.0, gamma = 1.0;  // off when lambda_e = 0
 };
 
+// What one pass over the elements computes from each element's gradient and Hessian (every
+// pointer optional): grad += gradient (3 N, all nodes); values += scale H and values2 += scale2 H
+// over the free dofs (pattern slots); Kv += v_scale H v (all nodes, v of every node).
+struct ElementPass {
+  Eigen::VectorXd* grad = nullptr;
+  double* values = nullptr;
+  double scale = 1.0;
+  double* values2 = nullptr;
+  double scale2 = 0.0;
+  const Eigen::VectorXd* v = nullptr;
+  double v_scale = 0.0;
+  Eigen::VectorXd* Kv = nullptr;
+};
+
 class ElasticAssembly {
  public:
   ElasticAssembly(const Mesh& mesh, std::shared_ptr<const Material> material, const DofMap& dofs,
@@ -63,6 +77,8 @@ class ElasticAssembly {
   const DofMap& dofs() const { return dofs_; }
   // Elastic energy at positions x (all nodes).
   double energy(const Points& x) const;
+  // One pass over the elements; returns the energy.
+  double evaluate(const Points& x, const ElementPass& pass) const;
   // Energy and its gradient with respect to every node (3 N, Dirichlet nodes included).
   double gradient(const Points& x, Eigen::VectorXd& grad) const;
   // values[slot] += scale * Hessian over the free dofs (values sized pattern().nnz()); with

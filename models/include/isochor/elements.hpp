@@ -26,7 +26,9 @@ struct TetShape {
 };
 
 // Energy V psi(F) of a tet; gradient V dFdx^T vec(P), Hessian V dFdx^T dP/dF dFdx.
-double tet_energy(const Material& m, const TetShape& s, const Vec12& x, Vec12* grad, Mat12* hess);
+// With dir and hess_dir, also hess_dir = H dir (computed without H when hess is null).
+double tet_energy(const Material& m, const TetShape& s, const Vec12& x, Vec12* grad, Mat12* hess,
+                  const Vec12* dir = nullptr, Vec12* hess_dir = nullptr);
 
 // Signed volume of a tet and its derivatives (the zone-volume constraint per element).
 double tet_volume(const Vec12& x, Vec12* grad, Mat12* hess);

@@ -26,6 +26,8 @@ class MeshSystem : public ConstrainedSystem {
   void initial_state(double t0, VectorXd& q, VectorXd& v) override;
   void force(double t, const VectorXd& q, const VectorXd& v, VectorXd& f) override;
   void add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq, double* neg_dfdv) override;
+  void force_and_jacobians(double t, const VectorXd& q, const VectorXd& v, VectorXd& f, double* neg_dfdq,
+                           double* neg_dfdv) override;
   void constraint(double t, const VectorXd& q, VectorXd& g) override;
   void constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* g_t) override;
   void add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) override;
@@ -64,7 +66,7 @@ class MeshSystem : public ConstrainedSystem {
   double force_scale_ = 1.0;
   // State cache: positions and velocities of every node.
   Points x_;
-  Eigen::VectorXd xdot_, grad_;
+  Eigen::VectorXd xdot_, grad_, kv_;
   double state_t_ = std::numeric_limits<double>::quiet_NaN();
 };
 

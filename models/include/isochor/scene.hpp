@@ -26,6 +26,7 @@ struct MaterialSpec {
 struct IntegratorSpec {
   std::string kind = "ida";
   double rtol = 1e-6, atol = 1e-8, dt = 1e-3;
+  double newton_tol = 1e-8;  // backward Euler: Newton stops when |dq|_inf <= newton_tol * max(1, |q|_inf)
   int max_order = 5;
   double max_step = 0.0;      // s, 0: none
   long max_steps = 10000000;

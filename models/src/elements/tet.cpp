@@ -32,12 +32,16 @@ Mat3 TetShape::F(const Vec12& x) const {
   return Ds * Dm_inv;
 }
 
-double tet_energy(const Material& m, const TetShape& s, const Vec12& x, Vec12* grad, Mat12* hess) {
+double tet_energy(const Material& m, const TetShape& s, const Vec12& x, Vec12* grad, Mat12* hess, const Vec12* dir,
+                  Vec12* hess_dir) {
   Mat3 P;
   Mat9 dPdF;
-  const double psi = m.evaluate(s.F(x), grad ? &P : nullptr, hess ? &dPdF : nullptr);
+  const bool second = hess || hess_dir;
+  const double psi = m.evaluate(s.F(x), grad ? &P : nullptr, second ? &dPdF : nullptr);
   if (grad) *grad = s.rest_volume * s.dFdx.transpose() * Eigen::Map<const Vec9>(P.data());
   if (hess) *hess = s.rest_volume * s.dFdx.transpose() * dPdF * s.dFdx;
+  // H d without forming H: three matrix-vector products instead of two matrix products.
+  if (hess_dir) *hess_dir = s.rest_volume * (s.dFdx.transpose() * (dPdF * (s.dFdx * *dir)));
   return s.rest_volume * psi;
 }
 
