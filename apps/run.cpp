@@ -8,6 +8,7 @@
 #include "isochor/output.hpp"
 #include "isochor/progress.hpp"
 #include "isochor/statics.hpp"
+#include "isochor/xpbd_system.hpp"
 
 namespace isochor {
 
@@ -30,9 +31,9 @@ void write_totals(OutputWriter& w, const IdaStats& s) {
 
 RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) {
   const std::string& kind = sc.integrator.kind;
-  if (kind != "ida" && kind != "backward_euler" && kind != "semi_implicit" && kind != "static")
+  if (kind != "ida" && kind != "backward_euler" && kind != "semi_implicit" && kind != "static" && kind != "xpbd")
     throw Error(sc.file.name() + ": integrator.kind = \"" + kind +
-                "\" is not available yet (expected \"ida\", \"backward_euler\", \"semi_implicit\" or \"static\")");
+                "\" is not available yet (expected \"ida\", \"backward_euler\", \"semi_implicit\", \"static\" or \"xpbd\")");
   if ((kind == "static") != (sc.frames.count > 0))
     throw Error(sc.file.name() + (kind == "static" ? ": a static run needs frames.count (load increments)"
                                                    : ": frames.count is for statics; a dynamic run needs frames.rate and frames.duration"));
@@ -52,6 +53,12 @@ RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) 
   be.newton_tol = sc.integrator.newton_tol;
   be.semi_implicit = kind == "semi_implicit";
   be.max_steps = sc.integrator.max_steps;
+  be.rescale_volume = sc.integrator.rescale_volume;
+  XpbdOptions xo;
+  xo.dt = sc.integrator.dt;
+  xo.substeps = sc.integrator.substeps;
+  xo.iterations = sc.integrator.iterations;
+  xo.max_steps = sc.integrator.max_steps;
   OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run"}, sc.output.pressure);
   const std::vector<double> times = sc.frames.times();
   Progress bar(sc.file.name(), static_cast<int>(times.size()) - 1, progress ? stderr : nullptr);
@@ -85,6 +92,20 @@ RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) 
   try {
     if (kind == "ida") summary.stats = IdaIntegrator(sys, o).run(times, on_frame);
     else if (kind == "static") summary.stats = StaticSolver(sys, StaticOptions{}).run(times, on_frame);
+    else if (kind == "xpbd") {
+      // XPBD works on every node; frames are written through the mesh system's free dofs.
+      XpbdMeshSystem points(sc);
+      const auto& free = sys.dofs().free_nodes;
+      VectorXd q(sys.num_dofs()), v(sys.num_dofs());
+      summary.stats = Xpbd(points, xo).run(times, [&](int k, double t, const VectorXd& x, const VectorXd& xv,
+                                                        const VectorXd& lambda, const IdaStats::FrameSample& s) {
+        for (std::size_t f = 0; f < free.size(); ++f) {
+          q.segment<3>(3 * f) = x.segment<3>(3 * free[f]);
+          v.segment<3>(3 * f) = xv.segment<3>(3 * free[f]);
+        }
+        on_frame(k, t, q, v, lambda, s);
+      });
+    }
     else summary.stats = BackwardEuler(sys, be).run(times, on_frame);
   } catch (const IntegrationError& e) {
     w.set_stat("failed_at_time", e.time);

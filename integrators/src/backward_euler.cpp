@@ -174,6 +174,8 @@ IdaStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
       throw IntegrationError(t + h, reason + " (step " + std::to_string(steps + 1) + ", h = " + std::to_string(h) + " s)");
     }
     const double t1 = t + h;
+    if (s.opt.rescale_volume && !s.sys.rescale_volume(t1, q1))
+      throw IntegrationError(t1, "this model has no volume rescaling");
     ++steps;
     if (steps > s.opt.max_steps) throw IntegrationError(t1, "more than " + std::to_string(s.opt.max_steps) + " steps");
     // Frames inside (t, t1]: linear interpolation (exact at step times).

@@ -1,6 +1,7 @@
 #include "isochor/drivers.hpp"
 
 #include <algorithm>
+#include <Eigen/Geometry>
 #include <cmath>
 
 #include "isochor/error.hpp"
@@ -67,6 +68,15 @@ Eigen::Vector3d Driver::velocity(double t) const {
 }
 
 void Driver::apply(const Points& rest, double t, Points& x, Eigen::VectorXd* v) const {
+  if (rotation) {
+    const double theta = displacement(t).x(), omega = v ? velocity(t).x() : 0.0;
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(theta, axis).toRotationMatrix();
+    for (int n : nodes) {
+      x.col(n) = center + R * (rest.col(n) - center);
+      if (v) v->segment<3>(3 * n) = omega * axis.cross(x.col(n) - center);
+    }
+    return;
+  }
   const Eigen::Vector3d u = displacement(t);
   const Eigen::Vector3d du = v ? velocity(t) : Eigen::Vector3d::Zero();
   for (int n : nodes) {

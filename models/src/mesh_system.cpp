@@ -15,27 +15,26 @@ std::shared_ptr<const Material> make_material(const MaterialSpec& m) {
   throw Error("material.model = \"" + m.model + "\" is not a tet material (expected cnh, unh, snh or snh_simple)");
 }
 
-namespace {
-DofMap dofs_of(const Scene& s) {
+DofMap scene_dofs(const Scene& s) {
   std::vector<int> driven;
   for (const Driver& d : s.boundary) driven.insert(driven.end(), d.nodes.begin(), d.nodes.end());
   return DofMap::make(s.mesh.num_nodes(), driven);
 }
-std::vector<std::vector<int>> zone_tets(const Scene& s) {
+
+std::vector<std::vector<int>> scene_zone_tets(const Scene& s) {
   std::vector<std::vector<int>> z;
   for (const auto& [name, tets] : s.zones) z.push_back(tets);
   return z;
 }
-}  // namespace
 
-MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(dofs_of(scene)), material_(make_material(scene.material)) {
+MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(scene)), material_(make_material(scene.material)) {
   if (dofs_.num_free() == 0) throw Error(scene.file.name() + ": every node is driven by [[boundary]]: nothing to simulate");
   elastic_ = std::make_unique<ElasticAssembly>(scene.mesh, material_, dofs_,
                                                EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
   node_mass_ = lumped_mass(scene.mesh, scene.material.density);
   external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.ground, dofs_, elastic_->pattern());
   damping_ = scene.damping;
-  const auto zt = zone_tets(scene);
+  const auto zt = scene_zone_tets(scene);
   constraints_ = VolumeConstraints::zones(scene.mesh, zt, dofs_, elastic_->pattern());
   constraint_tets_ = VolumeConstraints::element_tets(zt);
   for (int j = 0; j < constraints_.size(); ++j) {
@@ -171,6 +170,38 @@ std::vector<double> MeshSystem::volumes() const {
 void MeshSystem::pressures(const VectorXd& lambda, std::vector<double>& p) const {
   elastic_->pressures(x_, p);
   if (lambda.size()) constraints_.add_multiplier_pressure(lambda, constraint_tets_, p);
+}
+
+}  // namespace isochor
+
+namespace isochor {
+
+bool MeshSystem::rescale_volume(double t, VectorXd& q) {
+  // x_i(s) = c + s (x_i - c) for the free nodes (driven ones stay), c the centre of mass; the
+  // total volume is a cubic in s: Newton from s = 1 with dV/ds = sum_i grad_i V . (x_i - c).
+  set_positions(t, q);
+  const Mesh& mesh = scene_.mesh;
+  const double V0 = mesh.rest_volume();
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (int n = 0; n < x_.cols(); ++n) c += node_mass_[n] * x_.col(n);
+  c /= node_mass_.sum();
+  const Points base = x_;
+  double s = 1.0;
+  for (int it = 0; it < 30; ++it) {
+    for (int n : dofs_.free_nodes) x_.col(n) = c + s * (base.col(n) - c);
+    double V = 0, dV = 0;
+    for (const Tet& t : mesh.tets()) {
+      Vec12 xe, g;
+      for (int k = 0; k < 4; ++k) xe.segment<3>(3 * k) = x_.col(t[k]);
+      V += tet_volume(xe, &g, nullptr);
+      for (int k = 0; k < 4; ++k)
+        if (dofs_.free_index[t[k]] >= 0) dV += g.segment<3>(3 * k).dot(base.col(t[k]) - c);
+    }
+    if (std::abs(V - V0) <= 1e-14 * V0 || dV == 0) break;
+    s -= (V - V0) / dV;
+  }
+  for (int f = 0; f < dofs_.num_free(); ++f) q.segment<3>(3 * f) = x_.col(dofs_.free_nodes[f]);
+  return true;
 }
 
 }  // namespace isochor

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <set>
 
 #include "isochor/constraints.hpp"
@@ -37,8 +38,9 @@ MaterialSpec parse_material(const Section& s) {
   if (lame && young) s.fail(s.has("E") ? "E" : "nu", "give either mu and lambda or E and nu, not both");
   if (young) {
     const double E = s.number("E", 1e5, Range::positive());
-    const double nu = s.number("nu", 0.45, {-1.0, 0.5, true, true});
+    const double nu = s.number("nu", 0.45, {-1.0, 0.5, true, false});
     std::tie(m.mu, m.lambda) = lame_from_young(E, nu);
+    if (nu == 0.5) m.lambda = std::numeric_limits<double>::infinity();  // incompressible: XPBD only
   } else {
     m.mu = s.number("mu", 1e4, Range::positive());
     m.lambda = s.number("lambda", 9e4, Range::non_negative());
@@ -55,7 +57,7 @@ Driver parse_boundary(const Section& b, const Mesh& mesh) {
   const Section sel = b.table("select");
   if (!sel.exists()) b.fail("select", "missing, expected the nodes to drive, e.g. { kind = \"set\", name = \"zmin\" }");
   d.nodes = select_nodes(mesh, Selection::parse(sel));
-  const std::string kind = b.string("kind", "fixed", {"fixed", "ramp", "keyframes", "sinusoid"});
+  const std::string kind = b.string("kind", "fixed", {"fixed", "ramp", "keyframes", "sinusoid", "rotation"});
   if (kind == "ramp") {
     d.kind = Driver::Kind::ramp;
     if (!b.has("displacement")) b.fail("displacement", "missing, a ramp needs its end displacement [x, y, z] (m)");
@@ -69,6 +71,23 @@ Driver parse_boundary(const Section& b, const Mesh& mesh) {
     d.vector = b.vec3("amplitude", {});
     d.frequency = b.number("frequency", 1.0, Range::positive());
     d.phase = b.number("phase", 0.0);
+  } else if (kind == "rotation") {
+    const std::string interp = b.string("interpolation", "linear", {"linear", "cubic"});
+    d.kind = interp == "linear" ? Driver::Kind::keyframes_linear : Driver::Kind::keyframes_cubic;
+    d.rotation = true;
+    d.center = b.vec3("center", Eigen::Vector3d::Zero());
+    d.axis = b.vec3("axis", Eigen::Vector3d::UnitZ());
+    if (d.axis.norm() == 0) b.fail("axis", "expected a non-zero vector");
+    d.axis.normalize();
+    d.times = b.numbers("times");
+    const std::vector<double> angles = b.numbers("angles");
+    if (d.times.size() < 2) b.fail("times", "expected at least 2 keyframe times (s)");
+    for (std::size_t i = 1; i < d.times.size(); ++i)
+      if (d.times[i] <= d.times[i - 1]) b.fail("times", "expected increasing times");
+    if (angles.size() != d.times.size())
+      b.fail("angles", "expected one angle (degrees) per keyframe time, " + std::to_string(d.times.size()) + ", got " +
+                           std::to_string(angles.size()));
+    for (double a : angles) d.values.emplace_back(a * M_PI / 180.0, 0.0, 0.0);
   } else if (kind == "keyframes") {
     const std::string interp = b.string("interpolation", "linear", {"linear", "cubic"});
     d.kind = interp == "linear" ? Driver::Kind::keyframes_linear : Driver::Kind::keyframes_cubic;
@@ -171,6 +190,13 @@ Scene parse_scene(SceneFile file) {
   ig.max_steps = in.integer("max_steps", ig.max_steps, 1, 1000000000000L);
   ig.ordering = in.string("ordering", ig.ordering, {"metis", "colamd", "amd"});
   ig.linear_solver = in.string("linear_solver", ig.linear_solver, {"klu", "reduced"});
+  ig.substeps = static_cast<int>(in.integer("substeps", ig.substeps, 1, 100000));
+  ig.iterations = static_cast<int>(in.integer("iterations", ig.iterations, 1, 100000));
+  ig.rescale_volume = in.boolean("rescale_volume", false);
+  if (ig.rescale_volume && ig.kind != "backward_euler" && ig.kind != "semi_implicit")
+    in.fail("rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
+  if (std::isinf(sc.material.lambda) && ig.kind != "xpbd")
+    root.table("material").fail("nu", "nu = 0.5 (incompressible) needs integrator.kind = \"xpbd\" (expected nu < 0.5)");
 
   const Section fr = root.table("frames");
   if (fr.has("count") && (fr.has("rate") || fr.has("duration")))

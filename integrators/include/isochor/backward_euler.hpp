@@ -14,6 +14,7 @@ namespace isochor {
 struct BackwardEulerOptions {
   double dt = 1e-3;
   bool semi_implicit = false;
+  bool rescale_volume = false;  // after each step, the system's naive volume rescaling
   int max_newton = 30;
   double newton_tol = 1e-8;  // Newton stops when |dq|_inf <= newton_tol * max(1, |q_n|_inf) (m)
   long max_steps = 100000000;

@@ -52,6 +52,10 @@ class ConstrainedSystem {
   // every point the constraint depends on, driven ones included.
   virtual void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
                                             std::vector<std::vector<double>>& rows) = 0;
+  // Naive volume rescaling (the CNH paper's section 8.3 baseline): moves q so that the body's
+  // total volume is its rest volume again, by scaling about the centre of mass. Returns false if
+  // the model has no such operation.
+  virtual bool rescale_volume(double /*t*/, VectorXd& /*q*/) { return false; }
   // Typical size of a force, in force units, for the tolerances of the multipliers.
   virtual double force_scale() const { return 1.0; }
   // Typical size of constraint j's value (a zone's rest volume), so that solvers measure g_j

@@ -19,6 +19,10 @@ struct Driver {
   double frequency = 1, phase = 0;                   // sinusoid
   std::vector<double> times;                         // keyframes
   std::vector<Eigen::Vector3d> values;               // keyframe displacements
+  // Rotation drivers: keyframes whose values hold the angle (rad) in x; the nodes turn about the
+  // axis through `center`: x = c + R(theta(t)) (X - c), v = theta'(t) axis x (x - c).
+  bool rotation = false;
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ(), center = Eigen::Vector3d::Zero();
 
   // Displacement and its time derivative at t.
   Eigen::Vector3d displacement(double t) const;

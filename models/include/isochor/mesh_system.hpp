@@ -13,6 +13,9 @@
 namespace isochor {
 
 std::shared_ptr<const Material> make_material(const MaterialSpec& m);
+// The scene's free and driven nodes, and the tets of each zone (in scene order).
+DofMap scene_dofs(const Scene& s);
+std::vector<std::vector<int>> scene_zone_tets(const Scene& s);
 
 class MeshSystem : public ConstrainedSystem {
  public:
@@ -34,6 +37,7 @@ class MeshSystem : public ConstrainedSystem {
   void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
                                     std::vector<std::vector<double>>& rows) override;
   double force_scale() const override { return force_scale_; }
+  bool rescale_volume(double t, VectorXd& q) override;
   double constraint_scale(int j) const override { return zone_rest_volume_[j]; }
 
   // Positions and velocities of every node (3 N) for a state of the unknowns at time t

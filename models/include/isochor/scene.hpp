@@ -32,6 +32,8 @@ struct IntegratorSpec {
   long max_steps = 10000000;
   std::string ordering = "metis";
   std::string linear_solver = "klu";
+  int substeps = 10, iterations = 1;  // XPBD: substeps per step, Gauss-Seidel sweeps per substep
+  bool rescale_volume = false;        // backward Euler: naive global volume rescaling after each step
 };
 
 struct FramesSpec {

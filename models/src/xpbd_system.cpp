@@ -1,0 +1,114 @@
+#include "isochor/xpbd_system.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "isochor/assembly.hpp"
+#include "isochor/error.hpp"
+#include "isochor/material.hpp"
+#include "isochor/mesh_system.hpp"
+
+namespace isochor {
+
+
+XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(scene)) {
+  if (scene.damping.alpha != 0 || scene.damping.beta != 0)
+    throw Error(scene.file.name() + ": [damping] is not available with integrator.kind = \"xpbd\" (expected no Rayleigh damping)");
+  const Mesh& mesh = scene.mesh;
+  const double mu = scene.material.mu, lambda = scene.material.lambda;
+  const double lambda_p = std::isinf(lambda) ? lambda : lambda + mu;
+  gamma_ = std::isinf(lambda_p) ? 1.0 : 1.0 + mu / lambda_p;
+  const Points& X = mesh.rest_positions();
+  for (const Tet& t : mesh.tets()) {
+    shapes_.push_back(TetShape::make(X.col(t[0]), X.col(t[1]), X.col(t[2]), X.col(t[3])));
+    const double V = shapes_.back().rest_volume;
+    alpha_d_.push_back(1.0 / (mu * V));
+    alpha_h_.push_back(std::isinf(lambda_p) ? 0.0 : 1.0 / (lambda_p * V));
+  }
+  const Eigen::VectorXd m = lumped_mass(mesh, scene.material.density);
+  w_.resize(mesh.num_nodes());
+  w_.setZero();
+  for (int n : dofs_.free_nodes) w_[n] = 1.0 / m[n];
+  // Zone constraints over the free dofs (the pattern is only needed for Hessians, not used here).
+  std::vector<std::vector<int>> elements;
+  for (const Tet& t : mesh.tets()) elements.emplace_back(t.begin(), t.end());
+  const Pattern pattern = pattern_from_elements(dofs_, elements);
+  zones_ = VolumeConstraints::zones(mesh, scene_zone_tets(scene), dofs_, pattern);
+  zone_grad_.resize(zones_.size());
+  for (int j = 0; j < zones_.size(); ++j) zone_grad_[j].resize(zones_.row_dofs(j).size());
+}
+
+void XpbdMeshSystem::initial_state(double t0, Eigen::VectorXd& x, Eigen::VectorXd& v) {
+  const Points& X = scene_.mesh.rest_positions();
+  x = Eigen::Map<const Eigen::VectorXd>(X.data(), X.size());
+  v.resize(x.size());
+  for (int n = 0; n < scene_.mesh.num_nodes(); ++n) v.segment<3>(3 * n) = scene_.initial_velocity;
+  prescribe(t0, x, v);
+}
+
+void XpbdMeshSystem::external_acceleration(double t, Eigen::VectorXd& a) {
+  const double s = scene_.gravity_ramp > 0 ? std::clamp(t / scene_.gravity_ramp, 0.0, 1.0) : 1.0;
+  a.resize(3 * num_points());
+  for (int n = 0; n < num_points(); ++n) a.segment<3>(3 * n) = s * scene_.gravity;
+}
+
+void XpbdMeshSystem::prescribe(double t, Eigen::VectorXd& x, Eigen::VectorXd& v) {
+  if (scene_.boundary.empty()) return;
+  Points xp = Eigen::Map<const Points>(x.data(), 3, num_points());
+  for (const Driver& d : scene_.boundary) d.apply(scene_.mesh.rest_positions(), t, xp, &v);
+  x = Eigen::Map<const Eigen::VectorXd>(xp.data(), xp.size());
+}
+
+double XpbdMeshSystem::constraint(int c, const Eigen::VectorXd& x, std::vector<int>& points, std::vector<double>& grad) {
+  const int e = c / 2;
+  const Tet& t = scene_.mesh.tets()[e];
+  const TetShape& s = shapes_[e];
+  Vec12 xe;
+  for (int k = 0; k < 4; ++k) xe.segment<3>(3 * k) = x.segment<3>(3 * t[k]);
+  const Mat3 F = s.F(xe);
+  double value;
+  Vec9 dC;
+  if (c % 2 == 0) {  // deviatoric: sqrt(I_C), gradient F / sqrt(I_C)
+    value = F.norm();
+    dC = Eigen::Map<const Vec9>(F.data()) / value;
+  } else {  // hydrostatic: det F - gamma, gradient cof F
+    value = F.determinant() - gamma_;
+    dC = cofactor_vec(F);
+  }
+  const Vec12 g = s.dFdx.transpose() * dC;
+  points.assign(t.begin(), t.end());
+  grad.assign(g.data(), g.data() + 12);
+  return value;
+}
+
+void XpbdMeshSystem::after_sweep(double, Eigen::VectorXd& x) {
+  if (zones_.size() == 0) return;
+  // Each zone: one hard constraint V_j(x) = V_j(rest), projected in turn with fresh values.
+  for (int j = 0; j < zones_.size(); ++j) {
+    const Points xp = Eigen::Map<const Points>(x.data(), 3, num_points());
+    zones_.value(xp, zone_value_);
+    zones_.gradient(xp, zone_grad_);
+    const auto& rows = zones_.row_dofs(j);
+    double denom = 0;
+    for (std::size_t k = 0; k < rows.size(); ++k) denom += w_[dofs_.free_nodes[rows[k] / 3]] * zone_grad_[j][k] * zone_grad_[j][k];
+    if (denom <= 0) continue;
+    const double dl = -zone_value_[j] / denom;
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      const int n = dofs_.free_nodes[rows[k] / 3];
+      x[3 * n + rows[k] % 3] += w_[n] * zone_grad_[j][k] * dl;
+    }
+  }
+}
+
+void XpbdMeshSystem::project_collisions(Eigen::VectorXd& x) {
+  const GroundSpec& g = scene_.ground;
+  if (!g.enabled) return;
+  for (int n : dofs_.free_nodes) {
+    const double s = (x.segment<3>(3 * n) - g.point).dot(g.normal);
+    if (s < 0) x.segment<3>(3 * n) -= s * g.normal;
+  }
+}
+
+}  // namespace isochor
