@@ -153,11 +153,11 @@ Scene parse_scene(SceneFile file) {
   std::vector<int> driven_by(sc.mesh.num_nodes(), -1);
   for (const Section& b : root.tables("boundary")) {
     sc.boundary.push_back(parse_boundary(b, sc.mesh));
-    const int k = static_cast<int>(sc.boundary.size());
+    const int k = static_cast<int>(sc.boundary.size()) - 1;
     for (int v : sc.boundary.back().nodes) {
       if (driven_by[v] >= 0)
-        b.fail("select", "node " + std::to_string(v) + " is already driven by [[boundary]] number " +
-                             std::to_string(driven_by[v]) + " (expected each node in at most one [[boundary]])");
+        b.fail("select", "node " + std::to_string(v) + " is already driven by boundary[" + std::to_string(driven_by[v]) +
+                             "] (expected each node in at most one [[boundary]])");
       driven_by[v] = k;
     }
   }
