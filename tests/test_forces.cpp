@@ -13,7 +13,7 @@ TEST(Forces, GravityAndGroundDerivatives) {
   DofMap dofs = DofMap::make(m.num_nodes(), {});
   ElasticAssembly a(m, make_snh(1, 1), dofs);
   GroundSpec ground{true, Vec3(0, 0, 0.004), Vec3(0, 0, 2.0), 1e5, 0.01};
-  ExternalPotential ext(lumped_mass(m, 1000.0), Vec3(0, 0, -9.81), ground, dofs, a.pattern());
+  ExternalPotential ext(lumped_mass(m, 1000.0), Vec3(0, 0, -9.81), {ground}, dofs, a.pattern());
   EXPECT_NEAR(ext.mass().sum(), 1000.0 * 0.032, 1e-12);  // lumped mass sums to the total
   Points x = m.rest_positions();
   std::mt19937 rng(4);

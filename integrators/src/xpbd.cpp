@@ -60,7 +60,7 @@ IdaStats Xpbd::run(const std::vector<double>& times, const FrameCallback& on_fra
         sys_.after_sweep(h, x);
         stats.newton_iterations++;  // sweeps, reported as iterations
       }
-      sys_.project_collisions(x);
+      sys_.project_collisions(ts, x);
       for (int i = 0; i < P; ++i)
         if (w[i] > 0) v.segment<3>(3 * i) = (x.segment<3>(3 * i) - x_prev.segment<3>(3 * i)) / h;
       if (!x.allFinite()) {

@@ -6,25 +6,32 @@
 
 namespace isochor {
 
-ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, GroundSpec ground, const DofMap& dofs,
+Vec3 GroundSpec::point_at(double t) const {
+  return point + displacement * std::clamp((t - t0) / (t1 - t0), 0.0, 1.0);
+}
+
+ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::vector<GroundSpec> planes, const DofMap& dofs,
                                      const Pattern& pattern)
-    : mass_(std::move(mass)), gravity_(gravity), ground_(ground), dofs_(dofs) {
-  ground_.normal.normalize();
+    : mass_(std::move(mass)), gravity_(gravity), dofs_(dofs) {
+  for (GroundSpec& p : planes)
+    if (p.enabled) {
+      p.normal.normalize();
+      planes_.push_back(p);
+      points_.push_back(p.point);
+    }
   diag_slots_.resize(9 * static_cast<std::size_t>(dofs.num_free()));
   for (int f = 0; f < dofs.num_free(); ++f)
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) diag_slots_[9 * f + 3 * a + b] = pattern.find(3 * Index(f) + a, 3 * Index(f) + b);
 }
 
+void ExternalPotential::set_time(double t) {
+  for (std::size_t k = 0; k < planes_.size(); ++k) points_[k] = planes_[k].point_at(t);
+}
+
 double ExternalPotential::energy(const Points& x) const {
-  double E = 0.0;
-  const Vec3 gravity = g();
-  for (int i = 0; i < x.cols(); ++i) {
-    E -= mass_[i] * gravity.dot(x.col(i));
-    if (ground_.enabled)
-      E += ground_energy(ground_.stiffness, ground_.thickness, ground_.point, ground_.normal, x.col(i), nullptr, nullptr);
-  }
-  return E;
+  Eigen::VectorXd unused = Eigen::VectorXd::Zero(3 * x.cols());
+  return add_gradient(x, unused);
 }
 
 double ExternalPotential::add_gradient(const Points& x, Eigen::VectorXd& grad) const {
@@ -33,23 +40,24 @@ double ExternalPotential::add_gradient(const Points& x, Eigen::VectorXd& grad) c
   for (int i = 0; i < x.cols(); ++i) {
     E -= mass_[i] * gravity.dot(x.col(i));
     grad.segment<3>(3 * i) -= mass_[i] * gravity;
-    if (ground_.enabled) {
-      Vec3 g;
-      E += ground_energy(ground_.stiffness, ground_.thickness, ground_.point, ground_.normal, x.col(i), &g, nullptr);
-      grad.segment<3>(3 * i) += g;
+    for (std::size_t k = 0; k < planes_.size(); ++k) {
+      Vec3 gk;
+      E += ground_energy(planes_[k].stiffness, planes_[k].thickness, points_[k], planes_[k].normal, x.col(i), &gk, nullptr);
+      grad.segment<3>(3 * i) += gk;
     }
   }
   return E;
 }
 
 void ExternalPotential::add_hessian(const Points& x, double scale, double* values) const {
-  if (!ground_.enabled) return;
-  for (int f = 0; f < dofs_.num_free(); ++f) {
-    Mat3 H;
-    ground_energy(ground_.stiffness, ground_.thickness, ground_.point, ground_.normal, x.col(dofs_.free_nodes[f]),
-                  nullptr, &H);
-    for (int k = 0; k < 9; ++k) values[diag_slots_[9 * f + k]] += scale * H(k / 3, k % 3);
-  }
+  if (planes_.empty()) return;
+  for (int f = 0; f < dofs_.num_free(); ++f)
+    for (std::size_t k = 0; k < planes_.size(); ++k) {
+      Mat3 H;
+      ground_energy(planes_[k].stiffness, planes_[k].thickness, points_[k], planes_[k].normal, x.col(dofs_.free_nodes[f]),
+                    nullptr, &H);
+      for (int c = 0; c < 9; ++c) values[diag_slots_[9 * f + c]] += scale * H(c / 3, c % 3);
+    }
 }
 
 void RayleighDamping::add_force(const ElasticAssembly& a, const Eigen::VectorXd& mass, const Points& x,

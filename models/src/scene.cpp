@@ -143,7 +143,7 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, Eigen::Vector3d::Zero(), {}, {}, {}, {}};
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, {}, {}};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
@@ -173,6 +173,22 @@ Scene parse_scene(SceneFile file) {
   sc.ground.normal.normalize();
   sc.ground.stiffness = contact.number("stiffness", sc.ground.stiffness, Range::positive());
   sc.ground.thickness = contact.number("thickness", sc.ground.thickness, Range::positive());
+  for (const Section& p : contact.tables("plane")) {
+    GroundSpec g;
+    g.enabled = true;
+    if (!p.has("point") || !p.has("normal")) p.fail(p.has("point") ? "normal" : "point", "missing, a contact plane needs a point and a normal");
+    g.point = p.vec3("point", {});
+    g.normal = p.vec3("normal", {});
+    if (g.normal.norm() == 0) p.fail("normal", "expected a non-zero vector");
+    g.normal.normalize();
+    g.stiffness = p.number("stiffness", sc.ground.stiffness, Range::positive());
+    g.thickness = p.number("thickness", sc.ground.thickness, Range::positive());
+    g.displacement = p.vec3("displacement", Eigen::Vector3d::Zero());
+    g.t0 = p.number("t0", 0.0, Range::non_negative());
+    g.t1 = p.number("t1", 1.0, Range::positive());
+    if (g.t1 <= g.t0) p.fail("t1", "expected t1 > t0");
+    sc.planes.push_back(g);
+  }
   const Section damping = root.table("damping");
   sc.damping.alpha = damping.number("alpha", 0.0, Range::non_negative());
   sc.damping.beta = damping.number("beta", 0.0, Range::non_negative());

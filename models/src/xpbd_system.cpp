@@ -102,12 +102,16 @@ void XpbdMeshSystem::after_sweep(double, Eigen::VectorXd& x) {
   }
 }
 
-void XpbdMeshSystem::project_collisions(Eigen::VectorXd& x) {
-  const GroundSpec& g = scene_.ground;
-  if (!g.enabled) return;
-  for (int n : dofs_.free_nodes) {
-    const double s = (x.segment<3>(3 * n) - g.point).dot(g.normal);
-    if (s < 0) x.segment<3>(3 * n) -= s * g.normal;
+void XpbdMeshSystem::project_collisions(double t, Eigen::VectorXd& x) {
+  std::vector<GroundSpec> planes{scene_.ground};
+  planes.insert(planes.end(), scene_.planes.begin(), scene_.planes.end());
+  for (const GroundSpec& g : planes) {
+    if (!g.enabled) continue;
+    const Eigen::Vector3d p = g.point_at(t), n = g.normal.normalized();
+    for (int node : dofs_.free_nodes) {
+      const double s = (x.segment<3>(3 * node) - p).dot(n);
+      if (s < 0) x.segment<3>(3 * node) -= s * n;
+    }
   }
 }
 

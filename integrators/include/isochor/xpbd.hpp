@@ -36,7 +36,7 @@ class ProjectiveSystem {
   // points at once); returns nothing, may move points with w > 0.
   virtual void after_sweep(double /*h*/, Eigen::VectorXd& /*x*/) {}
   // Collision projection at the end of the sweeps (e.g. points pushed out of the ground).
-  virtual void project_collisions(Eigen::VectorXd& /*x*/) {}
+  virtual void project_collisions(double /*t*/, Eigen::VectorXd& /*x*/) {}
 };
 
 struct XpbdOptions {

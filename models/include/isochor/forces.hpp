@@ -12,12 +12,18 @@ struct GroundSpec {
   Vec3 point = Vec3::Zero(), normal = Vec3::UnitZ();
   double stiffness = 1e6;   // k in k/3 (delta - s)^3, N/m^3
   double thickness = 1e-3;  // delta, m
+  // A moving plane: its point travels by `displacement` between t0 and t1 (linearly).
+  Vec3 displacement = Vec3::Zero();
+  double t0 = 0.0, t1 = 1.0;
+  Vec3 point_at(double t) const;
 };
 
 // Gravity and the ground as one external potential: sum_i -m_i g . x_i + ground energy.
 class ExternalPotential {
  public:
-  ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, GroundSpec ground, const DofMap& dofs, const Pattern& pattern);
+  // planes: the ground and any other contact planes (only enabled ones act).
+  ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::vector<GroundSpec> planes, const DofMap& dofs,
+                    const Pattern& pattern);
   double energy(const Points& x) const;
   // grad += gradient over every node (3 N).
   double add_gradient(const Points& x, Eigen::VectorXd& grad) const;
@@ -26,13 +32,16 @@ class ExternalPotential {
   const Eigen::VectorXd& mass() const { return mass_; }
   // Gravity is multiplied by this factor (loads applied in increments); 1 by default.
   void set_gravity_scale(double s) { gravity_scale_ = s; }
+  // Moves the contact planes to where they are at time t.
+  void set_time(double t);
 
  private:
   Vec3 g() const { return gravity_scale_ * gravity_; }
   Eigen::VectorXd mass_;
   Vec3 gravity_;
   double gravity_scale_ = 1.0;
-  GroundSpec ground_;
+  std::vector<GroundSpec> planes_;
+  std::vector<Vec3> points_;  // where each plane is now
   DofMap dofs_;
   std::vector<Index> diag_slots_;  // 9 per free node
 };

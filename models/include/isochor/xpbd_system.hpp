@@ -24,7 +24,7 @@ class XpbdMeshSystem : public ProjectiveSystem {
   double constraint(int c, const Eigen::VectorXd& x, std::vector<int>& points, std::vector<double>& grad) override;
   double compliance(int c) const override { return c % 2 == 0 ? alpha_d_[c / 2] : alpha_h_[c / 2]; }
   void after_sweep(double h, Eigen::VectorXd& x) override;
-  void project_collisions(Eigen::VectorXd& x) override;
+  void project_collisions(double t, Eigen::VectorXd& x) override;
 
  private:
   const Scene& scene_;
