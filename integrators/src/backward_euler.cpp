@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "isochor/fixed_step.hpp"
 #include "isochor/sparse_factor.hpp"
 
 namespace isochor {
@@ -150,48 +151,22 @@ BackwardEuler::~BackwardEuler() = default;
 
 IdaStats BackwardEuler::run(const std::vector<double>& times, const FrameCallback& on_frame) {
   Impl& s = *impl_;
-  const auto wall0 = Clock::now();
   const double h = s.opt.dt;
   VectorXd q, v, a, lambda;
   IdaIntegrator::consistent_initial_state(s.sys, times.front(), q, v, a, lambda);
-  VectorXd q1, v1, l1 = lambda;
-  double t = times.front();
-  std::size_t k = 0;
-  long steps = 0;
-  auto sample = [&]() {
-    s.stats.steps = steps;
-    s.stats.frames.push_back({steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 1, h});
-    return s.stats.frames.back();
+  auto step = [&](double t, const VectorXd& qn, const VectorXd& vn, VectorXd& q1, VectorXd& v1, VectorXd& l1,
+                  std::string& reason) {
+    if (!s.step(t, qn, vn, q1, v1, l1, reason)) return false;
+    if (s.opt.rescale_volume && !s.sys.rescale_volume(t + h, q1)) {
+      reason = "this model has no volume rescaling";
+      return false;
+    }
+    return true;
   };
-  while (k < times.size() && times[k] <= t + 1e-12 * h) {
-    on_frame(static_cast<int>(k), times[k], q, v, lambda, sample());
-    ++k;
-  }
-  while (k < times.size()) {
-    std::string reason;
-    if (!s.step(t, q, v, q1, v1, l1, reason)) {
-      s.stats.wall_seconds = seconds_since(wall0);
-      throw IntegrationError(t + h, reason + " (step " + std::to_string(steps + 1) + ", h = " + std::to_string(h) + " s)");
-    }
-    const double t1 = t + h;
-    if (s.opt.rescale_volume && !s.sys.rescale_volume(t1, q1))
-      throw IntegrationError(t1, "this model has no volume rescaling");
-    ++steps;
-    if (steps > s.opt.max_steps) throw IntegrationError(t1, "more than " + std::to_string(s.opt.max_steps) + " steps");
-    // Frames inside (t, t1]: linear interpolation (exact at step times).
-    while (k < times.size() && times[k] <= t1 + 1e-9 * h) {
-      const double w = std::clamp((times[k] - t) / h, 0.0, 1.0);
-      const VectorXd qf = (1 - w) * q + w * q1, vf = (1 - w) * v + w * v1;
-      on_frame(static_cast<int>(k), times[k], qf, vf, l1, sample());
-      ++k;
-    }
-    q.swap(q1);
-    v.swap(v1);
-    lambda = l1;
-    t = t1;
-  }
-  s.stats.steps = steps;
-  s.stats.wall_seconds = seconds_since(wall0);
+  auto sample = [&]() {
+    return IdaStats::FrameSample{s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 1, h};
+  };
+  run_fixed_steps(times, h, s.opt.max_steps, q, v, lambda, step, s.stats, sample, on_frame);
   return s.stats;
 }
 

@@ -49,6 +49,10 @@ MaterialSpec parse_material(const Section& s) {
   m.epsilon = s.number("epsilon", m.epsilon, {0.0, 1.0, true, false});
   m.epidermis_lambda = s.number("epidermis_lambda", 0.0, Range::non_negative());
   m.epidermis_gamma = s.number("epidermis_gamma", 1.0, Range::non_negative());
+  // The mass-spring keys are read for every model, so one scene can switch models by --set.
+  m.spring_stiffness = s.number("spring_stiffness", m.spring_stiffness, Range::positive());
+  m.spring_damping = s.number("spring_damping", m.spring_damping, Range::non_negative());
+  m.volume_constraint = s.boolean("volume_constraint", true);
   return m;
 }
 
@@ -209,6 +213,8 @@ Scene parse_scene(SceneFile file) {
   ig.substeps = static_cast<int>(in.integer("substeps", ig.substeps, 1, 100000));
   ig.iterations = static_cast<int>(in.integer("iterations", ig.iterations, 1, 100000));
   ig.rescale_volume = in.boolean("rescale_volume", false);
+  ig.weights_center = in.vec3("weights_center", Eigen::Vector3d::Zero());
+  ig.weights_radius = in.number("weights_radius", 0.0, Range::non_negative());
   if (ig.rescale_volume && ig.kind != "backward_euler" && ig.kind != "semi_implicit")
     in.fail("rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
   if (std::isinf(sc.material.lambda) && ig.kind != "xpbd")

@@ -21,6 +21,9 @@ struct MaterialSpec {
   double epsilon = 0.1;       // CNH: J below which alpha~ is extended
   double epidermis_lambda = 0.0;  // Pa m (surface penalty weight); 0: no epidermis
   double epidermis_gamma = 1.0;
+  double spring_stiffness = 1000.0;  // mass_spring: N/m, every spring
+  double spring_damping = 0.0;       // mass_spring: N s/m, dashpot along every spring
+  bool volume_constraint = true;     // mass_spring: keep the enclosed volume
 };
 
 struct IntegratorSpec {
@@ -34,6 +37,8 @@ struct IntegratorSpec {
   std::string linear_solver = "klu";
   int substeps = 10, iterations = 1;  // XPBD: substeps per step, Gauss-Seidel sweeps per substep
   bool rescale_volume = false;        // backward Euler: naive global volume rescaling after each step
+  Eigen::Vector3d weights_center = Eigen::Vector3d::Zero();  // mass_spring: Hong's weight zone
+  double weights_radius = 0.0;                               // 0: uniform weights
 };
 
 struct FramesSpec {

@@ -1,0 +1,42 @@
+#include "isochor/fixed_step.hpp"
+#include "timing.hpp"
+
+#include <algorithm>
+
+namespace isochor {
+
+void run_fixed_steps(const std::vector<double>& times, double h, long max_steps, VectorXd q, VectorXd v,
+                     VectorXd lambda, const FixedStep& step, IdaStats& stats,
+                     const std::function<IdaStats::FrameSample()>& sample, const FrameCallback& on_frame) {
+  const auto wall0 = Clock::now();
+  VectorXd q1, v1, l1 = lambda;
+  double t = times.front();
+  std::size_t k = 0;
+  stats.steps = 0;
+  while (k < times.size() && times[k] <= t + 1e-12 * h) {
+    on_frame(static_cast<int>(k), times[k], q, v, lambda, sample());
+    ++k;
+  }
+  while (k < times.size()) {
+    std::string reason;
+    const double t1 = t + h;
+    if (!step(t, q, v, q1, v1, l1, reason)) {
+      stats.wall_seconds = seconds_since(wall0);
+      throw IntegrationError(t1, reason + " (step " + std::to_string(stats.steps + 1) + ", h = " + std::to_string(h) + " s)");
+    }
+    if (++stats.steps > max_steps) throw IntegrationError(t1, "more than " + std::to_string(max_steps) + " steps");
+    while (k < times.size() && times[k] <= t1 + 1e-9 * h) {
+      const double w = std::clamp((times[k] - t) / h, 0.0, 1.0);
+      const VectorXd qf = (1 - w) * q + w * q1, vf = (1 - w) * v + w * v1;
+      on_frame(static_cast<int>(k), times[k], qf, vf, l1, sample());
+      ++k;
+    }
+    q.swap(q1);
+    v.swap(v1);
+    lambda = l1;
+    t = t1;
+  }
+  stats.wall_seconds = seconds_since(wall0);
+}
+
+}  // namespace isochor

@@ -1,0 +1,67 @@
+// Hong et al. 2006's volume-preserving mass-spring model as a ConstrainedSystem: only the surface
+// nodes of the mesh move (the unknowns are its free surface nodes); structural, shear and bending
+// springs of one stiffness k with dashpots c along them; gravity and contact planes; one
+// constraint, the volume enclosed by the surface (divergence theorem) equal to its rest value.
+// The surface nodes' masses share the body's mass in proportion to their surface area. Interior
+// nodes are not simulated; for output they follow the surface (each moves with the inverse-
+// distance average of its nearest surface nodes' displacements).
+#pragma once
+#include <memory>
+
+#include "isochor/assembly.hpp"
+#include "isochor/constrained_system.hpp"
+#include "isochor/constraints.hpp"
+#include "isochor/forces.hpp"
+#include "isochor/scene.hpp"
+
+namespace isochor {
+
+class MassSpringSystem : public ConstrainedSystem {
+ public:
+  explicit MassSpringSystem(const Scene& scene);
+
+  int num_dofs() const override { return 3 * dofs_.num_free(); }
+  int num_constraints() const override { return constrained_ ? 1 : 0; }
+  const VectorXd& mass() const override { return dof_mass_; }
+  const SparsePattern& pattern() const override { return pattern_; }
+  const std::vector<std::vector<Index>>& constraint_rows() const override { return rows_; }
+  void initial_state(double t0, VectorXd& q, VectorXd& v) override;
+  void force(double t, const VectorXd& q, const VectorXd& v, VectorXd& f) override;
+  void add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq, double* neg_dfdv) override;
+  void constraint(double t, const VectorXd& q, VectorXd& g) override;
+  void constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* g_t) override;
+  void add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) override;
+  void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
+                                    std::vector<std::vector<double>>& rows) override;
+  double force_scale() const override { return force_scale_; }
+  double constraint_scale(int) const override { return rest_volume_; }
+
+  // Diagnostics at a state, as MeshSystem's: every node's position (interior ones carried).
+  void set_state(double t, const VectorXd& q, const VectorXd& v);
+  const Points& positions() const { return x_; }
+  std::array<double, 3> energies() const;  // kinetic, springs, external
+  std::vector<double> volumes() const;      // the enclosed volume (no zones)
+  const DofMap& dofs() const { return dofs_; }
+  // Hong's weight vector (their eq. 15) per free surface node, summing to their number.
+  Eigen::VectorXd weights(const Eigen::Vector3d& center, double radius) const;
+
+ private:
+  void place(double t, const VectorXd& q);
+  const Scene& scene_;
+  DofMap dofs_;  // free = surface nodes not driven
+  std::vector<Spring> springs_;
+  std::vector<Index> spring_slots_;  // 36 per spring
+  Pattern pattern_;
+  std::unique_ptr<ExternalPotential> external_;
+  VolumeConstraints volume_;
+  std::vector<std::vector<Index>> rows_;
+  bool constrained_ = true;
+  double k_, c_, rest_volume_, force_scale_ = 1.0;
+  Eigen::VectorXd node_mass_, dof_mass_;
+  std::vector<std::vector<std::pair<int, double>>> carry_;  // interior node -> (surface node, weight)
+  Points x_;
+  Eigen::VectorXd xdot_;
+  double state_t_ = std::numeric_limits<double>::quiet_NaN();
+};
+
+}  // namespace isochor
