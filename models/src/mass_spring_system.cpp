@@ -29,13 +29,10 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
                                     "volume enclosed by its surface; expected no zones)");
   std::vector<char> moving(N, 0);
   for (int v : mesh.surface_nodes()) moving[v] = 1;
+  // Driven surface nodes follow their drivers; driven interior nodes are carried like the rest
+  // of the interior (the model has no interior).
   for (const Driver& d : scene.boundary)
-    for (int v : d.nodes) {
-      if (!moving[v] && std::find(mesh.surface_nodes().begin(), mesh.surface_nodes().end(), v) == mesh.surface_nodes().end())
-        throw Error(scene.file.name() + ": node " + std::to_string(v) +
-                    " of a [[boundary]] is inside the body; the mass-spring model moves surface nodes only");
-      moving[v] = 0;
-    }
+    for (int v : d.nodes) moving[v] = 0;
   std::vector<int> fixed;
   for (int v = 0; v < N; ++v)
     if (!moving[v]) fixed.push_back(v);

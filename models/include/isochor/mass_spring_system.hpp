@@ -4,7 +4,7 @@
 // constraint, the volume enclosed by the surface (divergence theorem) equal to its rest value.
 // The surface nodes' masses share the body's mass in proportion to their surface area. Interior
 // nodes are not simulated; for output they follow the surface (each moves with the inverse-
-// distance average of its nearest surface nodes' displacements).
+// distance average of its nearest surface nodes' displacements), driven or not.
 #pragma once
 #include <memory>
 
