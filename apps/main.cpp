@@ -10,6 +10,7 @@
 #include "isochor/output_reader.hpp"
 #include "isochor/scene.hpp"
 #include "run.hpp"
+#include "study.hpp"
 
 using namespace isochor;
 
@@ -53,6 +54,16 @@ int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& over
   return 0;
 }
 
+// Charts, results.h5 and report.md of a study directory (tools/study_report.py).
+int study_report(const std::string& dir) {
+  if (!std::filesystem::exists(std::filesystem::path(dir) / "results.csv"))
+    throw Error(dir + ": no results.csv (expected the output directory of `isochor study`)");
+  const std::string cmd = "/usr/bin/python3 '" ISOCHOR_TOOLS_DIR "/study_report.py' '" + dir + "'";
+  const int rc = std::system(cmd.c_str());
+  if (rc != 0) throw Error(dir + ": the report tool failed (" + cmd + ")");
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -78,6 +89,15 @@ int main(int argc, char** argv) {
   auto* info = app.add_subcommand("info", "Summarise an output file: mesh, zones, frames, volume drift, solver statistics");
   info->add_option("file", h5_path, "Output file (.h5)")->required();
 
+  bool resume = false;
+  auto* study = app.add_subcommand("study", "Run a study: every method and sweep of a base scene against a reference; results, charts, report");
+  study->add_option("study", scene_path, "Study file (TOML)")->required();
+  study->add_option("--set", overrides, "Override a study key, e.g. --set study.jobs=1")->take_all();
+  study->add_flag("--resume", resume, "Keep cases that already finished");
+
+  auto* report = app.add_subcommand("report", "Write a study's charts, results.h5 and report.md from its results");
+  report->add_option("dir", dir, "The study's output directory")->required();
+
   auto* obj = app.add_subcommand("export-obj", "Write the surface of every frame as an OBJ sequence");
   obj->add_option("file", h5_path, "Output file (.h5)")->required();
   obj->add_option("--dir", dir, "Directory for the OBJ files (default: beside the file, <name>_obj)");
@@ -96,6 +116,18 @@ int main(int argc, char** argv) {
                   s.assembly_seconds, s.factor_seconds, s.solve_seconds, r.output.c_str());
       return 0;
     }
+    if (study->parsed()) {
+      const Study s = load_study(scene_path, overrides);
+      const std::string exe = std::filesystem::read_symlink("/proc/self/exe").string();
+      std::fprintf(stderr, "%s: %zu cases (the reference first), %d at a time, into %s\n", scene_path.c_str(),
+                   s.cases.size(), s.jobs, s.output.c_str());
+      const int failed = run_study(s, exe, resume, true);
+      const int rc = study_report(s.output.string());
+      std::printf("%s: %zu cases, %d failed (reasons in results.csv); wrote %s/report.md\n", scene_path.c_str(),
+                  s.cases.size(), failed, s.output.c_str());
+      return rc;
+    }
+    if (report->parsed()) return study_report(dir);
     if (info->parsed()) {
       std::fputs(describe_run(h5_path).c_str(), stdout);
       return 0;

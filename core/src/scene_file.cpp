@@ -178,6 +178,30 @@ std::vector<double> Section::numbers(std::string_view key, Range range) const {
   return out;
 }
 
+std::vector<std::string> Section::strings(std::string_view key) const {
+  const toml::node* n = get(key);
+  if (!n) return {};
+  auto a = n->as_array();
+  if (!a) fail(key, "expected a list of strings, got " + type_name(*n));
+  std::vector<std::string> out;
+  for (const toml::node& e : *a) {
+    auto s = e.as_string();
+    if (!s) fail(key, "expected a list of strings, got an element that is " + type_name(e));
+    out.push_back(s->get());
+  }
+  return out;
+}
+
+std::vector<std::string> Section::keys() const {
+  std::vector<std::pair<std::size_t, std::string>> k;
+  if (table_)
+    for (const auto& [key, node] : *table_) k.emplace_back(node.source().begin.line, std::string(key.str()));
+  std::sort(k.begin(), k.end());
+  std::vector<std::string> out;
+  for (auto& [line, key] : k) out.push_back(key);
+  return out;
+}
+
 std::vector<long> Section::integers(std::string_view key, long min, long max) const {
   const toml::node* n = get(key);
   if (!n) return {};

@@ -56,6 +56,9 @@ class Section {
   std::optional<Eigen::Vector3d> vec3_opt(std::string_view key, Range range = {}) const;
   std::vector<double> numbers(std::string_view key, Range range = {}) const;  // absent: empty
   std::vector<long> integers(std::string_view key, long min, long max) const;  // absent: empty
+  std::vector<std::string> strings(std::string_view key) const;                // absent: empty
+  // The keys of this table, in file order.
+  std::vector<std::string> keys() const;
   // An int or a list of three ints (e.g. cells per axis).
   std::array<long, 3> int3(std::string_view key, std::array<long, 3> fallback, long min, long max) const;
 

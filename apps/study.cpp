@@ -1,0 +1,271 @@
+#include "study.hpp"
+
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <fcntl.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "isochor/error.hpp"
+#include "isochor/output_reader.hpp"
+#include "isochor/scene_file.hpp"
+
+extern char** environ;
+
+namespace isochor {
+
+namespace {
+std::string number_text(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+std::string label_of(const std::string& method, const std::vector<std::pair<std::string, double>>& sweep) {
+  std::string l = method;
+  for (const auto& [key, value] : sweep) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%g", value);
+    l += "__" + key.substr(key.rfind('.') + 1) + "_" + b;
+  }
+  return l;
+}
+}  // namespace
+
+Study load_study(const std::string& path, const std::vector<std::string>& overrides) {
+  SceneFile f = SceneFile::load(path, overrides);
+  const Section root = f.root();
+  Study s;
+  s.file = path;
+  const Section st = root.table("study");
+  const std::string scene = st.string("scene", "");
+  if (scene.empty()) st.fail("scene", "missing, expected the base scene file (relative to the study)");
+  s.scene = std::filesystem::path(path).parent_path() / scene;
+  if (!std::filesystem::exists(s.scene)) st.fail("scene", "no such file: " + s.scene.string());
+  const std::string stem = std::filesystem::path(path).stem().string();
+  s.output = st.string("output", "out/studies/" + stem);
+  s.jobs = static_cast<int>(st.integer("jobs", 2, 1, 64));
+  s.kind = st.string("kind", "work_precision", {"work_precision", "stability"});
+  const std::vector<std::string> base = st.strings("set");
+  const Section ref = root.table("reference");
+  StudyCase r{"reference", "reference", base, {}};
+  const std::vector<std::string> ref_set =
+      ref.exists() ? ref.strings("set")
+                   : std::vector<std::string>{"integrator.kind=ida", "integrator.rtol=1e-10", "integrator.atol=1e-12"};
+  r.overrides.insert(r.overrides.end(), ref_set.begin(), ref_set.end());
+  s.cases.push_back(r);
+  for (const Section& m : root.tables("method")) {
+    const std::string name = m.string("name", "");
+    if (name.empty()) m.fail("name", "missing, expected the method's name");
+    if (name == "reference" || name.find_first_of("/ ,") != std::string::npos)
+      m.fail("name", "expected a name without '/', ' ' or ',' other than \"reference\"");
+    std::vector<std::string> set = base;
+    for (const std::string& o : m.strings("set")) set.push_back(o);
+    // Sweeps: { key = [values] }, the cartesian product of all keys.
+    const Section sw = m.table("sweep");
+    std::vector<std::pair<std::string, std::vector<double>>> axes;
+    for (const std::string& key : sw.keys()) {
+      const auto values = sw.numbers(key);
+      if (values.empty()) sw.fail(key, "expected a non-empty list of values");
+      axes.emplace_back(key, values);
+    }
+    std::vector<std::vector<std::pair<std::string, double>>> points{{}};
+    for (const auto& [key, values] : axes) {
+      std::vector<std::vector<std::pair<std::string, double>>> next;
+      for (const auto& p : points)
+        for (double v : values) {
+          auto q = p;
+          q.emplace_back(key, v);
+          next.push_back(q);
+        }
+      points.swap(next);
+    }
+    for (const auto& p : points) {
+      StudyCase c{name, label_of(name, p), set, p};
+      for (const auto& [key, value] : p) c.overrides.push_back(key + "=" + number_text(value));
+      s.cases.push_back(c);
+    }
+  }
+  if (s.cases.size() < 2) root.fail("method", "missing, expected at least one [[method]]");
+  f.check_unknown_keys();
+  return s;
+}
+
+namespace {
+
+struct Outcome {
+  int status = 0;
+  double cpu = 0;
+};
+
+// Runs one case in its own process: one OpenMP and BLAS thread (cases run side by side), output
+// and messages into the study's cases/ directory. Returns the exit status and CPU seconds.
+Outcome run_case(const Study& s, const StudyCase& c, const std::string& exe) {
+  const auto dir = s.output / "cases";
+  std::vector<std::string> args{exe, "run", s.scene.string(), "-q", "-o", (dir / (c.label + ".h5")).string()};
+  for (const std::string& o : c.overrides) {
+    args.push_back("--set");
+    args.push_back(o);
+  }
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::vector<std::string> env_s;
+  for (char** e = environ; *e; ++e) {
+    const std::string v = *e;
+    if (v.rfind("OMP_NUM_THREADS=", 0) && v.rfind("OPENBLAS_NUM_THREADS=", 0)) env_s.push_back(v);
+  }
+  env_s.push_back("OMP_NUM_THREADS=1");
+  env_s.push_back("OPENBLAS_NUM_THREADS=1");
+  std::vector<char*> envp;
+  for (auto& e : env_s) envp.push_back(e.data());
+  envp.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  const std::string log = (dir / (c.label + ".log")).string();
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid;
+  Outcome out;
+  if (posix_spawn(&pid, exe.c_str(), &fa, nullptr, argv.data(), envp.data()) != 0) {
+    posix_spawn_file_actions_destroy(&fa);
+    out.status = 127;
+    return out;
+  }
+  posix_spawn_file_actions_destroy(&fa);
+  int status = 0;
+  rusage ru{};
+  wait4(pid, &status, 0, &ru);
+  out.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  out.cpu = ru.ru_utime.tv_sec + ru.ru_utime.tv_usec * 1e-6 + ru.ru_stime.tv_sec + ru.ru_stime.tv_usec * 1e-6;
+  std::ofstream(dir / (c.label + ".cpu")) << number_text(out.cpu) << "\n" << out.status << "\n";
+  return out;
+}
+
+std::string last_line(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
+}
+
+std::string csv_field(std::string s) {
+  for (char& ch : s)
+    if (ch == '"') ch = '\'';
+  return "\"" + s + "\"";
+}
+
+}  // namespace
+
+int run_study(const Study& s, const std::string& exe, bool resume, bool progress) {
+  std::filesystem::create_directories(s.output / "cases");
+  std::atomic<std::size_t> next{0};
+  std::atomic<int> done{0};
+  std::mutex print;
+  auto worker = [&]() {
+    for (std::size_t i = next++; i < s.cases.size(); i = next++) {
+      const StudyCase& c = s.cases[i];
+      const auto cpu = s.output / "cases" / (c.label + ".cpu");
+      Outcome o;
+      if (resume && std::filesystem::exists(cpu)) {
+        std::ifstream in(cpu);
+        in >> o.cpu >> o.status;
+      } else {
+        o = run_case(s, c, exe);
+      }
+      const int d = ++done;
+      if (progress) {
+        std::lock_guard<std::mutex> lock(print);
+        std::fprintf(stderr, "[%d/%zu] %-40s %s (%.1f s CPU)\n", d, s.cases.size(), c.label.c_str(),
+                     o.status == 0 ? "ok" : "FAILED", o.cpu);
+      }
+    }
+  };
+  // The reference first, alone: every other case is measured against it.
+  next = 1;
+  {
+    const StudyCase& r = s.cases[0];
+    const auto cpu = s.output / "cases" / "reference.cpu";
+    if (!(resume && std::filesystem::exists(cpu))) run_case(s, r, exe);
+    ++done;
+    if (progress) std::fprintf(stderr, "[1/%zu] reference done\n", s.cases.size());
+  }
+  std::vector<std::thread> pool;
+  for (int j = 0; j < s.jobs; ++j) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  write_study_results(s);
+  int failed = 0;
+  for (const StudyCase& c : s.cases) {
+    std::ifstream in(s.output / "cases" / (c.label + ".cpu"));
+    double cpu;
+    int st = 1;
+    in >> cpu >> st;
+    failed += st != 0;
+  }
+  return failed;
+}
+
+void write_study_results(const Study& s) {
+  const auto dir = s.output / "cases";
+  const auto ref_path = dir / "reference.h5";
+  std::unique_ptr<RunFile> ref;
+  std::vector<Points> ref_x;
+  double ref_den = 0;
+  try {
+    ref = std::make_unique<RunFile>(ref_path.string());
+    const Points X = ref->rest_positions();
+    for (int k = 0; k < ref->num_frames(); ++k) {
+      ref_x.push_back(ref->positions(k));
+      ref_den += (ref_x.back() - X).squaredNorm();
+    }
+  } catch (const Error&) {
+    ref.reset();
+  }
+  std::ofstream csv(s.output / "results.csv");
+  csv << "method,label,sweep,status,reason,frames,frames_expected,cpu_seconds,wall_seconds,steps,error_l2,"
+         "volume_error\n";
+  for (const StudyCase& c : s.cases) {
+    double cpu = NAN;
+    int status = -1;
+    {
+      std::ifstream in(dir / (c.label + ".cpu"));
+      in >> cpu >> status;
+    }
+    std::string sweep;
+    for (const auto& [key, value] : c.sweep) sweep += (sweep.empty() ? "" : ";") + key + "=" + number_text(value);
+    std::string reason = status == 0 ? "" : last_line(dir / (c.label + ".log"));
+    int frames = 0;
+    double wall = NAN, steps = NAN, err = NAN, vol = NAN;
+    try {
+      RunFile f((dir / (c.label + ".h5")).string());
+      frames = f.num_frames();
+      const auto totals = f.stat_totals();
+      if (totals.count("wall_seconds")) wall = totals.at("wall_seconds");
+      if (totals.count("steps")) steps = totals.at("steps");
+      const auto v = f.volumes();
+      vol = 0;
+      for (const auto& row : v)
+        for (std::size_t z = 0; z < row.size(); ++z) vol = std::max(vol, std::abs(row[z] / v[0][z] - 1));
+      if (ref && ref_den > 0 && frames > 0) {
+        double num = 0;
+        const int n = std::min(frames, static_cast<int>(ref_x.size()));
+        for (int k = 0; k < n; ++k) num += (f.positions(k) - ref_x[k]).squaredNorm();
+        err = std::sqrt(num / ref_den);
+      }
+    } catch (const Error& e) {
+      if (reason.empty()) reason = e.what();
+    }
+    csv << c.method << "," << c.label << "," << csv_field(sweep) << "," << (status == 0 ? "ok" : "failed") << ","
+        << csv_field(reason) << "," << frames << "," << (ref ? ref->num_frames() : 0) << "," << number_text(cpu) << ","
+        << number_text(wall) << "," << number_text(steps) << "," << number_text(err) << "," << number_text(vol) << "\n";
+  }
+}
+
+}  // namespace isochor

@@ -1,0 +1,106 @@
+// `isochor study` end to end on studies/quick.toml: every case runs, is measured against the
+// reference, and the table, charts and report are written.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "study.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+
+namespace {
+// results.csv as rows of named fields (quoted fields may hold commas).
+std::vector<std::map<std::string, std::string>> read_csv(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::vector<std::string> header;
+  std::vector<std::map<std::string, std::string>> rows;
+  while (std::getline(in, line)) {
+    std::vector<std::string> fields;
+    std::string cur;
+    bool quoted = false;
+    for (char c : line) {
+      if (c == '"') quoted = !quoted;
+      else if (c == ',' && !quoted) {
+        fields.push_back(cur);
+        cur.clear();
+      } else cur += c;
+    }
+    fields.push_back(cur);
+    if (header.empty()) {
+      header = fields;
+      continue;
+    }
+    std::map<std::string, std::string> r;
+    for (std::size_t i = 0; i < header.size() && i < fields.size(); ++i) r[header[i]] = fields[i];
+    rows.push_back(r);
+  }
+  return rows;
+}
+}  // namespace
+
+TEST(Study, CasesAreTheCartesianProductOfTheSweeps) {
+  const auto dir = test::temp_dir();
+  const std::string path = test::write_file(dir / "s.toml", R"(
+[study]
+scene = ")" + std::string(ISOCHOR_SOURCE_DIR) + R"(/demos/stretch.toml"
+set = ["frames.duration=0.1"]
+[[method]]
+name = "xpbd"
+sweep = { "integrator.substeps" = [1, 2, 3], "material.nu" = [0.4, 0.5] }
+[[method]]
+name = "be"
+set = ["integrator.kind=backward_euler"]
+)");
+  const Study s = load_study(path);
+  ASSERT_EQ(s.cases.size(), 1u + 6u + 1u);
+  EXPECT_EQ(s.cases[0].method, "reference");
+  EXPECT_EQ(s.cases[1].label, "xpbd__substeps_1__nu_0.4");
+  EXPECT_EQ(s.cases[6].label, "xpbd__substeps_3__nu_0.5");
+  EXPECT_EQ(s.cases[7].overrides.back(), "integrator.kind=backward_euler");
+  EXPECT_EQ(s.cases[1].overrides.front(), "frames.duration=0.1");
+  // An unknown key in a method is an error naming it.
+  const std::string bad = test::write_file(dir / "bad.toml", R"(
+[study]
+scene = ")" + std::string(ISOCHOR_SOURCE_DIR) + R"(/demos/stretch.toml"
+[[method]]
+name = "x"
+sweeps = { "integrator.dt" = [1] }
+)");
+  EXPECT_NE(test::error_of([&] { load_study(bad); }).find("method[0].sweeps: unknown key"), std::string::npos);
+}
+
+TEST(Study, QuickStudyRunsEveryCaseAndCharts) {
+  const auto dir = test::temp_dir() / "quick";
+  const std::string cmd = std::string(ISOCHOR_BINARY) + " study " + ISOCHOR_SOURCE_DIR + "/studies/quick.toml --set study.output='\"" +
+                          dir.string() + "\"' > " + (dir.parent_path() / "log.txt").string() + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const auto rows = read_csv((dir / "results.csv").string());
+  ASSERT_EQ(rows.size(), 13u);
+  std::map<std::string, std::vector<double>> err, vol;
+  for (const auto& r : rows) {
+    EXPECT_EQ(r.at("status"), "ok") << r.at("label") << ": " << r.at("reason");
+    EXPECT_EQ(r.at("frames"), r.at("frames_expected"));
+    err[r.at("method")].push_back(std::stod(r.at("error_l2")));
+    vol[r.at("method")].push_back(std::stod(r.at("volume_error")));
+  }
+  EXPECT_EQ(err["reference"][0], 0.0);
+  // IDA's error falls with its tolerance (1e-3 ... 1e-6) and CNH keeps the volume on every method
+  // that enforces it; XPBD's volume error falls with its substeps.
+  for (std::size_t i = 1; i < err["cnh_ida"].size(); ++i) EXPECT_LT(err["cnh_ida"][i], err["cnh_ida"][i - 1]);
+  EXPECT_LT(err["cnh_ida"].back(), 1e-4);
+  for (double v : vol["cnh_ida"]) EXPECT_LT(v, 1e-8);
+  for (double v : vol["cnh_backward_euler"]) EXPECT_LT(v, 1e-12);
+  for (std::size_t i = 1; i < vol["xpbd"].size(); ++i) EXPECT_LT(vol["xpbd"][i], vol["xpbd"][i - 1]);
+  for (const char* f : {"results.h5", "work_precision.png", "work_precision.svg", "volume_error.png", "energy.png", "report.md"})
+    EXPECT_GT(std::filesystem::exists(dir / f) ? std::filesystem::file_size(dir / f) : 0u, 1000u) << f;
+  std::ifstream report(dir / "report.md");
+  std::stringstream text;
+  text << report.rdbuf();
+  EXPECT_NE(text.str().find("![work_precision](work_precision.png)"), std::string::npos);
+}

@@ -1,0 +1,174 @@
+#!/usr/bin/python3
+"""Charts, results.h5 and report.md of a study directory written by `isochor study`.
+
+    /usr/bin/python3 tools/study_report.py out/studies/NAME
+
+Reads results.csv and the cases' HDF5 files (cases/<label>.h5); writes
+  results.h5            the table, one dataset per column
+  work_precision.png/svg  error against CPU seconds, log-log, one curve per method
+  volume_error.png/svg    worst relative zone-volume error against time, every case
+  energy.png/svg          total energy against time, every case
+  stability.png/svg       for methods swept over two keys: each cell stable or failed (and why)
+  report.md             the charts and the table
+"""
+import csv
+import math
+import os
+import sys
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def number(s):
+    try:
+        return float(s)
+    except ValueError:
+        return math.nan
+
+
+def load(d):
+    with open(os.path.join(d, "results.csv")) as f:
+        rows = list(csv.DictReader(f))
+    for r in rows:
+        for k in ("frames", "frames_expected", "cpu_seconds", "wall_seconds", "steps", "error_l2", "volume_error"):
+            r[k] = number(r[k])
+        r["sweep_pairs"] = [p.split("=", 1) for p in r["sweep"].split(";") if p]
+    return rows
+
+
+def save(fig, d, name):
+    for ext in ("png", "svg"):
+        fig.savefig(os.path.join(d, f"{name}.{ext}"), dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return f"{name}.png"
+
+
+def cost(r):
+    """The integrator's own time (one thread), else the whole process's CPU time."""
+    return r["wall_seconds"] if r["wall_seconds"] > 0 else r["cpu_seconds"]
+
+
+def work_precision(rows, d):
+    fig, ax = plt.subplots(figsize=(7, 5))
+    methods = sorted({r["method"] for r in rows if r["method"] != "reference"})
+    for m in methods:
+        pts = sorted((cost(r), r["error_l2"]) for r in rows
+                     if r["method"] == m and r["status"] == "ok" and r["error_l2"] > 0)
+        if pts:
+            ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", label=m)
+        bad = [r for r in rows if r["method"] == m and r["status"] != "ok"]
+        if bad:
+            ax.plot([], [], "x", color="gray", label=f"{m}: {len(bad)} failed")
+    ax.set_xlabel("integration seconds (one thread; meshing and start-up excluded)")
+    ax.set_ylabel("relative L2 error of positions, all frames")
+    ax.set_title("work-precision (lower left is better)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return save(fig, d, "work_precision")
+
+
+def series(d, rows):
+    for r in rows:
+        p = os.path.join(d, "cases", r["label"] + ".h5")
+        if not os.path.exists(p):
+            continue
+        try:
+            with h5py.File(p, "r") as f:
+                t = f["/frames/time"][()]
+                V = f["/frames/volume"][()]
+                E = f["/frames/energy"][()]
+        except (OSError, KeyError):
+            continue
+        yield r, t, np.max(np.abs(V / V[0] - 1), axis=1), E.sum(axis=1)
+
+
+def over_time(rows, d):
+    figv, axv = plt.subplots(figsize=(7, 4.5))
+    fige, axe = plt.subplots(figsize=(7, 4.5))
+    for r, t, dv, e in series(d, rows):
+        style = "k-" if r["method"] == "reference" else "-"
+        axv.semilogy(t, np.maximum(dv, 1e-16), style, lw=0.8, label=r["label"])
+        axe.plot(t, e, style, lw=0.8, label=r["label"])
+    axv.set_xlabel("time (s)")
+    axv.set_ylabel("worst |V - V0| / V0 over zones")
+    axv.set_title("volume error")
+    axe.set_xlabel("time (s)")
+    axe.set_ylabel("kinetic + elastic + external energy (J)")
+    axe.set_title("energy")
+    for ax in (axv, axe):
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=6, ncol=2)
+    return save(figv, d, "volume_error"), save(fige, d, "energy")
+
+
+def stability(rows, d):
+    methods = [m for m in sorted({r["method"] for r in rows}) if m != "reference"
+               and all(len(r["sweep_pairs"]) == 2 for r in rows if r["method"] == m)]
+    if not methods:
+        return None
+    fig, axes = plt.subplots(1, len(methods), figsize=(4.2 * len(methods), 3.6), squeeze=False)
+    for ax, m in zip(axes[0], methods):
+        mine = [r for r in rows if r["method"] == m]
+        kx, ky = mine[0]["sweep_pairs"][0][0], mine[0]["sweep_pairs"][1][0]
+        xs = sorted({number(r["sweep_pairs"][0][1]) for r in mine})
+        ys = sorted({number(r["sweep_pairs"][1][1]) for r in mine})
+        for r in mine:
+            i, j = xs.index(number(r["sweep_pairs"][0][1])), ys.index(number(r["sweep_pairs"][1][1]))
+            ok = r["status"] == "ok"
+            ax.add_patch(plt.Rectangle((i - 0.5, j - 0.5), 1, 1, color="#7fc97f" if ok else "#f0027f", alpha=0.8))
+            text = "ok" if ok else (r["reason"].split(": ")[-1][:28] or "failed")
+            ax.text(i, j, text, ha="center", va="center", fontsize=6, wrap=True)
+        ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs])
+        ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys])
+        ax.set_xlim(-0.5, len(xs) - 0.5)
+        ax.set_ylim(-0.5, len(ys) - 0.5)
+        ax.set_xlabel(kx)
+        ax.set_ylabel(ky)
+        ax.set_title(m)
+    return save(fig, d, "stability")
+
+
+def write_h5(rows, d):
+    with h5py.File(os.path.join(d, "results.h5"), "w") as f:
+        for k in ("method", "label", "sweep", "status", "reason"):
+            f[k] = np.array([r[k] for r in rows], dtype=h5py.string_dtype())
+        for k in ("frames", "frames_expected", "cpu_seconds", "wall_seconds", "steps", "error_l2", "volume_error"):
+            f[k] = np.array([r[k] for r in rows], dtype=float)
+
+
+def report(rows, d, images):
+    lines = [f"# Study `{os.path.basename(os.path.normpath(d))}`", "",
+             "Every case ran in its own process on one thread; errors are measured against the reference "
+             "case (relative L2 of all node positions over all frames; worst relative volume error over "
+             "frames and zones).", ""]
+    for img in images:
+        if img:
+            lines += [f"![{img[:-4]}]({img})", ""]
+    lines += ["| method | case | status | frames | CPU s | error (L2) | volume error | reason |",
+              "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['method']} | {r['label']} | {r['status']} | {r['frames']:.0f}/{r['frames_expected']:.0f} | "
+                     f"{r['cpu_seconds']:.3g} | {r['error_l2']:.3g} | {r['volume_error']:.3g} | "
+                     f"{r['reason'].replace('|', '/')} |")
+    with open(os.path.join(d, "report.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    d = sys.argv[1]
+    rows = load(d)
+    write_h5(rows, d)
+    images = [work_precision(rows, d), *over_time(rows, d), stability(rows, d)]
+    report(rows, d, images)
+    print(f"wrote {d}/results.h5, charts and report.md")
+
+
+if __name__ == "__main__":
+    main()
