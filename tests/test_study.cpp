@@ -104,3 +104,14 @@ TEST(Study, QuickStudyRunsEveryCaseAndCharts) {
   text << report.rdbuf();
   EXPECT_NE(text.str().find("![work_precision](work_precision.png)"), std::string::npos);
 }
+
+TEST(Study, EveryStudyFileLoads) {
+  int n = 0;
+  for (const auto& e : std::filesystem::directory_iterator(std::string(ISOCHOR_SOURCE_DIR) + "/studies")) {
+    if (e.path().extension() != ".toml") continue;
+    const Study s = load_study(e.path().string());
+    EXPECT_GE(s.cases.size(), 3u) << e.path();
+    ++n;
+  }
+  EXPECT_GE(n, 4);
+}

@@ -9,6 +9,7 @@ Reads results.csv and the cases' HDF5 files (cases/<label>.h5); writes
   volume_error.png/svg    worst relative zone-volume error against time, every case
   energy.png/svg          total energy against time, every case
   stability.png/svg       for methods swept over two keys: each cell stable or failed (and why)
+  resolution.png/svg      for methods swept over mesh.target_tets: centre height, height/width
   report.md             the charts and the table
 """
 import csv
@@ -133,6 +134,33 @@ def stability(rows, d):
     return save(fig, d, "stability")
 
 
+def resolution(rows, d):
+    """For methods swept over mesh.target_tets: the ball's centre height and height/width ratio."""
+    cases = [r for r in rows if any(k == "mesh.target_tets" for k, _ in r["sweep_pairs"])]
+    if not cases:
+        return None
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
+    for r in cases:
+        p = os.path.join(d, "cases", r["label"] + ".h5")
+        if not os.path.exists(p):
+            continue
+        with h5py.File(p, "r") as f:
+            t = f["/frames/time"][()]
+            x = f["/frames/positions"]
+            c = np.array([x[k][:, 2].mean() for k in range(len(t))])
+            hw = np.array([np.ptp(x[k][:, 2]) / np.ptp(x[k][:, 0]) for k in range(len(t))])
+        tets = dict(r["sweep_pairs"])["mesh.target_tets"]
+        a1.plot(t, c, label=f"{r['method']} {float(tets):.0f} tets")
+        a2.plot(t, hw, label=f"{r['method']} {float(tets):.0f} tets")
+    a1.set_ylabel("centre height (m)")
+    a2.set_ylabel("height / width")
+    for a in (a1, a2):
+        a.set_xlabel("time (s)")
+        a.grid(True, alpha=0.3)
+        a.legend(fontsize=7)
+    return save(fig, d, "resolution")
+
+
 def write_h5(rows, d):
     with h5py.File(os.path.join(d, "results.h5"), "w") as f:
         for k in ("method", "label", "sweep", "status", "reason"):
@@ -165,7 +193,7 @@ def main():
     d = sys.argv[1]
     rows = load(d)
     write_h5(rows, d)
-    images = [work_precision(rows, d), *over_time(rows, d), stability(rows, d)]
+    images = [work_precision(rows, d), *over_time(rows, d), stability(rows, d), resolution(rows, d)]
     report(rows, d, images)
     print(f"wrote {d}/results.h5, charts and report.md")
 
