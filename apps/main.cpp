@@ -98,6 +98,12 @@ int main(int argc, char** argv) {
   auto* report = app.add_subcommand("report", "Write a study's charts, results.h5 and report.md from its results");
   report->add_option("dir", dir, "The study's output directory")->required();
 
+  auto* render = app.add_subcommand("render", "Draw frames of a run to PNG (shaded surface coloured by displacement, pressure or zone; --mp4 with ffmpeg)");
+  render->add_option("file", h5_path, "Output file (.h5)")->required();
+  render->footer("Options after the file go to tools/render.py: --frames 0,10,-1 | --every N, "
+                 "--color displacement|pressure|zone, --out DIR, --mp4, --elev, --azim");
+  render->prefix_command();
+
   auto* obj = app.add_subcommand("export-obj", "Write the surface of every frame as an OBJ sequence");
   obj->add_option("file", h5_path, "Output file (.h5)")->required();
   obj->add_option("--dir", dir, "Directory for the OBJ files (default: beside the file, <name>_obj)");
@@ -128,6 +134,12 @@ int main(int argc, char** argv) {
       return rc;
     }
     if (report->parsed()) return study_report(dir);
+    if (render->parsed()) {
+      if (!std::filesystem::exists(h5_path)) throw Error(h5_path + ": no such file");
+      std::string cmd = "/usr/bin/python3 '" ISOCHOR_TOOLS_DIR "/render.py' '" + h5_path + "'";
+      for (const std::string& a : render->remaining()) cmd += " '" + a + "'";
+      return std::system(cmd.c_str()) == 0 ? 0 : 1;
+    }
     if (info->parsed()) {
       std::fputs(describe_run(h5_path).c_str(), stdout);
       return 0;

@@ -115,3 +115,17 @@ TEST(Study, EveryStudyFileLoads) {
   }
   EXPECT_GE(n, 4);
 }
+
+TEST(Render, DrawsAFrameAndNamesMissingPressure) {
+  const auto dir = test::temp_dir();
+  const std::string bin = ISOCHOR_BINARY, h5 = (dir / "tt.h5").string(), png = (dir / "last.png").string();
+  ASSERT_EQ(std::system((bin + " run -q " + ISOCHOR_SOURCE_DIR + "/demos/two_tets.toml -o " + h5 + " > /dev/null 2>&1").c_str()), 0);
+  ASSERT_EQ(std::system((bin + " render " + h5 + " --frames -1 --out " + png + " > /dev/null 2>&1").c_str()), 0);
+  EXPECT_GT(std::filesystem::file_size(png), 5000u);
+  const std::string log = (dir / "err.txt").string();
+  EXPECT_NE(std::system((bin + " render " + h5 + " --color pressure --out " + (dir / "p").string() + " > " + log + " 2>&1").c_str()), 0);
+  std::ifstream in(log);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_NE(text.str().find("no /frames/pressure (run the scene with output.pressure = true)"), std::string::npos) << text.str();
+}
