@@ -110,9 +110,14 @@ void MassSpringSystem::place(double t, const VectorXd& q) {
   }
 }
 
-void MassSpringSystem::set_state(double t, const VectorXd& q, const VectorXd& v) {
+void MassSpringSystem::place(double t, const VectorXd& q, const VectorXd& v) {
   for (int f = 0; f < dofs_.num_free(); ++f) xdot_.segment<3>(3 * dofs_.free_nodes[f]) = v.segment<3>(3 * f);
   place(t, q);
+}
+
+void MassSpringSystem::set_state(double t, const VectorXd& q, const VectorXd& v) {
+  place(t, q, v);
+  // Interior nodes are only carried for output; forces and the constraint never read them.
   const Points& X = scene_.mesh.rest_positions();
   for (std::size_t n = 0; n < carry_.size(); ++n) {
     if (carry_[n].empty()) continue;
@@ -127,7 +132,7 @@ void MassSpringSystem::set_state(double t, const VectorXd& q, const VectorXd& v)
 }
 
 void MassSpringSystem::force(double t, const VectorXd& q, const VectorXd& v, VectorXd& f) {
-  set_state(t, q, v);
+  place(t, q, v);
   Eigen::VectorXd grad = Eigen::VectorXd::Zero(3 * x_.cols());
   external_->add_gradient(x_, grad);
   for (const Spring& s : springs_) {
@@ -143,7 +148,7 @@ void MassSpringSystem::force(double t, const VectorXd& q, const VectorXd& v, Vec
 
 void MassSpringSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq,
                                            double* neg_dfdv) {
-  set_state(t, q, v);
+  place(t, q, v);
   if (neg_dfdq) external_->add_hessian(x_, 1.0, neg_dfdq);
   for (std::size_t i = 0; i < springs_.size(); ++i) {
     const Spring& s = springs_[i];
@@ -181,7 +186,7 @@ void MassSpringSystem::add_constraint_hessian(double t, const VectorXd& q, const
 
 void MassSpringSystem::constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
                                                     std::vector<std::vector<double>>& rows) {
-  set_state(t, q, v);
+  place(t, q, v);
   if (constrained_) volume_.hessian_times(x_, xdot_, rows);
 }
 

@@ -46,7 +46,8 @@ class MassSpringSystem : public ConstrainedSystem {
   Eigen::VectorXd weights(const Eigen::Vector3d& center, double radius) const;
 
  private:
-  void place(double t, const VectorXd& q);
+  void place(double t, const VectorXd& q);                       // free and driven nodes
+  void place(double t, const VectorXd& q, const VectorXd& v);  // and their velocities
   const Scene& scene_;
   DofMap dofs_;  // free = surface nodes not driven
   std::vector<Spring> springs_;
