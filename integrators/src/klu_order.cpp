@@ -78,12 +78,15 @@ SuiteSparse_long user_order(SuiteSparse_long n, SuiteSparse_long*, SuiteSparse_l
 }
 }  // namespace
 
+void set_klu_user_order(klu_l_common& c, const std::vector<Index>* order) {
+  c.ordering = 3;
+  c.btf = 0;
+  c.user_order = user_order;
+  c.user_data = const_cast<std::vector<Index>*>(order);
+}
+
 void use_klu_order(SUNLinearSolver klu, const std::vector<Index>* order) {
-  klu_l_common* c = SUNLinSol_KLUGetCommon(klu);
-  c->ordering = 3;
-  c->btf = 0;
-  c->user_order = user_order;
-  c->user_data = const_cast<std::vector<Index>*>(order);
+  set_klu_user_order(*SUNLinSol_KLUGetCommon(klu), order);
 }
 
 }  // namespace isochor

@@ -2,6 +2,7 @@
 // come in groups (a node's x, y, z), the matrix has `copies` blocks of n rows that share the
 // group graph (IDA's GGL form: q and v; statics: q only), then `tail` rows (multipliers) last.
 #pragma once
+#include <klu.h>
 #include <sunlinsol/sunlinsol_klu.h>
 
 #include <vector>
@@ -19,5 +20,6 @@ std::vector<Index> metis_order(const SparsePattern& K, int per_group, Index n, i
 
 // Makes KLU use `order` (kept alive by the caller) and no block triangular form.
 void use_klu_order(SUNLinearSolver klu, const std::vector<Index>* order);
+void set_klu_user_order(klu_l_common& common, const std::vector<Index>* order);
 
 }  // namespace isochor

@@ -1,4 +1,5 @@
 #include "isochor/statics.hpp"
+#include "kkt.hpp"
 #include "klu_order.hpp"
 #include "timing.hpp"
 
@@ -18,9 +19,7 @@ struct StaticSolver::Impl {
   ConstrainedSystem& sys;
   StaticOptions opt;
   Index n, m;
-  SparsePattern p;                               // (n + m) KKT pattern
-  std::vector<Index> kk;                         // slot of each stiffness-pattern entry
-  std::vector<std::vector<Index>> gcol, grow;    // slots of G^T (column n + j) and G (row n + j)
+  KktLayout kkt;                                 // (n + m) KKT pattern and slots
   std::vector<double> K, D;
   std::vector<std::vector<double>> G;
   VectorXd q, v0, lambda, f, g;
@@ -28,39 +27,11 @@ struct StaticSolver::Impl {
   IdaStats stats;
   std::vector<Index> order;  // METIS order for KLU
 
-  Impl(ConstrainedSystem& s, StaticOptions o) : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()) {
+  Impl(ConstrainedSystem& s, StaticOptions o)
+      : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()), kkt(s.pattern(), s.constraint_rows()) {
     const SparsePattern& S = sys.pattern();
-    const auto& rows = sys.constraint_rows();
-    std::vector<std::pair<Index, Index>> e;  // (col, row)
-    for (Index c = 0; c < n; ++c)
-      for (Index k = S.col_ptr[c]; k < S.col_ptr[c + 1]; ++k) e.emplace_back(c, S.row_ind[k]);
-    for (Index j = 0; j < m; ++j)
-      for (Index d : rows[j]) {
-        e.emplace_back(n + j, d);
-        e.emplace_back(d, n + j);
-      }
-    std::sort(e.begin(), e.end());
-    p.n = n + m;
-    p.col_ptr.assign(p.n + 1, 0);
-    p.row_ind.resize(e.size());
-    for (std::size_t k = 0; k < e.size(); ++k) {
-      p.col_ptr[e[k].first + 1]++;
-      p.row_ind[k] = e[k].second;
-    }
-    for (Index c = 0; c < p.n; ++c) p.col_ptr[c + 1] += p.col_ptr[c];
-    kk.resize(S.nnz());
-    for (Index c = 0; c < n; ++c)
-      for (Index k = S.col_ptr[c]; k < S.col_ptr[c + 1]; ++k) kk[k] = p.find(S.row_ind[k], c);
-    gcol.resize(m);
-    grow.resize(m);
     G.resize(m);
-    for (Index j = 0; j < m; ++j) {
-      for (Index d : rows[j]) {
-        gcol[j].push_back(p.find(d, n + j));
-        grow[j].push_back(p.find(n + j, d));
-      }
-      G[j].resize(rows[j].size());
-    }
+    for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
     K.resize(S.nnz());
     D.resize(S.nnz());
     v0 = VectorXd::Zero(n);
@@ -94,22 +65,15 @@ struct StaticSolver::Impl {
     const double* x = N_VGetArrayPointer(u);
     q = Eigen::Map<const VectorXd>(x, n);
     lambda = Eigen::Map<const VectorXd>(x + n, m);
-    std::memcpy(SM_INDEXPTRS_S(J), p.col_ptr.data(), sizeof(sunindextype) * (p.n + 1));
-    std::memcpy(SM_INDEXVALS_S(J), p.row_ind.data(), sizeof(sunindextype) * p.nnz());
-    double* val = SM_DATA_S(J);
-    std::fill(val, val + p.nnz(), 0.0);
+    std::memcpy(SM_INDEXPTRS_S(J), kkt.p.col_ptr.data(), sizeof(sunindextype) * (kkt.p.n + 1));
+    std::memcpy(SM_INDEXVALS_S(J), kkt.p.row_ind.data(), sizeof(sunindextype) * kkt.p.nnz());
     std::fill(K.begin(), K.end(), 0.0);
     sys.add_force_jacobians(t, q, v0, K.data(), nullptr);
-    if (m) sys.add_constraint_hessian(t, q, lambda, 1.0, K.data());
-    for (std::size_t k = 0; k < K.size(); ++k) val[kk[k]] += K[k];
     if (m) {
+      sys.add_constraint_hessian(t, q, lambda, 1.0, K.data());
       sys.constraint_jacobian(t, q, G, nullptr);
-      for (Index j = 0; j < m; ++j)
-        for (std::size_t k = 0; k < G[j].size(); ++k) {
-          val[gcol[j][k]] += G[j][k];
-          val[grow[j][k]] += G[j][k];
-        }
     }
+    kkt.fill(K.data(), G, SM_DATA_S(J));
     stats.jacobian_evals++;
     stats.assembly_seconds += seconds_since(t0);
     return 0;
@@ -154,7 +118,7 @@ IdaStats StaticSolver::run(const std::vector<double>& times, const FrameCallback
   KINSetNumMaxIters(mem, s.opt.max_iterations);
   KINSetMaxNewtonStep(mem, 1e10);
   if (std::getenv("ISOCHOR_KINSOL_PRINT")) KINSetPrintLevel(mem, 2);
-  SUNMatrix J = SUNSparseMatrix(N, N, s.p.nnz(), CSC_MAT, ctx);
+  SUNMatrix J = SUNSparseMatrix(N, N, s.kkt.p.nnz(), CSC_MAT, ctx);
   SUNLinearSolver LS = SUNLinSol_KLU(u, J, ctx);
   s.order = metis_order(s.sys.pattern(), s.sys.dofs_per_group(), s.n, 1, s.sys.constraint_rows(), 1);
   use_klu_order(LS, &s.order);
