@@ -7,6 +7,7 @@
 
 #include "isochor/fixed_step.hpp"
 #include "isochor/sparse_factor.hpp"
+#include "kkt.hpp"
 
 namespace isochor {
 
@@ -19,9 +20,19 @@ struct BackwardEuler::Impl {
   std::vector<Index> diag;
   std::vector<std::vector<double>> G;
   IdaStats stats;
+  // Many constraints: KLU on the whole KKT matrix instead of m solves for a dense Schur complement.
+  bool use_kkt;
+  std::unique_ptr<KktLayout> layout;
+  std::unique_ptr<KktFactor> kkt;
+  std::vector<double> kv;
 
   Impl(ConstrainedSystem& s, BackwardEulerOptions o)
-      : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()), S(s.pattern()) {
+      : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()), S(s.pattern()), use_kkt(m > o.schur_max_constraints) {
+    if (use_kkt) {
+      layout = std::make_unique<KktLayout>(s.pattern(), s.constraint_rows());
+      kkt = std::make_unique<KktFactor>(*layout, s.pattern(), s.dofs_per_group(), s.constraint_rows());
+      kv.resize(layout->p.nnz());
+    }
     const SparsePattern& p = sys.pattern();
     K.resize(p.nnz());
     D.resize(p.nnz());
@@ -66,7 +77,8 @@ struct BackwardEuler::Impl {
     if (have_previous && !opt.semi_implicit) q = qn + h * (2 * vn - v_previous);
     else q = qn + h * vn;
     VectorXd f(n), R1(n), R2(m), g(m), y(n), dq(n), rhs(n);
-    Eigen::MatrixXd Z(n, m), Gt(n, m);
+    Eigen::MatrixXd Z(n, use_kkt ? 0 : m), Gt(n, use_kkt ? 0 : m);
+    VectorXd kr(use_kkt ? n + m : 0);
     const double tol = opt.newton_tol * std::max(1.0, qn.cwiseAbs().maxCoeff());
     const int iterations = opt.semi_implicit ? 1 : opt.max_newton;
     double previous = 0;
@@ -81,10 +93,15 @@ struct BackwardEuler::Impl {
       if (m) {
         sys.constraint(t1, q, g);
         sys.constraint_jacobian(t1, q, G, nullptr);
-        Gt.setZero();
-        for (Index j = 0; j < m; ++j)
-          for (std::size_t k = 0; k < G[j].size(); ++k) Gt(sys.constraint_rows()[j][k], j) = G[j][k];
-        R1 += Gt * lambda;
+        if (use_kkt) {
+          for (Index j = 0; j < m; ++j)
+            for (std::size_t k = 0; k < G[j].size(); ++k) R1[sys.constraint_rows()[j][k]] += G[j][k] * lambda[j];
+        } else {
+          Gt.setZero();
+          for (Index j = 0; j < m; ++j)
+            for (std::size_t k = 0; k < G[j].size(); ++k) Gt(sys.constraint_rows()[j][k], j) = G[j][k];
+          R1 += Gt * lambda;
+        }
         R2 = g;
       }
       if (!R1.allFinite()) {
@@ -99,7 +116,13 @@ struct BackwardEuler::Impl {
       stats.assembly_seconds += seconds_since(ta);
       if (fresh) {
         const auto tf = Clock::now();
-        const bool ok = S.factor(Sv.data());
+        bool ok;
+        if (use_kkt) {
+          layout->fill(Sv.data(), G, kv.data());
+          ok = kkt->factor(kv.data());
+        } else {
+          ok = S.factor(Sv.data());
+        }
         stats.factor_seconds += seconds_since(tf);
         stats.jacobian_evals++;
         stats.fresh_factorisations++;
@@ -111,16 +134,22 @@ struct BackwardEuler::Impl {
         }
       }
       const auto ts = Clock::now();
-      rhs = -R1;
-      S.solve(rhs.data(), y.data());
-      if (m) {
-        for (Index j = 0; j < m; ++j) S.solve(Gt.col(j).data(), Z.col(j).data());
-        // (G Z) dl = R2 - G S^-1 R1 = R2 + G y;  dq = y - Z dl.
-        const VectorXd dl = (Gt.transpose() * Z).partialPivLu().solve(R2 + Gt.transpose() * y);
-        dq = y - Z * dl;
-        lambda += dl;
+      if (use_kkt) {
+        kr << -R1, -R2;
+        kkt->solve(kr.data());
+        dq = kr.head(n);
+        lambda += kr.tail(m);
       } else {
+        rhs = -R1;
+        S.solve(rhs.data(), y.data());
         dq = y;
+        if (m) {
+          for (Index j = 0; j < m; ++j) S.solve(Gt.col(j).data(), Z.col(j).data());
+          // (G Z) dl = R2 - G S^-1 R1 = R2 + G y;  dq = y - Z dl.
+          const VectorXd dl = (Gt.transpose() * Z).partialPivLu().solve(R2 + Gt.transpose() * y);
+          dq -= Z * dl;
+          lambda += dl;
+        }
       }
       stats.solve_seconds += seconds_since(ts);
       q += dq;

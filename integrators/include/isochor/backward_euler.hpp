@@ -18,6 +18,9 @@ struct BackwardEulerOptions {
   int max_newton = 30;
   double newton_tol = 1e-8;  // Newton stops when |dq|_inf <= newton_tol * max(1, |q_n|_inf) (m)
   long max_steps = 100000000;
+  // Up to this many constraints: CHOLMOD on the n x n step matrix and a dense Schur complement
+  // for the borders; more (e.g. 1-ring zones): KLU on the whole (n + m) KKT matrix.
+  int schur_max_constraints = 32;
 };
 
 class BackwardEuler {
