@@ -217,20 +217,23 @@ void write_study_results(const Study& s) {
   const auto ref_path = dir / "reference.h5";
   std::unique_ptr<RunFile> ref;
   std::vector<Points> ref_x;
-  double ref_den = 0;
+  std::vector<Eigen::Vector3d> ref_c;  // centroid of the nodes per frame
+  double ref_den = 0, ref_cden = 0;
   try {
     ref = std::make_unique<RunFile>(ref_path.string());
     const Points X = ref->rest_positions();
     for (int k = 0; k < ref->num_frames(); ++k) {
       ref_x.push_back(ref->positions(k));
       ref_den += (ref_x.back() - X).squaredNorm();
+      ref_c.push_back(ref_x.back().rowwise().mean());
+      ref_cden += (ref_c.back() - ref_c.front()).squaredNorm();
     }
   } catch (const Error&) {
     ref.reset();
   }
   std::ofstream csv(s.output / "results.csv");
   csv << "method,label,sweep,status,reason,frames,frames_expected,cpu_seconds,wall_seconds,steps,error_l2,"
-         "volume_error\n";
+         "volume_error,error_centroid\n";
   for (const StudyCase& c : s.cases) {
     double cpu = NAN;
     int status = -1;
@@ -242,7 +245,7 @@ void write_study_results(const Study& s) {
     for (const auto& [key, value] : c.sweep) sweep += (sweep.empty() ? "" : ";") + key + "=" + number_text(value);
     std::string reason = status == 0 ? "" : last_line(dir / (c.label + ".log"));
     int frames = 0;
-    double wall = NAN, steps = NAN, err = NAN, vol = NAN;
+    double wall = NAN, steps = NAN, err = NAN, vol = NAN, cerr = NAN;
     try {
       RunFile f((dir / (c.label + ".h5")).string());
       frames = f.num_frames();
@@ -256,15 +259,22 @@ void write_study_results(const Study& s) {
       if (ref && ref_den > 0 && frames > 0) {
         double num = 0;
         const int n = std::min(frames, static_cast<int>(ref_x.size()));
-        for (int k = 0; k < n; ++k) num += (f.positions(k) - ref_x[k]).squaredNorm();
+        double cnum = 0;
+        for (int k = 0; k < n; ++k) {
+          const Points x = f.positions(k);
+          num += (x - ref_x[k]).squaredNorm();
+          cnum += (Eigen::Vector3d(x.rowwise().mean()) - ref_c[k]).squaredNorm();
+        }
         err = std::sqrt(num / ref_den);
+        if (ref_cden > 0) cerr = std::sqrt(cnum / ref_cden);
       }
     } catch (const Error& e) {
       if (reason.empty()) reason = e.what();
     }
     csv << c.method << "," << c.label << "," << csv_field(sweep) << "," << (status == 0 ? "ok" : "failed") << ","
         << csv_field(reason) << "," << frames << "," << (ref ? ref->num_frames() : 0) << "," << number_text(cpu) << ","
-        << number_text(wall) << "," << number_text(steps) << "," << number_text(err) << "," << number_text(vol) << "\n";
+        << number_text(wall) << "," << number_text(steps) << "," << number_text(err) << "," << number_text(vol) << ","
+        << number_text(cerr) << "\n";
   }
 }
 

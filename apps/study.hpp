@@ -1,7 +1,8 @@
 // Studies: one base scene, methods (named sets of scene overrides), sweeps of keys over values
 // (their cartesian product per method), and a reference run. `isochor study` runs every case in
 // its own process (a failed case is recorded with its reason), measures each against the
-// reference (relative L2 of positions over all frames, worst zone-volume error) and writes
+// reference (relative L2 of positions over all frames, of the centroid's path, worst
+// zone-volume error) and writes
 // results.csv; tools/study_report.py turns that into results.h5, charts and report.md.
 #pragma once
 #include <filesystem>

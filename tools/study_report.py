@@ -36,8 +36,9 @@ def load(d):
     with open(os.path.join(d, "results.csv")) as f:
         rows = list(csv.DictReader(f))
     for r in rows:
-        for k in ("frames", "frames_expected", "cpu_seconds", "wall_seconds", "steps", "error_l2", "volume_error"):
-            r[k] = number(r[k])
+        for k in ("frames", "frames_expected", "cpu_seconds", "wall_seconds", "steps", "error_l2", "volume_error",
+                  "error_centroid"):
+            r[k] = number(r.get(k, "nan"))
         r["sweep_pairs"] = [p.split("=", 1) for p in r["sweep"].split(";") if p]
     return rows
 
@@ -55,21 +56,22 @@ def cost(r):
 
 
 def work_precision(rows, d):
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5))
     methods = sorted({r["method"] for r in rows if r["method"] != "reference"})
-    for m in methods:
-        pts = sorted((cost(r), r["error_l2"]) for r in rows
-                     if r["method"] == m and r["status"] == "ok" and r["error_l2"] > 0)
-        if pts:
-            ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", label=m)
-        bad = [r for r in rows if r["method"] == m and r["status"] != "ok"]
-        if bad:
-            ax.plot([], [], "x", color="gray", label=f"{m}: {len(bad)} failed")
-    ax.set_xlabel("integration seconds (one thread; meshing and start-up excluded)")
-    ax.set_ylabel("relative L2 error of positions, all frames")
-    ax.set_title("work-precision (lower left is better)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    for ax, key, what in ((axes[0], "error_l2", "relative L2 error of all positions, all frames"),
+                          (axes[1], "error_centroid", "relative L2 error of the centroid's path")):
+        for m in methods:
+            pts = sorted((cost(r), r[key]) for r in rows if r["method"] == m and r["status"] == "ok" and r[key] > 0)
+            if pts:
+                ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", label=m)
+            bad = [r for r in rows if r["method"] == m and r["status"] != "ok"]
+            if bad:
+                ax.plot([], [], "x", color="gray", label=f"{m}: {len(bad)} failed")
+        ax.set_xlabel("integration seconds (one thread; meshing and start-up excluded)")
+        ax.set_ylabel(what)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle("work-precision (lower left is better)")
     return save(fig, d, "work_precision")
 
 
@@ -165,7 +167,8 @@ def write_h5(rows, d):
     with h5py.File(os.path.join(d, "results.h5"), "w") as f:
         for k in ("method", "label", "sweep", "status", "reason"):
             f[k] = np.array([r[k] for r in rows], dtype=h5py.string_dtype())
-        for k in ("frames", "frames_expected", "cpu_seconds", "wall_seconds", "steps", "error_l2", "volume_error"):
+        for k in ("frames", "frames_expected", "cpu_seconds", "wall_seconds", "steps", "error_l2", "volume_error",
+                  "error_centroid"):
             f[k] = np.array([r[k] for r in rows], dtype=float)
 
 
@@ -177,11 +180,11 @@ def report(rows, d, images):
     for img in images:
         if img:
             lines += [f"![{img[:-4]}]({img})", ""]
-    lines += ["| method | case | status | frames | CPU s | error (L2) | volume error | reason |",
-              "|---|---|---|---|---|---|---|---|"]
+    lines += ["| method | case | status | frames | CPU s | error (L2) | centroid error | volume error | reason |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['method']} | {r['label']} | {r['status']} | {r['frames']:.0f}/{r['frames_expected']:.0f} | "
-                     f"{r['cpu_seconds']:.3g} | {r['error_l2']:.3g} | {r['volume_error']:.3g} | "
+                     f"{r['cpu_seconds']:.3g} | {r['error_l2']:.3g} | {r['error_centroid']:.3g} | {r['volume_error']:.3g} | "
                      f"{r['reason'].replace('|', '/')} |")
     with open(os.path.join(d, "report.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
