@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "isochor/error.hpp"
+#include "isochor/mesh_system.hpp"
 
 namespace isochor {
 
@@ -90,12 +91,7 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
 }
 
 void MassSpringSystem::initial_state(double t0, VectorXd& q, VectorXd& v) {
-  q.resize(num_dofs());
-  v.resize(num_dofs());
-  for (int f = 0; f < dofs_.num_free(); ++f) {
-    q.segment<3>(3 * f) = scene_.mesh.rest_positions().col(dofs_.free_nodes[f]);
-    v.segment<3>(3 * f) = scene_.initial_velocity;
-  }
+  scene_initial_state(scene_, dofs_, q, v);
   state_t_ = std::numeric_limits<double>::quiet_NaN();
   set_state(t0, q, v);
 }

@@ -60,13 +60,17 @@ void MeshSystem::set_state(double t, const VectorXd& q, const VectorXd& v) {
   set_positions(t, q);
 }
 
-void MeshSystem::initial_state(double t0, VectorXd& q, VectorXd& v) {
-  q.resize(num_dofs());
-  v.resize(num_dofs());
-  for (int f = 0; f < dofs_.num_free(); ++f) {
-    q.segment<3>(3 * f) = scene_.mesh.rest_positions().col(dofs_.free_nodes[f]);
-    v.segment<3>(3 * f) = scene_.initial_velocity;
+void scene_initial_state(const Scene& s, const DofMap& dofs, VectorXd& q, VectorXd& v) {
+  q.resize(3 * dofs.num_free());
+  v.resize(3 * dofs.num_free());
+  for (int f = 0; f < dofs.num_free(); ++f) {
+    q.segment<3>(3 * f) = s.mesh.rest_positions().col(dofs.free_nodes[f]);
+    v.segment<3>(3 * f) = s.initial_velocity;
   }
+}
+
+void MeshSystem::initial_state(double t0, VectorXd& q, VectorXd& v) {
+  scene_initial_state(scene_, dofs_, q, v);
   state_t_ = std::numeric_limits<double>::quiet_NaN();
   set_state(t0, q, v);
 }

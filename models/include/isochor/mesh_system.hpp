@@ -16,6 +16,8 @@ std::shared_ptr<const Material> make_material(const MaterialSpec& m);
 // The scene's free and driven nodes, and the tets of each zone (in scene order).
 DofMap scene_dofs(const Scene& s);
 std::vector<std::vector<int>> scene_zone_tets(const Scene& s);
+// The free nodes' rest positions and the scene's initial velocity, as (q, v) of the free dofs.
+void scene_initial_state(const Scene& s, const DofMap& dofs, VectorXd& q, VectorXd& v);
 
 class MeshSystem : public ConstrainedSystem {
  public:
