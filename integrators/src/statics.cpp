@@ -20,7 +20,7 @@ struct StaticSolver::Impl {
   StaticOptions opt;
   Index n, m;
   KktLayout kkt;                                 // (n + m) KKT pattern and slots
-  std::vector<double> K, D;
+  std::vector<double> K;
   std::vector<std::vector<double>> G;
   VectorXd q, v0, lambda, f, g;
   double t = 0;
@@ -33,7 +33,6 @@ struct StaticSolver::Impl {
     G.resize(m);
     for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
     K.resize(S.nnz());
-    D.resize(S.nnz());
     v0 = VectorXd::Zero(n);
     f.resize(n);
     g.resize(m);

@@ -64,9 +64,7 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
   node_mass_ *= scene.material.density * mesh.rest_volume() / area;
   dof_mass_.resize(num_dofs());
   for (int f = 0; f < dofs_.num_free(); ++f) dof_mass_.segment<3>(3 * f).setConstant(node_mass_[dofs_.free_nodes[f]]);
-  std::vector<GroundSpec> planes{scene.ground};
-  planes.insert(planes.end(), scene.planes.begin(), scene.planes.end());
-  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, planes, dofs_, pattern_);
+  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.contact_planes(), dofs_, pattern_);
   volume_ = VolumeConstraints::surface(mesh, dofs_, pattern_);
   rest_volume_ = volume_.rest_volumes()[0];
   if (constrained_) rows_.push_back(volume_.row_dofs(0));
@@ -99,9 +97,7 @@ void MassSpringSystem::initial_state(double t0, VectorXd& q, VectorXd& v) {
 void MassSpringSystem::place(double t, const VectorXd& q) {
   for (int f = 0; f < dofs_.num_free(); ++f) x_.col(dofs_.free_nodes[f]) = q.segment<3>(3 * f);
   if (t != state_t_) {
-    for (const Driver& d : scene_.boundary) d.apply(scene_.mesh.rest_positions(), t, x_, &xdot_);
-    external_->set_time(t);
-    if (scene_.gravity_ramp > 0) external_->set_gravity_scale(std::clamp(t / scene_.gravity_ramp, 0.0, 1.0));
+    scene_at_time(scene_, t, x_, xdot_, *external_);
     state_t_ = t;
   }
 }

@@ -32,9 +32,7 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
   elastic_ = std::make_unique<ElasticAssembly>(scene.mesh, material_, dofs_,
                                                EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
   node_mass_ = lumped_mass(scene.mesh, scene.material.density);
-  std::vector<GroundSpec> planes{scene.ground};
-  planes.insert(planes.end(), scene.planes.begin(), scene.planes.end());
-  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, planes, dofs_, elastic_->pattern());
+  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.contact_planes(), dofs_, elastic_->pattern());
   damping_ = scene.damping;
   const auto zt = scene_zone_tets(scene);
   constraints_ = VolumeConstraints::zones(scene.mesh, zt, dofs_, elastic_->pattern());
@@ -67,6 +65,12 @@ void scene_initial_state(const Scene& s, const DofMap& dofs, VectorXd& q, Vector
     q.segment<3>(3 * f) = s.mesh.rest_positions().col(dofs.free_nodes[f]);
     v.segment<3>(3 * f) = s.initial_velocity;
   }
+}
+
+void scene_at_time(const Scene& s, double t, Points& x, Eigen::VectorXd& xdot, ExternalPotential& external) {
+  for (const Driver& d : s.boundary) d.apply(s.mesh.rest_positions(), t, x, &xdot);
+  external.set_time(t);
+  external.set_gravity_scale(s.gravity_scale(t));
 }
 
 void MeshSystem::initial_state(double t0, VectorXd& q, VectorXd& v) {
@@ -131,9 +135,7 @@ void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd
 void MeshSystem::set_positions(double t, const VectorXd& q) {
   for (int f = 0; f < dofs_.num_free(); ++f) x_.col(dofs_.free_nodes[f]) = q.segment<3>(3 * f);
   if (t != state_t_) {
-    for (const Driver& d : scene_.boundary) d.apply(scene_.mesh.rest_positions(), t, x_, &xdot_);
-    external_->set_time(t);
-    if (scene_.gravity_ramp > 0) external_->set_gravity_scale(std::clamp(t / scene_.gravity_ramp, 0.0, 1.0));
+    scene_at_time(scene_, t, x_, xdot_, *external_);
     state_t_ = t;
   }
 }

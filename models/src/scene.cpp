@@ -1,5 +1,6 @@
 #include "isochor/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -26,6 +27,16 @@ std::vector<double> FramesSpec::times() const {
   const long n = std::lround(std::floor(duration * rate + 1e-9));
   for (long k = 0; k <= n; ++k) t.push_back(static_cast<double>(k) / rate);
   return t;
+}
+
+double Scene::gravity_scale(double t) const {
+  return gravity_ramp > 0 ? std::clamp(t / gravity_ramp, 0.0, 1.0) : 1.0;
+}
+
+std::vector<GroundSpec> Scene::contact_planes() const {
+  std::vector<GroundSpec> p{ground};
+  p.insert(p.end(), planes.begin(), planes.end());
+  return p;
 }
 
 namespace {

@@ -49,7 +49,7 @@ void XpbdMeshSystem::initial_state(double t0, Eigen::VectorXd& x, Eigen::VectorX
 }
 
 void XpbdMeshSystem::external_acceleration(double t, Eigen::VectorXd& a) {
-  const double s = scene_.gravity_ramp > 0 ? std::clamp(t / scene_.gravity_ramp, 0.0, 1.0) : 1.0;
+  const double s = scene_.gravity_scale(t);
   a.resize(3 * num_points());
   for (int n = 0; n < num_points(); ++n) a.segment<3>(3 * n) = s * scene_.gravity;
 }
@@ -103,9 +103,7 @@ void XpbdMeshSystem::after_sweep(double, Eigen::VectorXd& x) {
 }
 
 void XpbdMeshSystem::project_collisions(double t, Eigen::VectorXd& x) {
-  std::vector<GroundSpec> planes{scene_.ground};
-  planes.insert(planes.end(), scene_.planes.begin(), scene_.planes.end());
-  for (const GroundSpec& g : planes) {
+  for (const GroundSpec& g : scene_.contact_planes()) {
     if (!g.enabled) continue;
     const Eigen::Vector3d p = g.point_at(t), n = g.normal.normalized();
     for (int node : dofs_.free_nodes) {

@@ -18,6 +18,8 @@ DofMap scene_dofs(const Scene& s);
 std::vector<std::vector<int>> scene_zone_tets(const Scene& s);
 // The free nodes' rest positions and the scene's initial velocity, as (q, v) of the free dofs.
 void scene_initial_state(const Scene& s, const DofMap& dofs, VectorXd& q, VectorXd& v);
+// What changes with time alone: driven nodes' positions and velocities, contact planes, gravity.
+void scene_at_time(const Scene& s, double t, Points& x, Eigen::VectorXd& xdot, ExternalPotential& external);
 
 class MeshSystem : public ConstrainedSystem {
  public:

@@ -69,6 +69,11 @@ struct Scene {
   IntegratorSpec integrator;
   FramesSpec frames;
   OutputSpec output;
+
+  // The factor on gravity at time t (forces.gravity_ramp), and every contact plane (the ground
+  // first, enabled or not, then [[contact.plane]]).
+  double gravity_scale(double t) const;
+  std::vector<GroundSpec> contact_planes() const;
 };
 
 // Parses a scene file with overrides; every key is checked and unknown keys are errors.
