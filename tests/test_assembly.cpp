@@ -257,6 +257,10 @@ TEST(Drivers, VelocityIsTheTimeDerivativeOfPosition) {
     for (std::size_t i = 0; i < drivers[k].times.size(); ++i)
       EXPECT_LT((drivers[k].displacement(drivers[k].times[i]) - drivers[k].values[i]).norm(), 1e-15);
   EXPECT_LT((drivers[4].velocity(0.2 - 1e-9) - drivers[4].velocity(0.2 + 1e-9)).norm(), 1e-6);
+  // ... and at the first and last keys, where the value is held: the velocity goes to zero.
+  EXPECT_LT(drivers[4].velocity(1e-9).norm(), 1e-6);
+  EXPECT_LT(drivers[4].velocity(1.0 - 1e-9).norm(), 1e-6);
+  EXPECT_GT(drivers[4].velocity(0.1).norm(), 1.0);
   EXPECT_LT((drivers[1].displacement(0.35) - Eigen::Vector3d(0, 0, -0.25)).norm(), 1e-15);
 }
 

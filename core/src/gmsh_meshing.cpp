@@ -213,6 +213,23 @@ Mesh make_cylinder(double radius, double height, int resolution, const Eigen::Ve
   return finish(std::move(e), "cylinder", {}, std::move(sets));
 }
 
+Mesh make_capsule(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius, double edge_length) {
+  GmshSession session("capsule");
+  const Eigen::Vector3d d = b - a;
+  std::vector<std::pair<int, int>> parts = {{3, gmsh::model::occ::addSphere(a.x(), a.y(), a.z(), radius)},
+                                            {3, gmsh::model::occ::addSphere(b.x(), b.y(), b.z(), radius)}};
+  std::vector<std::pair<int, int>> tool = {{3, gmsh::model::occ::addCylinder(a.x(), a.y(), a.z(), d.x(), d.y(), d.z(), radius)}};
+  std::vector<std::pair<int, int>> out;
+  std::vector<std::vector<std::pair<int, int>>> map;
+  gmsh::model::occ::fuse(parts, tool, out, map);
+  gmsh::model::occ::synchronize();
+  gmsh::option::setNumber("Mesh.MeshSizeMin", edge_length);
+  gmsh::option::setNumber("Mesh.MeshSizeMax", edge_length);
+  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
+  generate_3d("capsule");
+  return finish(extract_tets("capsule"), "capsule", {}, {});
+}
+
 Mesh read_msh(const std::string& path) {
   check_readable(path, "a Gmsh .msh file");
   // Gmsh 4.8 falls back to its .geo parser on a file that is not a mesh, and a syntax error there

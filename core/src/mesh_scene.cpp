@@ -10,7 +10,7 @@ namespace isochor {
 Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
   const bool has_file = s.has("file"), has_shape = s.has("shape");
   if (has_file && has_shape) s.fail("file", "give either shape or file, not both");
-  if (!has_file && !has_shape) s.fail("shape", "missing, expected shape = \"box\" | \"cylinder\" | \"sphere\" | \"two_tets\" or file = \"...\"");
+  if (!has_file && !has_shape) s.fail("shape", "missing, expected shape = \"box\" | \"capsule\" | \"cylinder\" | \"sphere\" | \"two_tets\" or file = \"...\"");
   const Eigen::Vector3d center = s.vec3("center", Eigen::Vector3d::Zero());
   if (has_file) {
     const std::string name = s.string("file", "");
@@ -25,7 +25,7 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     if (center != Eigen::Vector3d::Zero()) s.fail("center", "applies to shapes only, not to a mesh file");
     return m;
   }
-  const std::string shape = s.string("shape", "", {"box", "cylinder", "sphere", "two_tets"});
+  const std::string shape = s.string("shape", "", {"box", "capsule", "cylinder", "sphere", "two_tets"});
   if (shape == "box") {
     return make_box(s.vec3("size", Eigen::Vector3d::Ones(), Range::positive()), s.int3("cells", {4, 4, 4}, 1, 1000),
                     center, static_cast<int>(s.integer("split", 6, 5, 6)));
@@ -33,6 +33,15 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
   if (shape == "cylinder") {
     return make_cylinder(s.number("radius", 0.5, Range::positive()), s.number("height", 1.0, Range::positive()),
                          static_cast<int>(s.integer("resolution", 24, 6, 10000)), center);
+  }
+  if (shape == "capsule") {
+    if (!s.has("from") || !s.has("to")) s.fail(s.has("from") ? "to" : "from", "missing, a capsule needs the ends of its axis, from = [x, y, z] and to = [x, y, z] (m)");
+    const Eigen::Vector3d a = s.vec3("from", {}), b = s.vec3("to", {});
+    if ((b - a).norm() == 0) s.fail("to", "expected a point other than `from`");
+    const double r = s.number("radius", 0.5, Range::positive());
+    const double h = s.number("edge_length", r / 3, Range::positive());
+    if (center != Eigen::Vector3d::Zero()) s.fail("center", "does not apply to a capsule (it lies between from and to)");
+    return make_capsule(a, b, r, h);
   }
   if (shape == "sphere") {
     const double r = s.number("radius", 1.0, Range::positive());

@@ -24,11 +24,12 @@ int segment(const std::vector<double>& times, double t, double& s) {
   s = (t - times[i]) / (times[i + 1] - times[i]);
   return std::min(i, n - 2);
 }
-// Catmull-Rom tangent at keyframe k (one-sided at the ends).
+// Catmull-Rom tangent at keyframe k; zero at the first and last keys, where the value is then
+// held, so that the motion is C^1 at the ends too (a driven velocity that jumps stalls IDA).
 Eigen::Vector3d tangent(const std::vector<double>& times, const std::vector<Eigen::Vector3d>& values, int k) {
   const int n = static_cast<int>(times.size());
-  const int a = std::max(k - 1, 0), b = std::min(k + 1, n - 1);
-  return (values[b] - values[a]) / (times[b] - times[a]);
+  if (k == 0 || k == n - 1) return Eigen::Vector3d::Zero();
+  return (values[k + 1] - values[k - 1]) / (times[k + 1] - times[k - 1]);
 }
 }  // namespace
 
@@ -44,7 +45,7 @@ Eigen::Vector3d Driver::displacement(double t) const {
   if (i == -1) return values.front();
   if (i == -2) return values.back();
   if (kind == Kind::keyframes_linear) return (1 - s) * values[i] + s * values[i + 1];
-  // Cubic Hermite on [t_i, t_i+1] with Catmull-Rom tangents (one-sided at the ends).
+  // Cubic Hermite on [t_i, t_i+1] with Catmull-Rom tangents (zero at the ends).
   const double h = times[i + 1] - times[i];
   const double h00 = 2 * s * s * s - 3 * s * s + 1, h10 = s * s * s - 2 * s * s + s, h01 = -2 * s * s * s + 3 * s * s,
                h11 = s * s * s - s * s;

@@ -32,8 +32,7 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
   for (int v : mesh.surface_nodes()) moving[v] = 1;
   // Driven surface nodes follow their drivers; driven interior nodes are carried like the rest
   // of the interior (the model has no interior).
-  for (const Driver& d : scene.boundary)
-    for (int v : d.nodes) moving[v] = 0;
+  for (int v : scene.driven_nodes()) moving[v] = 0;
   std::vector<int> fixed;
   for (int v = 0; v < N; ++v)
     if (!moving[v]) fixed.push_back(v);

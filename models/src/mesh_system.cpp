@@ -16,9 +16,7 @@ std::shared_ptr<const Material> make_material(const MaterialSpec& m) {
 }
 
 DofMap scene_dofs(const Scene& s) {
-  std::vector<int> driven;
-  for (const Driver& d : s.boundary) driven.insert(driven.end(), d.nodes.begin(), d.nodes.end());
-  return DofMap::make(s.mesh.num_nodes(), driven);
+  return DofMap::make(s.mesh.num_nodes(), s.driven_nodes());
 }
 
 std::vector<std::vector<int>> scene_zone_tets(const Scene& s) {
@@ -28,7 +26,7 @@ std::vector<std::vector<int>> scene_zone_tets(const Scene& s) {
 }
 
 MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(scene)), material_(make_material(scene.material)) {
-  if (dofs_.num_free() == 0) throw Error(scene.file.name() + ": every node is driven by [[boundary]]: nothing to simulate");
+  if (dofs_.num_free() == 0) throw Error(scene.file.name() + ": every node is driven (by [[boundary]] or a bone): nothing to simulate");
   elastic_ = std::make_unique<ElasticAssembly>(scene.mesh, material_, dofs_,
                                                EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
   node_mass_ = lumped_mass(scene.mesh, scene.material.density);
@@ -68,7 +66,7 @@ void scene_initial_state(const Scene& s, const DofMap& dofs, VectorXd& q, Vector
 }
 
 void scene_at_time(const Scene& s, double t, Points& x, Eigen::VectorXd& xdot, ExternalPotential& external) {
-  for (const Driver& d : s.boundary) d.apply(s.mesh.rest_positions(), t, x, &xdot);
+  s.drive(t, x, &xdot);
   external.set_time(t);
   external.set_gravity_scale(s.gravity_scale(t));
 }

@@ -33,10 +33,45 @@ double Scene::gravity_scale(double t) const {
   return gravity_ramp > 0 ? std::clamp(t / gravity_ramp, 0.0, 1.0) : 1.0;
 }
 
+std::vector<int> Scene::driven_nodes() const {
+  std::vector<int> driven;
+  for (const Driver& d : boundary) driven.insert(driven.end(), d.nodes.begin(), d.nodes.end());
+  if (skeleton) {
+    const std::vector<int> bound = skeleton->bound_nodes();
+    driven.insert(driven.end(), bound.begin(), bound.end());
+  }
+  return driven;
+}
+
+void Scene::drive(double t, Points& x, Eigen::VectorXd* xdot) const {
+  for (const Driver& d : boundary) d.apply(mesh.rest_positions(), t, x, xdot);
+  if (skeleton) skeleton->apply(mesh.rest_positions(), t, x, xdot);
+}
+
 std::vector<GroundSpec> Scene::contact_planes() const {
   std::vector<GroundSpec> p{ground};
   p.insert(p.end(), planes.begin(), planes.end());
   return p;
+}
+
+Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what) {
+  Driver d;
+  const std::string interp = b.string("interpolation", "linear", {"linear", "cubic"});
+  d.kind = interp == "linear" ? Driver::Kind::keyframes_linear : Driver::Kind::keyframes_cubic;
+  d.times = b.numbers("times");
+  const std::vector<double> flat = b.numbers(key);
+  if (d.times.size() < 2) b.fail("times", "expected at least 2 keyframe times (s)");
+  for (std::size_t i = 1; i < d.times.size(); ++i)
+    if (d.times[i] <= d.times[i - 1]) b.fail("times", "expected increasing times");
+  const std::size_t n = static_cast<std::size_t>(per_time) * d.times.size();
+  if (flat.size() != n)
+    b.fail(key, "expected " + what + " per keyframe time, " + std::to_string(n) + " numbers in all, got " + std::to_string(flat.size()));
+  for (std::size_t i = 0; i < d.times.size(); ++i) {
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    for (int k = 0; k < per_time; ++k) v[k] = scale * flat[per_time * i + k];
+    d.values.push_back(v);
+  }
+  return d;
 }
 
 namespace {
@@ -87,34 +122,18 @@ Driver parse_boundary(const Section& b, const Mesh& mesh) {
     d.frequency = b.number("frequency", 1.0, Range::positive());
     d.phase = b.number("phase", 0.0);
   } else if (kind == "rotation") {
-    const std::string interp = b.string("interpolation", "linear", {"linear", "cubic"});
-    d.kind = interp == "linear" ? Driver::Kind::keyframes_linear : Driver::Kind::keyframes_cubic;
+    const std::vector<int> nodes = d.nodes;
+    d = parse_keyframes(b, "angles", 1, M_PI / 180.0, "one angle (degrees)");
+    d.nodes = nodes;
     d.rotation = true;
     d.center = b.vec3("center", Eigen::Vector3d::Zero());
     d.axis = b.vec3("axis", Eigen::Vector3d::UnitZ());
     if (d.axis.norm() == 0) b.fail("axis", "expected a non-zero vector");
     d.axis.normalize();
-    d.times = b.numbers("times");
-    const std::vector<double> angles = b.numbers("angles");
-    if (d.times.size() < 2) b.fail("times", "expected at least 2 keyframe times (s)");
-    for (std::size_t i = 1; i < d.times.size(); ++i)
-      if (d.times[i] <= d.times[i - 1]) b.fail("times", "expected increasing times");
-    if (angles.size() != d.times.size())
-      b.fail("angles", "expected one angle (degrees) per keyframe time, " + std::to_string(d.times.size()) + ", got " +
-                           std::to_string(angles.size()));
-    for (double a : angles) d.values.emplace_back(a * M_PI / 180.0, 0.0, 0.0);
   } else if (kind == "keyframes") {
-    const std::string interp = b.string("interpolation", "linear", {"linear", "cubic"});
-    d.kind = interp == "linear" ? Driver::Kind::keyframes_linear : Driver::Kind::keyframes_cubic;
-    d.times = b.numbers("times");
-    const std::vector<double> flat = b.numbers("values");
-    if (d.times.size() < 2) b.fail("times", "expected at least 2 keyframe times (s)");
-    for (std::size_t i = 1; i < d.times.size(); ++i)
-      if (d.times[i] <= d.times[i - 1]) b.fail("times", "expected increasing times");
-    if (flat.size() != 3 * d.times.size())
-      b.fail("values", "expected 3 numbers (a displacement) per keyframe time, " + std::to_string(3 * d.times.size()) +
-                           " in all, got " + std::to_string(flat.size()));
-    for (std::size_t i = 0; i < d.times.size(); ++i) d.values.emplace_back(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
+    const std::vector<int> nodes = d.nodes;
+    d = parse_keyframes(b, "values", 3, 1.0, "3 numbers (a displacement)");
+    d.nodes = nodes;
   }
   return d;
 }
@@ -158,7 +177,7 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, {}, {}};
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, {}, {}, {}};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
@@ -176,6 +195,7 @@ Scene parse_scene(SceneFile file) {
       driven_by[v] = k;
     }
   }
+  sc.skeleton = parse_skeleton(root.table("skeleton"), sc.file, sc.mesh, driven_by);
 
   const Section forces = root.table("forces");
   sc.gravity = forces.vec3("gravity", sc.gravity);

@@ -55,9 +55,9 @@ void XpbdMeshSystem::external_acceleration(double t, Eigen::VectorXd& a) {
 }
 
 void XpbdMeshSystem::prescribe(double t, Eigen::VectorXd& x, Eigen::VectorXd& v) {
-  if (scene_.boundary.empty()) return;
+  if (scene_.boundary.empty() && !scene_.skeleton) return;
   Points xp = Eigen::Map<const Points>(x.data(), 3, num_points());
-  for (const Driver& d : scene_.boundary) d.apply(scene_.mesh.rest_positions(), t, xp, &v);
+  scene_.drive(t, xp, &v);
   x = Eigen::Map<const Eigen::VectorXd>(xp.data(), xp.size());
 }
 

@@ -24,6 +24,10 @@ Mesh make_cylinder(double radius, double height, int resolution, const Eigen::Ve
 // Sphere meshed by Gmsh, by edge length or (edge_length <= 0) by a target tet count.
 Mesh make_sphere(double radius, double edge_length, long target_tets, const Eigen::Vector3d& center);
 
+// Capsule (a cylinder with hemispherical ends) around the segment a-b, meshed by Gmsh with the
+// given edge length: a limb around its bones.
+Mesh make_capsule(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double radius, double edge_length);
+
 // Gmsh .msh (v2 or v4): tets; 3-D physical groups become zones, physical groups of any
 // dimension become node sets.
 Mesh read_msh(const std::string& path);

@@ -1,6 +1,7 @@
 // Dirichlet drivers: a node set whose positions are given functions of time, x_i(t) = X_i + u(t),
 // with velocities u'(t). Kinds: fixed (u = 0), ramp (u = u_end * clamp((t - t0)/(t1 - t0))),
-// keyframes (piecewise linear, or cubic Hermite with Catmull-Rom tangents, C^1), sinusoid
+// keyframes (piecewise linear, or cubic Hermite with Catmull-Rom tangents, zero at the first and
+// last keys: C^1 everywhere, the value held outside the keys), sinusoid
 // (u = amplitude * sin(2 pi f t + phase)).
 #pragma once
 #include <string>

@@ -10,6 +10,7 @@
 #include "isochor/forces.hpp"
 #include "isochor/mesh.hpp"
 #include "isochor/scene_file.hpp"
+#include "isochor/skeleton.hpp"
 
 namespace isochor {
 
@@ -69,7 +70,11 @@ struct Scene {
   IntegratorSpec integrator;
   FramesSpec frames;
   OutputSpec output;
+  std::shared_ptr<Skeleton> skeleton;  // [skeleton]: bones that drive their bound nodes; null without
 
+  // Every node driven by [[boundary]] or bound to a bone, and their positions and velocities at t.
+  std::vector<int> driven_nodes() const;
+  void drive(double t, Points& x, Eigen::VectorXd* xdot) const;
   // The factor on gravity at time t (forces.gravity_ramp), and every contact plane (the ground
   // first, enabled or not, then [[contact.plane]]).
   double gravity_scale(double t) const;
@@ -79,6 +84,10 @@ struct Scene {
 // Parses a scene file with overrides; every key is checked and unknown keys are errors.
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
 Scene parse_scene(SceneFile file);
+
+// Keyframes of a driver or joint: `times`, `per_time` numbers of `key` per time (scaled by `scale`,
+// into x, y, z of the values) and `interpolation`; `what` names the numbers in errors.
+Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what);
 
 // Lamé parameters from Young's modulus and Poisson's ratio.
 std::pair<double, double> lame_from_young(double E, double nu);

@@ -1,0 +1,325 @@
+// Rigged skeletons (Simbody bones driving mesh nodes): bound nodes follow the closed-form joint
+// rotations, their velocities are the time derivatives of their positions, BVH files drive the
+// joints, dg/dt of zones with bound nodes, and bad skeleton input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "isochor/bvh.hpp"
+#include "isochor/mesh_system.hpp"
+#include "isochor/scene.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+
+namespace {
+
+const double kDeg = M_PI / 180.0;
+
+// Rodrigues' formula: the rotation by angle a about the unit axis k.
+Eigen::Matrix3d rot(Eigen::Vector3d k, double a) {
+  k.normalize();
+  Eigen::Matrix3d K;
+  K << 0, -k.z(), k.y(), k.z(), 0, -k.x(), -k.y(), k.x(), 0;
+  return Eigen::Matrix3d::Identity() + std::sin(a) * K + (1 - std::cos(a)) * K * K;
+}
+
+const char* kBox = R"(
+[mesh]
+shape = "box"
+size = [1.0, 1.0, 1.0]
+cells = 4
+center = [0.5, 0.5, 0.5]
+[material]
+model = "cnh"
+mu = 1000.0
+lambda = 1000.0
+)";
+
+Scene scene(const std::string& skeleton, const std::vector<std::string>& overrides = {}) {
+  return parse_scene(SceneFile::parse(std::string(kBox) + skeleton, "skeleton.toml", overrides));
+}
+
+// Positions and velocities of every node at t (rest positions where nothing drives them).
+void drive(const Scene& s, double t, Points& x, Eigen::VectorXd& v) {
+  x = s.mesh.rest_positions();
+  v = Eigen::VectorXd::Zero(3 * s.mesh.num_nodes());
+  s.drive(t, x, &v);
+}
+
+// Velocities of the driven nodes against a central difference of their positions in time.
+double velocity_error(const Scene& s, double t) {
+  Points x, xp, xm;
+  Eigen::VectorXd v, w;
+  drive(s, t, x, v);
+  const double h = 1e-6;
+  drive(s, t + h, xp, w);
+  drive(s, t - h, xm, w);
+  double worst = 0;
+  for (int n : s.driven_nodes()) worst = std::max(worst, (v.segment<3>(3 * n) - (xp.col(n) - xm.col(n)) / (2 * h)).norm());
+  return worst;
+}
+
+const char* kPinChain = R"(
+[skeleton]
+[[skeleton.bone]]
+name = "root"
+select = { kind = "box", min = [-0.1, -0.1, -0.1], max = [0.3, 1.1, 1.1] }
+[[skeleton.bone]]
+name = "mid"
+parent = "root"
+joint = "pin"
+origin = [0.5, 0.5, 0.5]
+axis = [1.0, 2.0, 2.0]
+motion = "sinusoid"
+amplitude = [70.0]
+frequency = 0.7
+phase = 0.3
+select = { kind = "box", min = [0.45, -0.1, -0.1], max = [0.55, 1.1, 1.1] }
+[[skeleton.bone]]
+name = "tip"
+parent = "mid"
+joint = "pin"
+origin = [0.75, 0.25, 0.5]
+axis = [0.0, 0.0, 1.0]
+motion = "keyframes"
+times = [0.0, 0.5, 1.5]
+angles = [0.0, 40.0, -30.0]
+select = { kind = "box", min = [0.95, -0.1, -0.1], max = [1.1, 1.1, 1.1] }
+)";
+
+}  // namespace
+
+TEST(Skeleton, PinChainFollowsTheClosedFormRotations) {
+  const Scene s = scene(kPinChain);
+  ASSERT_TRUE(s.skeleton);
+  const auto& bones = s.skeleton->bones();
+  ASSERT_EQ(bones.size(), 3u);
+  EXPECT_EQ(bones[0].nodes.size(), 50u);  // the x = 0 and x = 0.25 planes of the 5x5x5 grid
+  EXPECT_EQ(bones[1].nodes.size(), 25u);
+  EXPECT_EQ(bones[2].nodes.size(), 25u);
+  const Eigen::Vector3d o1(0.5, 0.5, 0.5), o2(0.75, 0.25, 0.5);
+  const Points& X = s.mesh.rest_positions();
+  for (double t : {0.02, 0.17, 0.8, 1.3}) {
+    const double a1 = 70 * kDeg * std::sin(2 * M_PI * 0.7 * t + 0.3);
+    const double a2 = t <= 0.5 ? 40 * kDeg * t / 0.5 : (40 + (t - 0.5) * (-70)) * kDeg;
+    const Eigen::Matrix3d R1 = rot({1, 2, 2}, a1), R2 = rot({0, 0, 1}, a2);
+    Points x;
+    Eigen::VectorXd v;
+    drive(s, t, x, v);
+    double worst = 0;
+    for (int n : bones[0].nodes) worst = std::max(worst, (x.col(n) - X.col(n)).norm());
+    for (int n : bones[1].nodes) worst = std::max(worst, (x.col(n) - (o1 + R1 * (X.col(n) - o1))).norm());
+    for (int n : bones[2].nodes) worst = std::max(worst, (x.col(n) - (o1 + R1 * (o2 - o1) + R1 * R2 * (X.col(n) - o2))).norm());
+    EXPECT_LT(worst, 1e-12) << "t = " << t;
+    EXPECT_LT(velocity_error(s, t), 1e-6) << "t = " << t;
+  }
+  // The root is welded: its nodes never move; the others do.
+  Points x;
+  Eigen::VectorXd v;
+  drive(s, 0.8, x, v);
+  EXPECT_GT(v.norm(), 0.1);
+  // Repeated evaluation at one t is cached: one realization per distinct time.
+  const long before = s.skeleton->realizations();
+  drive(s, 0.8, x, v);
+  EXPECT_EQ(s.skeleton->realizations(), before);
+}
+
+TEST(Skeleton, UniversalAndBallJointsComposeTheirAxisRotations) {
+  const Scene s = scene(R"(
+[skeleton]
+[[skeleton.bone]]
+name = "u"
+joint = "universal"
+origin = [0.0, 0.0, 0.0]
+axis = [1.0, 0.0, 0.0]
+axis2 = [0.0, 1.0, 0.0]
+motion = "keyframes"
+times = [0.0, 1.0]
+angles = [0.0, 0.0, 30.0, 60.0]
+select = { kind = "box", min = [-0.1, -0.1, -0.1], max = [0.3, 1.1, 1.1] }
+[[skeleton.bone]]
+name = "b"
+joint = "ball"
+order = "ZXY"
+origin = [1.0, 0.5, 0.5]
+motion = "keyframes"
+interpolation = "cubic"
+times = [0.0, 1.0]
+angles = [0.0, 0.0, 0.0, 90.0, 30.0, -45.0]
+select = { kind = "box", min = [0.7, -0.1, -0.1], max = [1.1, 1.1, 1.1] }
+)");
+  const auto& bones = s.skeleton->bones();
+  const Points& X = s.mesh.rest_positions();
+  const Eigen::Vector3d ob(1.0, 0.5, 0.5);
+  for (double t : {0.25, 0.5, 0.9}) {
+    const Eigen::Matrix3d Ru = rot({1, 0, 0}, 30 * kDeg * t) * rot({0, 1, 0}, 60 * kDeg * t);
+    // Two keyframes with zero end tangents: the cubic Hermite is the smoothstep 3t^2 - 2t^3.
+    const double f = 3 * t * t - 2 * t * t * t;
+    const Eigen::Matrix3d Rb = rot({0, 0, 1}, 90 * kDeg * f) * rot({1, 0, 0}, 30 * kDeg * f) * rot({0, 1, 0}, -45 * kDeg * f);
+    Points x;
+    Eigen::VectorXd v;
+    drive(s, t, x, v);
+    double worst = 0;
+    for (int n : bones[0].nodes) worst = std::max(worst, (x.col(n) - Ru * X.col(n)).norm());
+    for (int n : bones[1].nodes) worst = std::max(worst, (x.col(n) - (ob + Rb * (X.col(n) - ob))).norm());
+    EXPECT_LT(worst, 1e-12) << "t = " << t;
+    EXPECT_LT(velocity_error(s, t), 1e-6) << "t = " << t;
+  }
+}
+
+TEST(Skeleton, CapsulesBindTheNearestBone) {
+  const Scene s = scene(R"(
+[skeleton]
+[[skeleton.bone]]
+name = "a"
+origin = [0.0, 0.5, 0.5]
+direction = [1.0, 0.0, 0.0]
+length = 0.5
+radius = 0.01
+[[skeleton.bone]]
+name = "b"
+parent = "a"
+joint = "pin"
+axis = [0.0, 1.0, 0.0]
+origin = [0.5, 0.5, 0.5]
+length = 0.5
+start = 0.25
+radius = 0.3
+)");
+  const auto& bones = s.skeleton->bones();
+  const Points& X = s.mesh.rest_positions();
+  // a: the nodes on its axis segment (x = 0 .. 0.5 on the line y = z = 0.5) but the one at
+  // x = 0.5, which lies deeper inside b's capsule (0.25 from b's segment, radius 0.3: 0.05 inside
+  // against 0.01); b: every node within 0.3 of the segment x = 0.75 .. 1 on that line.
+  EXPECT_EQ(bones[0].nodes.size(), 2u);
+  for (int n : bones[0].nodes) EXPECT_NEAR((X.col(n) - Eigen::Vector3d(X(0, n), 0.5, 0.5)).norm(), 0.0, 1e-12);
+  for (int n : bones[1].nodes) {
+    const double s_ = std::clamp(X(0, n), 0.75, 1.0);
+    EXPECT_LE((X.col(n) - Eigen::Vector3d(s_, 0.5, 0.5)).norm(), 0.3 + 1e-12);
+  }
+  int expected = 0;
+  for (int n = 0; n < X.cols(); ++n)
+    if ((X.col(n) - Eigen::Vector3d(std::clamp(X(0, n), 0.75, 1.0), 0.5, 0.5)).norm() <= 0.3) ++expected;
+  EXPECT_EQ(static_cast<int>(bones[1].nodes.size()), expected);
+  EXPECT_GT(expected, 0);
+}
+
+TEST(Skeleton, BvhFileDrivesTheJoints) {
+  const auto dir = test::temp_dir();
+  test::write_file(dir / "two.bvh", R"(HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 0 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT Elbow
+  {
+    OFFSET 0.5 0 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    End Site
+    {
+      OFFSET 0.5 0 0
+    }
+  }
+}
+MOTION
+Frames: 3
+Frame Time: 0.5
+0 0 0 0 0 0 0 0 0
+0 0 0 10 0 0 45 0 0
+0 0 0 20 0 0 90 0 30
+)");
+  const Bvh b = read_bvh((dir / "two.bvh").string());
+  ASSERT_EQ(b.joints.size(), 2u);
+  EXPECT_EQ(b.joints[1].parent, 0);
+  EXPECT_EQ(b.joints[1].first_channel, 6);
+  EXPECT_EQ(b.motion.rows(), 3);
+  EXPECT_DOUBLE_EQ(b.motion(2, 8), 30.0);
+  const std::string path = test::write_file(dir / "scene.toml", std::string(kBox) + R"(
+[skeleton]
+bvh = "two.bvh"
+[[skeleton.bone]]
+name = "hips"
+joint = "ball"
+motion = "bvh"
+bvh_joint = "Hips"
+select = { kind = "box", min = [-0.1, -0.1, -0.1], max = [0.3, 1.1, 1.1] }
+[[skeleton.bone]]
+name = "Elbow"
+parent = "hips"
+joint = "ball"
+motion = "bvh"
+origin = [0.5, 0.5, 0.5]
+select = { kind = "box", min = [0.7, -0.1, -0.1], max = [1.1, 1.1, 1.1] }
+)");
+  const Scene s = load_scene(path);
+  const auto& bones = s.skeleton->bones();
+  const Points& X = s.mesh.rest_positions();
+  const Eigen::Vector3d oe(0.5, 0.5, 0.5);
+  // At the frame times the cubic keyframes pass through the file's angles: BVH's channel order
+  // Z, X, Y is the body-fixed product R_Z R_X R_Y.
+  const std::vector<std::pair<Eigen::Matrix3d, Eigen::Matrix3d>> expect = {
+      {rot({0, 0, 1}, 10 * kDeg), rot({0, 0, 1}, 45 * kDeg)},
+      {rot({0, 0, 1}, 20 * kDeg), rot({0, 0, 1}, 90 * kDeg) * rot({0, 1, 0}, 30 * kDeg)}};
+  for (int f = 1; f <= 2; ++f) {
+    const auto& [Rh, Re] = expect[f - 1];
+    Points x;
+    Eigen::VectorXd v;
+    drive(s, 0.5 * f, x, v);
+    double worst = 0;
+    for (int n : bones[0].nodes) worst = std::max(worst, (x.col(n) - Rh * X.col(n)).norm());
+    for (int n : bones[1].nodes) worst = std::max(worst, (x.col(n) - (Rh * oe + Rh * Re * (X.col(n) - oe))).norm());
+    EXPECT_LT(worst, 1e-12) << "frame " << f;
+  }
+  EXPECT_LT(velocity_error(s, 0.7), 1e-6);
+  // Errors name the file, line and what was expected.
+  test::write_file(dir / "bad.bvh", "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 1 Wrotation\n}\n");
+  EXPECT_NE(test::error_of([&] { read_bvh((dir / "bad.bvh").string()); }).find("bad.bvh:5: expected a channel"), std::string::npos);
+  test::write_file(dir / "short.bvh", "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n}\n"
+                                      "MOTION\nFrames: 2\nFrame Time: 0.1\n1 2 3\n4 5\n");
+  EXPECT_NE(test::error_of([&] { read_bvh((dir / "short.bvh").string()); }).find("frame 1 has 2 values, expected 3"),
+            std::string::npos);
+  EXPECT_NE(test::error_of([&] { load_scene(path, {"skeleton.bone=[{name=\"x\", joint=\"ball\", motion=\"bvh\", bvh_joint=\"Knee\"}]"}); })
+                .find("\"Knee\" is not a joint of the BVH file"),
+            std::string::npos);
+}
+
+TEST(Skeleton, ZoneConstraintTimeDerivativeFollowsTheBones) {
+  // dg/dt of the global zone with nodes bound to a moving bone: a central difference in time of
+  // g at fixed free positions.
+  Scene s = scene(kPinChain);
+  MeshSystem sys(s);
+  Eigen::VectorXd q, v;
+  sys.initial_state(0.0, q, v);
+  auto g_at = [&](double t) {
+    Eigen::VectorXd g;
+    sys.constraint(t, q, g);
+    return g;
+  };
+  const double t = 0.4;
+  std::vector<std::vector<double>> G;
+  Eigen::VectorXd gt;
+  sys.constraint_jacobian(t, q, G, &gt);
+  const Eigen::VectorXd fd = (g_at(t + 1e-6) - g_at(t - 1e-6)) / 2e-6;
+  EXPECT_LT((gt - fd).norm(), 1e-7 * (1 + fd.norm()));
+  EXPECT_GT(fd.norm(), 1e-3);  // not vacuous
+}
+
+TEST(Skeleton, BadInputNamesTheBoneAndWhatWasExpected) {
+  auto err = [&](const std::string& text) { return test::error_of([&] { scene(text); }); };
+  EXPECT_NE(err("[skeleton]\n[[skeleton.bone]]\nname = \"a\"\nparent = \"b\"\n").find("skeleton.bone[0].parent: \"b\" is not a bone defined above"),
+            std::string::npos);
+  EXPECT_NE(err("[skeleton]\n[[skeleton.bone]]\nname = \"a\"\norigin = [5.0, 5.0, 5.0]\nradius = 0.1\n")
+                .find("skeleton.bone[0].radius: bone \"a\" binds no mesh node"),
+            std::string::npos);
+  EXPECT_NE(err("[skeleton]\n[[skeleton.bone]]\nname = \"a\"\nmotion = \"sinusoid\"\n").find("a weld joint does not move"),
+            std::string::npos);
+  EXPECT_NE(err("[skeleton]\n[[skeleton.bone]]\nname = \"a\"\njoint = \"pin\"\nmotion = \"keyframes\"\ntimes = [0.0, 1.0]\nangles = [1.0]\n")
+                .find("skeleton.bone[0].angles: expected 1 angle (degrees) per keyframe time, 2 numbers in all, got 1"),
+            std::string::npos);
+  EXPECT_NE(err("[[boundary]]\nselect = { kind = \"set\", name = \"xmin\" }\n[skeleton]\n[[skeleton.bone]]\nname = \"a\"\n"
+                "select = { kind = \"set\", name = \"xmin\" }\n")
+                .find("is already driven by boundary[0]"),
+            std::string::npos);
+  EXPECT_NE(err("[skeleton]\n").find("a [skeleton] needs at least one [[skeleton.bone]]"), std::string::npos);
+}
