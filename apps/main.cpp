@@ -50,6 +50,9 @@ int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& over
   std::printf("\n");
   for (const auto& [name, tets] : sc.zones) std::printf("  zone %-16s %zu tets\n", name.c_str(), tets.size());
   for (const auto& [name, nodes] : m.node_sets) std::printf("  node set %-12s %zu nodes\n", name.c_str(), nodes.size());
+  if (sc.skeleton)
+    for (const BoneSpec& b : sc.skeleton->bones())
+      std::printf("  bone %-16s %zu nodes bound\n", b.name.c_str(), b.nodes.size());
   std::printf("wrote %s and %s\n", out.c_str(), w.xdmf_path().c_str());
   return 0;
 }
@@ -117,9 +120,11 @@ int main(int argc, char** argv) {
       RunSummary r = run_scene(sc, out_path, !quiet);
       const IdaStats& s = r.stats;
       std::printf("%s: %d frames, %ld steps, %ld Newton iterations, %ld Jacobians, %.2f s wall "
-                  "(assembly %.2f, factorisation %.2f, solve %.2f)\nwrote %s\n",
+                  "(assembly %.2f, factorisation %.2f, solve %.2f",
                   scene_path.c_str(), r.frames, s.steps, s.newton_iterations, s.jacobian_evals, s.wall_seconds,
-                  s.assembly_seconds, s.factor_seconds, s.solve_seconds, r.output.c_str());
+                  s.assembly_seconds, s.factor_seconds, s.solve_seconds);
+      if (sc.skeleton) std::printf(", Simbody %.2f", r.simbody_seconds);
+      std::printf(")\nwrote %s\n", r.output.c_str());
       return 0;
     }
     if (study->parsed()) {

@@ -46,6 +46,7 @@ RunSummary run_system(const Scene& sc, System& sys, const std::string& output, b
   o.atol_q = sc.integrator.atol;
   o.max_order = sc.integrator.max_order;
   o.max_step = sc.integrator.max_step;
+  o.newton_coef = sc.integrator.newton_coef;
   o.max_steps = sc.integrator.max_steps;
   o.ordering = sc.integrator.ordering;
   o.linear_solver = sc.integrator.linear_solver;
@@ -136,6 +137,11 @@ RunSummary run_system(const Scene& sc, System& sys, const std::string& output, b
                 summary.output);
   }
   write_totals(w, summary.stats);
+  if (sc.skeleton) {
+    summary.simbody_seconds = sc.skeleton->simbody_seconds();
+    w.set_stat("simbody_seconds", summary.simbody_seconds);
+    w.set_stat("simbody_realizations", static_cast<double>(sc.skeleton->realizations()));
+  }
   w.close();
   bar.finish();
   return summary;

@@ -11,6 +11,7 @@ struct RunSummary {
   std::string output;
   int frames = 0;
   IdaStats stats;
+  double simbody_seconds = 0;  // realizing the skeleton (0 without one)
 };
 
 // Runs the scene and writes every frame to `output` (scene's output.path when empty). A solver

@@ -245,6 +245,7 @@ IdaStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   IDASetUserData(mem, &s);
   IDASetId(mem, id);
   IDASetSuppressAlg(mem, SUNTRUE);
+  IDASetNonlinConvCoef(mem, s.opt.newton_coef);
   IDASetMaxOrd(mem, s.opt.max_order);
   if (s.opt.max_step > 0) IDASetMaxStep(mem, s.opt.max_step);
   if (s.opt.initial_step > 0) {

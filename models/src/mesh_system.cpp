@@ -32,7 +32,9 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
   node_mass_ = lumped_mass(scene.mesh, scene.material.density);
   external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.contact_planes(), dofs_, elastic_->pattern());
   damping_ = scene.damping;
-  const auto zt = scene_zone_tets(scene);
+  const auto all_zones = scene_zone_tets(scene);
+  zone_volumes_ = VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern());
+  const auto zt = scene.keep_zones ? all_zones : std::vector<std::vector<int>>{};
   constraints_ = VolumeConstraints::zones(scene.mesh, zt, dofs_, elastic_->pattern());
   constraint_tets_ = VolumeConstraints::element_tets(zt);
   for (int j = 0; j < constraints_.size(); ++j) {
@@ -169,7 +171,7 @@ std::array<double, 3> MeshSystem::energies() const {
 std::vector<double> MeshSystem::volumes() const {
   std::vector<double> v{tets_volume(x_, scene_.mesh.tets())};
   Eigen::VectorXd z;
-  constraints_.volumes(x_, z);
+  zone_volumes_.volumes(x_, z);
   v.insert(v.end(), z.data(), z.data() + z.size());
   return v;
 }

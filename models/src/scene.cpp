@@ -177,13 +177,14 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, {}, {}, {}};
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, Eigen::Vector3d::Zero(), {}, true, {}, {}, {}, {}};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
   sc.mesh = mesh_from_scene(mesh, sc.file);
   sc.material = parse_material(root.table("material"));
   sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.material.model == "cnh");
+  sc.keep_zones = root.table("zones").boolean("keep", true);
   std::vector<int> driven_by(sc.mesh.num_nodes(), -1);
   for (const Section& b : root.tables("boundary")) {
     sc.boundary.push_back(parse_boundary(b, sc.mesh));
@@ -238,6 +239,7 @@ Scene parse_scene(SceneFile file) {
   ig.newton_tol = in.number("newton_tol", ig.newton_tol, Range::positive());
   ig.max_order = static_cast<int>(in.integer("max_order", ig.max_order, 1, 5));
   ig.max_step = in.number("max_step", 0.0, Range::non_negative());
+  ig.newton_coef = in.number("newton_coef", ig.newton_coef, {0.0, 1.0, true, true});
   ig.max_steps = in.integer("max_steps", ig.max_steps, 1, 1000000000000L);
   ig.ordering = in.string("ordering", ig.ordering, {"metis", "colamd", "amd"});
   ig.linear_solver = in.string("linear_solver", ig.linear_solver, {"klu", "reduced"});

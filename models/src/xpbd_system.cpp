@@ -35,7 +35,7 @@ XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_
   std::vector<std::vector<int>> elements;
   for (const Tet& t : mesh.tets()) elements.emplace_back(t.begin(), t.end());
   const Pattern pattern = pattern_from_elements(dofs_, elements);
-  zones_ = VolumeConstraints::zones(mesh, scene_zone_tets(scene), dofs_, pattern);
+  zones_ = VolumeConstraints::zones(mesh, scene.keep_zones ? scene_zone_tets(scene) : std::vector<std::vector<int>>{}, dofs_, pattern);
   zone_grad_.resize(zones_.size());
   for (int j = 0; j < zones_.size(); ++j) zone_grad_[j].resize(zones_.row_dofs(j).size());
 }

@@ -22,6 +22,7 @@ struct IdaOptions {
   double atol_lambda = 0.0;  // multipliers (only the Newton test sees them); 0: from force_scale()
   int max_order = 5;
   double max_step = 0.0;     // 0: no limit
+  double newton_coef = 0.33; // IDA's nonlinear convergence coefficient (smaller: algebraic rows kept tighter)
   double initial_step = 0.0; // 0: IDA's choice
   long max_steps = 10000000; // over the whole run
   std::string ordering = "metis";  // KLU: "metis" (node-grouped nested dissection), "colamd", "amd"

@@ -33,6 +33,7 @@ struct IntegratorSpec {
   double newton_tol = 1e-8;  // backward Euler: Newton stops when |dq|_inf <= newton_tol * max(1, |q|_inf)
   int max_order = 5;
   double max_step = 0.0;      // s, 0: none
+  double newton_coef = 0.33;  // IDA: Newton stops when its estimated error is below this fraction of the tolerance
   long max_steps = 10000000;
   std::string ordering = "metis";
   std::string linear_solver = "klu";
@@ -67,6 +68,7 @@ struct Scene {
   RayleighDamping damping;
   Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();
   std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tet indices
+  bool keep_zones = true;  // zones.keep: false measures the zones' volumes without constraining them
   IntegratorSpec integrator;
   FramesSpec frames;
   OutputSpec output;
