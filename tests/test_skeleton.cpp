@@ -370,6 +370,6 @@ TEST(Skeleton, ArmFlexKeepsZoneVolumesAndBulgesWithCnh) {
   EXPECT_GT(unh.worst_drift, 1e-3);  // nu = 0.45 loses volume where the elbow squeezes it
   EXPECT_GT(cnh.bulge, unh.bulge);
   EXPECT_GT(cnh.bulge, 0.0);
-  std::printf("arm (coarse): CNH drift %.2e bulge %.4f m; UNH drift %.2e bulge %.4f m\n", cnh.worst_drift, cnh.bulge,
+  std::printf("arm to full flexion: CNH drift %.2e bulge %.4f m; UNH drift %.2e bulge %.4f m\n", cnh.worst_drift, cnh.bulge,
               unh.worst_drift, unh.bulge);
 }

@@ -78,11 +78,14 @@ def main():
     if a.color == "pressure" and "/frames/pressure" not in f:
         sys.exit(f"{a.run}: no /frames/pressure (run the scene with output.pressure = true)")
     zone_of = np.zeros(len(T), dtype=int)
+    zone_names = []
     if a.color == "zone" and "/zones" in f:
-        for z, name in enumerate(f["/zones"].keys()):
+        # Smaller zones first, so that a zone inside a larger one (e.g. inside "global") shows.
+        for z, name in enumerate(sorted(f["/zones"].keys(), key=lambda nm: f["/zones"][nm].shape[0])):
             tets = f["/zones"][name][()]
             mask = zone_of[tets] == 0
             zone_of[tets[mask]] = z + 1
+            zone_names.append(name)
     lo = np.min([P[k].min(0) for k in frames], axis=0)
     hi = np.max([P[k].max(0) for k in frames], axis=0)
     span = (hi - lo).max()
@@ -94,8 +97,11 @@ def main():
         allp = np.concatenate([f["/frames/pressure"][k] for k in frames])
         vmin, vmax = np.percentile(allp, 2), np.percentile(allp, 98)
     else:
-        vmin, vmax = 0, max(zone_of.max(), 1)
-    cmap = plt.get_cmap("viridis" if a.color != "zone" else "tab10")
+        vmin, vmax = 0, 9  # tab10: one colour per zone index, 0 (grey) for tets in no zone
+    cmap = plt.get_cmap("viridis")
+    if a.color == "zone":
+        tab = plt.get_cmap("tab10")
+        cmap = matplotlib.colors.ListedColormap([(0.6, 0.6, 0.6)] + [tab(i) for i in range(9)])
     light = np.array([0.3, -0.5, 0.8])
     light /= np.linalg.norm(light)
     written = []
@@ -131,9 +137,16 @@ def main():
         ax.set_box_aspect((1, 1, 1))
         ax.view_init(elev=a.elev, azim=a.azim)
         ax.set_axis_off()
-        sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(vmin, vmax))
-        label = {"displacement": "displacement (m)", "pressure": "pressure (Pa)", "zone": "zone"}[a.color]
-        fig.colorbar(sm, ax=ax, shrink=0.6, label=label)
+        if a.color == "zone":
+            from matplotlib.patches import Patch
+            handles = [Patch(color=cmap((z + 1) / 9), label=nm) for z, nm in enumerate(zone_names[:9])]
+            if (zone_of[under] == 0).any() or not zone_names:
+                handles.append(Patch(color=cmap(0.0), label="no zone"))
+            ax.legend(handles=handles, loc="upper right", title="zone")
+        else:
+            sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(vmin, vmax))
+            label = {"displacement": "displacement (m)", "pressure": "pressure (Pa)"}[a.color]
+            fig.colorbar(sm, ax=ax, shrink=0.6, label=label)
         ax.set_title(f"{os.path.basename(a.run)}  t = {times[k]:.4f} s")
         path = a.out if single else os.path.join(out, f"frame_{k:06d}.png")
         fig.savefig(path, dpi=100, bbox_inches="tight")
