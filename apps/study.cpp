@@ -193,9 +193,13 @@ int run_study(const Study& s, const std::string& exe, bool resume, bool progress
   {
     const StudyCase& r = s.cases[0];
     const auto cpu = s.output / "cases" / "reference.cpu";
-    if (!(resume && std::filesystem::exists(cpu))) run_case(s, r, exe);
+    Outcome o;
+    const bool kept = resume && std::filesystem::exists(cpu);
+    if (!kept) o = run_case(s, r, exe);
     ++done;
-    if (progress) std::fprintf(stderr, "[1/%zu] reference done\n", s.cases.size());
+    if (progress)
+      std::fprintf(stderr, "[1/%zu] reference %s\n", s.cases.size(),
+                   kept ? "kept" : o.status == 0 ? "ok" : "FAILED: every case runs, but errors against it are not computed (see cases/reference.log)");
   }
   std::vector<std::thread> pool;
   for (int j = 0; j < s.jobs; ++j) pool.emplace_back(worker);
