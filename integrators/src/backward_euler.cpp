@@ -15,7 +15,7 @@ struct BackwardEuler::Impl {
   ConstrainedSystem& sys;
   BackwardEulerOptions opt;
   Index n, m;
-  SymmetricFactor S;
+  std::unique_ptr<SymmetricSolver> S;
   std::vector<double> K, D, Sv;
   std::vector<Index> diag;
   std::vector<std::vector<double>> G;
@@ -27,7 +27,9 @@ struct BackwardEuler::Impl {
   std::vector<double> kv;
 
   Impl(ConstrainedSystem& s, BackwardEulerOptions o)
-      : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()), S(s.pattern()), use_kkt(m > o.schur_max_constraints) {
+      : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()),
+        S(make_symmetric_solver(s.pattern(), o.linear_solver == "krylov" ? "pcg" : "cholmod")),
+        use_kkt(o.linear_solver == "klu" || m > o.schur_max_constraints) {
     if (use_kkt) {
       layout = std::make_unique<KktLayout>(s.pattern(), s.constraint_rows());
       kkt = std::make_unique<KktFactor>(*layout, s.pattern(), s.dofs_per_group(), s.constraint_rows());
@@ -121,7 +123,7 @@ struct BackwardEuler::Impl {
           layout->fill(Sv.data(), G, kv.data());
           ok = kkt->factor(kv.data());
         } else {
-          ok = S.factor(Sv.data());
+          ok = S->factor(Sv.data());
         }
         stats.factor_seconds += seconds_since(tf);
         stats.jacobian_evals++;
@@ -141,14 +143,20 @@ struct BackwardEuler::Impl {
         lambda += kr.tail(m);
       } else {
         rhs = -R1;
-        S.solve(rhs.data(), y.data());
+        bool solved = S->solve(rhs.data(), y.data());
         dq = y;
         if (m) {
-          for (Index j = 0; j < m; ++j) S.solve(Gt.col(j).data(), Z.col(j).data());
+          for (Index j = 0; j < m; ++j) solved = S->solve(Gt.col(j).data(), Z.col(j).data()) && solved;
           // (G Z) dl = R2 - G S^-1 R1 = R2 + G y;  dq = y - Z dl.
           const VectorXd dl = (Gt.transpose() * Z).partialPivLu().solve(R2 + Gt.transpose() * y);
           dq -= Z * dl;
           lambda += dl;
+        }
+        stats.linear_iterations = S->iterations();
+        if (!solved) {
+          stats.solve_seconds += seconds_since(ts);
+          reason = "the linear solve failed (PCG did not converge, or the step matrix is indefinite)";
+          return false;
         }
       }
       stats.solve_seconds += seconds_since(ts);

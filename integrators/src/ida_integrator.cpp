@@ -44,7 +44,8 @@ struct IdaIntegrator::Impl {
   Impl(ConstrainedSystem& s, IdaOptions o) : sys(s), opt(std::move(o)), ggl(s) {
     n = sys.num_dofs();
     m = sys.num_constraints();
-    if (opt.linear_solver == "reduced") reduced = std::make_unique<ReducedSolver>(ggl);
+    if (opt.linear_solver == "reduced" || opt.linear_solver == "krylov")
+      reduced = std::make_unique<ReducedSolver>(ggl, opt.linear_solver == "krylov" ? "pcg" : "cholmod");
     else if (opt.ordering == "metis") order = metis_order(sys.pattern(), sys.dofs_per_group(), n, 2, sys.constraint_rows(), 2);
   }
 
@@ -123,9 +124,10 @@ int reduced_setup(SUNLinearSolver S, SUNMatrix A) {
 int reduced_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype) {
   auto* s = static_cast<IdaIntegrator::Impl*>(S->content);
   const auto t0 = Clock::now();
-  s->reduced->solve(N_VGetArrayPointer(b), N_VGetArrayPointer(x));
+  const bool ok = s->reduced->solve(N_VGetArrayPointer(b), N_VGetArrayPointer(x));
   s->stats.solve_seconds += seconds_since(t0);
-  return SUNLS_SUCCESS;
+  s->stats.linear_iterations = s->reduced->iterations();
+  return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;  // PCG did not converge: IDA retries a smaller step
 }
 sunindextype reduced_lastflag(SUNLinearSolver) { return 0; }
 int reduced_free(SUNLinearSolver S) {

@@ -4,7 +4,8 @@
 //   row 2:  S dq + V G^T dm + G^T dl = r2 + V r1,   S = -df/dq + H_lambda + c V   (H_mu left out)
 //   row 3:  G dq = r3
 //   row 4:  (B + c G) dq + G G^T dm = r4 + G r1
-// S is factored by CHOLMOD (SymmetricFactor: METIS ordering, supernodal, LDL^T if indefinite); Z1 = S^-1 G^T and Z2 = S^-1 V G^T turn
+// S is factored by CHOLMOD (SymmetricFactor: METIS ordering, supernodal, LDL^T if indefinite) or
+// solved by block-Jacobi PCG (linear_solver = krylov); Z1 = S^-1 G^T and Z2 = S^-1 V G^T turn
 // rows 3 and 4 into a dense 2m x 2m system for (dl, dm). Computed directly, (B + c G) Z2 - G G^T
 // cancels to O(1/c) of its terms (Z2 ~ G^T / c for large c); with A = S - c V and
 // Z3 = S^-1 A G^T, Z2 = (G^T - Z3) / c and the block is ((B G^T - B Z3) / c - G Z3), free of
@@ -20,7 +21,7 @@ namespace isochor {
 struct ReducedSolver::Impl {
   const GglForm& form;
   Index n, m;
-  SymmetricFactor S;
+  std::unique_ptr<SymmetricSolver> S;
   std::vector<double> Sx;  // values of S in the system's pattern
   Eigen::MatrixXd Gt, W, Z1, Z2, Z3, Bt;  // n x m: G^T, A G^T, S^-1 G^T, S^-1 V G^T, S^-1 A G^T, B^T
   Eigen::PartialPivLU<Eigen::MatrixXd> small;
@@ -28,7 +29,8 @@ struct ReducedSolver::Impl {
   double cj = 0;
   VectorXd b1, y, dq, tmp;
 
-  explicit Impl(const GglForm& f) : form(f), n(f.n()), m(f.m()), S(f.system().pattern()) {
+  bool ok = true;  // every solve of S in the current setup/solve succeeded
+  Impl(const GglForm& f, const std::string& kind) : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind)) {
     Sx.resize(f.system().pattern().nnz());
     Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);
     b1.resize(n), y.resize(n), dq.resize(n), tmp.resize(n);
@@ -41,13 +43,14 @@ struct ReducedSolver::Impl {
     for (Index col = 0; col < n; ++col)
       for (Index k = K.col_ptr[col]; k < K.col_ptr[col + 1]; ++k) out[K.row_ind[k]] += vals[slots[k]] * x[col];
   }
-  void solve_S(const double* b, double* x) { S.solve(b, x); }
+  void solve_S(const double* b, double* x) { ok = S->solve(b, x) && ok; }
 };
 
-ReducedSolver::ReducedSolver(const GglForm& form) : impl_(std::make_unique<Impl>(form)) {}
+ReducedSolver::ReducedSolver(const GglForm& form, const std::string& kind) : impl_(std::make_unique<Impl>(form, kind)) {}
 ReducedSolver::~ReducedSolver() = default;
 
-double ReducedSolver::factor_nnz() const { return impl_->S.factor_nnz(); }
+double ReducedSolver::factor_nnz() const { return impl_->S->factor_nnz(); }
+long ReducedSolver::iterations() const { return impl_->S->iterations(); }
 
 bool ReducedSolver::setup(double cj, const double* vals) {
   Impl& s = *impl_;
@@ -56,8 +59,9 @@ bool ReducedSolver::setup(double cj, const double* vals) {
   const GglForm& f = s.form;
   const Index m = s.m;
   for (std::size_t k = 0; k < f.vq.size(); ++k) s.Sx[k] = vals[f.vq[k]] + cj * vals[f.vv[k]];
-  if (!s.S.factor(s.Sx.data())) return false;
+  if (!s.S->factor(s.Sx.data())) return false;
   if (m == 0) return true;
+  s.ok = true;
   const auto& rows = f.system().constraint_rows();
   s.Gt.setZero();
   s.Bt.setZero();
@@ -79,12 +83,13 @@ bool ReducedSolver::setup(double cj, const double* vals) {
   C.bottomLeftCorner(m, m) = (s.Bt + cj * s.Gt).transpose() * s.Z1;
   C.bottomRightCorner(m, m) = (s.Bt.transpose() * s.Gt - s.Bt.transpose() * s.Z3) / cj - s.Gt.transpose() * s.Z3;
   s.small.compute(C);
-  return true;
+  return s.ok;
 }
 
-void ReducedSolver::solve(const double* b, double* x, int refine) {
+bool ReducedSolver::solve(const double* b, double* x, int refine) {
+  impl_->ok = true;
   solve_once(b, x);
-  if (refine <= 0) return;
+  if (refine <= 0) return impl_->ok;
   const SparsePattern& p = impl_->form.pattern();
   VectorXd r(p.n), dx(p.n);
   for (int it = 0; it < refine; ++it) {
@@ -94,6 +99,7 @@ void ReducedSolver::solve(const double* b, double* x, int refine) {
     solve_once(r.data(), dx.data());
     Eigen::Map<VectorXd>(x, p.n) += dx;
   }
+  return impl_->ok;
 }
 
 void ReducedSolver::solve_once(const double* b, double* x) {

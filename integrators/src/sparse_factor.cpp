@@ -61,11 +61,12 @@ bool SymmetricFactor::factor(const double* values) {
   return s.c.status == CHOLMOD_OK;
 }
 
-void SymmetricFactor::solve(const double* b, double* x) {
+bool SymmetricFactor::solve(const double* b, double* x) {
   Impl& s = *impl_;
   std::memcpy(s.B->x, b, sizeof(double) * s.n);
   cholmod_l_solve2(CHOLMOD_A, s.L, s.B, nullptr, &s.X, nullptr, &s.Y, &s.E, &s.c);
   std::memcpy(x, s.X->x, sizeof(double) * s.n);
+  return true;
 }
 
 bool SymmetricFactor::used_ldlt() const { return impl_->ldlt; }

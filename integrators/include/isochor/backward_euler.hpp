@@ -21,6 +21,9 @@ struct BackwardEulerOptions {
   // Up to this many constraints: CHOLMOD on the n x n step matrix and a dense Schur complement
   // for the borders; more (e.g. 1-ring zones): KLU on the whole (n + m) KKT matrix.
   int schur_max_constraints = 32;
+  // "reduced" (the above), "klu" (KLU on the KKT matrix always), "krylov" (block-Jacobi PCG
+  // instead of CHOLMOD on the step matrix; the KKT path above schur_max_constraints stays KLU).
+  std::string linear_solver = "reduced";
 };
 
 class BackwardEuler {

@@ -12,6 +12,7 @@
 // by a Schur complement.
 #pragma once
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "isochor/constrained_system.hpp"
@@ -51,14 +52,17 @@ class GglForm {
 // approximation otherwise, which Newton's iteration absorbs.
 class ReducedSolver {
  public:
-  explicit ReducedSolver(const GglForm& form);
+  // kind: "cholmod" (direct) or "pcg" (the krylov solver: no factor).
+  explicit ReducedSolver(const GglForm& form, const std::string& kind = "cholmod");
   ~ReducedSolver();
   // Factors S for this Jacobian (LDL^T once S is found indefinite); false when it is singular.
   bool setup(double cj, const double* values);
   // x = J^-1 b, then `refine` steps of iterative refinement with the exact J (each one more
   // sparse product and reduced solve).
-  void solve(const double* b, double* x, int refine = 0);
+  // False if a solve with S failed (PCG: no convergence or S found indefinite).
+  bool solve(const double* b, double* x, int refine = 0);
   double factor_nnz() const;
+  long iterations() const;  // PCG iterations so far (0 for the direct solver)
 
  private:
   void solve_once(const double* b, double* x);

@@ -36,6 +36,7 @@ struct IdaStats {
        newton_failures = 0, error_test_failures = 0, fresh_factorisations = 0;
   double wall_seconds = 0, assembly_seconds = 0, factor_seconds = 0, solve_seconds = 0;
   double factor_nnz = 0;  // nnz(L) + nnz(U) of the last factorisation
+  long linear_iterations = 0;  // krylov: PCG iterations over the run
   struct FrameSample {
     long steps, newton_iterations, error_test_failures, newton_failures, jacobian_evals;
     int order;

@@ -1,23 +1,43 @@
-// A symmetric sparse matrix on a fixed pattern, factored by CHOLMOD (METIS ordering, analysis
-// done once): supernodal Cholesky, and simplicial LDL^T from the first time the matrix is found
-// indefinite (e.g. an unconstrained model under strong compression).
+// Solvers of a symmetric sparse matrix on a fixed pattern (both triangles present), the effective
+// stiffness S of the reduced Newton systems:
+//  - SymmetricFactor: CHOLMOD (METIS ordering, analysis done once): supernodal Cholesky, and
+//    simplicial LDL^T from the first time the matrix is found indefinite (e.g. an unconstrained
+//    model under strong compression);
+//  - BlockJacobiPcg: preconditioned conjugate gradients with the inverses of the 3x3 nodal
+//    diagonal blocks as preconditioner; no factor, memory O(nnz): for meshes beyond a direct
+//    factor. Fails (false) when S is found indefinite or the iteration does not converge.
 #pragma once
 #include <memory>
+#include <string>
 
 #include "isochor/sparse_pattern.hpp"
 
 namespace isochor {
 
-class SymmetricFactor {
+class SymmetricSolver {
+ public:
+  virtual ~SymmetricSolver() = default;
+  // Values in the pattern's order. False if the matrix cannot be solved (singular, or indefinite
+  // where the method cannot help).
+  virtual bool factor(const double* values) = 0;
+  // x = S^-1 b; false if the solve failed (iterative: no convergence).
+  virtual bool solve(const double* b, double* x) = 0;
+  virtual double factor_nnz() const = 0;   // entries of the factor (0 for an iterative solver)
+  virtual long iterations() const { return 0; }  // iterative: iterations over all solves so far
+};
+
+// kind: "cholmod" or "pcg" (relative residual tolerance `tol`: the GGL residual of a reduced solve
+// is ~1e6 times it, so 1e-12 leaves Newton an error of ~1e-6, far below its own contraction).
+std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, const std::string& kind, double tol = 1e-12);
+
+class SymmetricFactor : public SymmetricSolver {
  public:
   explicit SymmetricFactor(const SparsePattern& pattern);
-  ~SymmetricFactor();
-  // Values in the pattern's order (both triangles present; the lower one is used). False if the
-  // matrix is singular (or indefinite where LDL^T cannot help).
-  bool factor(const double* values);
-  void solve(const double* b, double* x);
+  ~SymmetricFactor() override;
+  bool factor(const double* values) override;
+  bool solve(const double* b, double* x) override;
   bool used_ldlt() const;
-  double factor_nnz() const;
+  double factor_nnz() const override;
 
  private:
   struct Impl;

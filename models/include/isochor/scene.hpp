@@ -36,7 +36,7 @@ struct IntegratorSpec {
   double newton_coef = 0.33;  // IDA: Newton stops when its estimated error is below this fraction of the tolerance
   long max_steps = 10000000;
   std::string ordering = "metis";
-  std::string linear_solver = "klu";
+  std::string linear_solver = "auto";  // auto | klu | reduced | krylov
   int substeps = 10, iterations = 1;  // XPBD: substeps per step, Gauss-Seidel sweeps per substep
   bool rescale_volume = false;        // backward Euler: naive global volume rescaling after each step
   Eigen::Vector3d weights_center = Eigen::Vector3d::Zero();  // mass_spring: Hong's weight zone

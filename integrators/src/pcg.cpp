@@ -1,0 +1,110 @@
+// Block-Jacobi preconditioned conjugate gradients on the effective stiffness (sparse_factor.hpp).
+#include <Eigen/Dense>
+#include <cmath>
+#include <vector>
+
+#include "isochor/sparse_factor.hpp"
+
+namespace isochor {
+
+using VectorXd = Eigen::VectorXd;
+
+namespace {
+
+class BlockJacobiPcg : public SymmetricSolver {
+ public:
+  BlockJacobiPcg(const SparsePattern& p, double tol) : p_(p), tol_(tol), n_(p.n) {
+    // The slots of each node's 3x3 diagonal block (dofs 3k .. 3k+2 belong to node k).
+    slot_.assign(static_cast<std::size_t>(n_) * 3, -1);
+    for (Index c = 0; c < n_; ++c)
+      for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k) {
+        const Index r = p.row_ind[k];
+        if (r / 3 == c / 3) slot_[3 * c + r % 3] = k;
+      }
+    inv_.resize(n_ / 3 + 1);
+    r_.resize(n_), z_.resize(n_), d_.resize(n_), q_.resize(n_);
+  }
+
+  bool factor(const double* values) override {
+    vals_ = values;
+    for (Index k = 0; 3 * k < n_; ++k) {
+      Eigen::Matrix3d B = Eigen::Matrix3d::Identity();
+      for (int a = 0; a < 3 && 3 * k + a < n_; ++a)
+        for (int b = 0; b < 3 && 3 * k + b < n_; ++b) {
+          const Index s = slot_[3 * (3 * k + b) + a];
+          B(a, b) = s >= 0 ? values[s] : (a == b ? 1.0 : 0.0);
+        }
+      Eigen::LLT<Eigen::Matrix3d> llt(B);
+      if (llt.info() != Eigen::Success) return false;  // a non-positive diagonal block: S is indefinite
+      inv_[k] = llt.solve(Eigen::Matrix3d::Identity());
+    }
+    return true;
+  }
+
+  bool solve(const double* b, double* x) override {
+    Eigen::Map<const VectorXd> bb(b, n_);
+    Eigen::Map<VectorXd> xx(x, n_);
+    xx.setZero();
+    r_ = bb;
+    const double bnorm = bb.norm();
+    if (bnorm == 0) return true;
+    precondition(r_, z_);
+    d_ = z_;
+    double rz = r_.dot(z_);
+    for (int it = 0; it < max_iterations(); ++it) {
+      multiply(d_, q_);
+      const double dq = d_.dot(q_);
+      if (!(dq > 0)) return false;  // S is not positive definite along d
+      const double alpha = rz / dq;
+      xx += alpha * d_;
+      r_ -= alpha * q_;
+      ++iterations_;
+      if (r_.norm() <= tol_ * bnorm) return true;
+      precondition(r_, z_);
+      const double rz_new = r_.dot(z_);
+      d_ = z_ + (rz_new / rz) * d_;
+      rz = rz_new;
+    }
+    return false;
+  }
+
+  double factor_nnz() const override { return 0; }
+  long iterations() const override { return iterations_; }
+
+ private:
+  int max_iterations() const { return static_cast<int>(std::max<Index>(1000, n_ / 10)); }
+  void multiply(const VectorXd& v, VectorXd& out) const {
+    out.setZero();
+    for (Index c = 0; c < n_; ++c) {
+      const double vc = v[c];
+      for (Index k = p_.col_ptr[c]; k < p_.col_ptr[c + 1]; ++k) out[p_.row_ind[k]] += vals_[k] * vc;
+    }
+  }
+  void precondition(const VectorXd& r, VectorXd& z) const {
+    for (Index k = 0; 3 * k < n_; ++k) {
+      const Index m = std::min<Index>(3, n_ - 3 * k);
+      if (m == 3) {
+        z.segment<3>(3 * k) = inv_[k] * r.segment<3>(3 * k);
+      } else {  // a last partial block, padded with the identity: its inverse is the top-left corner
+        z.segment(3 * k, m) = inv_[k].topLeftCorner(m, m) * r.segment(3 * k, m);
+      }
+    }
+  }
+  const SparsePattern& p_;
+  double tol_;
+  Index n_;
+  const double* vals_ = nullptr;
+  std::vector<Index> slot_;
+  std::vector<Eigen::Matrix3d> inv_;
+  VectorXd r_, z_, d_, q_;
+  long iterations_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, const std::string& kind, double tol) {
+  if (kind == "pcg") return std::make_unique<BlockJacobiPcg>(pattern, tol);
+  return std::make_unique<SymmetricFactor>(pattern);
+}
+
+}  // namespace isochor
