@@ -109,13 +109,30 @@ def over_time(rows, d):
     return save(figv, d, "volume_error"), save(fige, d, "energy")
 
 
+def short_reason(reason):
+    """A failure reason in a few words for a map cell, with the time it happened."""
+    import re
+    tm = re.search(r"failed at t = ([0-9.eE+-]+) s", reason)
+    at = f"\nat {float(tm.group(1)):.3g} s" if tm else ""
+    for key, tag in (("not finite", "inverted /\nexploded"), ("singular", "singular\nmatrix"), ("Newton", "Newton\ndiverged"),
+                     ("IDA_CONV_FAIL", "IDA corrector\nfailed"), ("IDA_ERR_FAIL", "IDA error\ntest failed"),
+                     ("steps", "too many\nsteps"), ("PCG", "linear solve\nfailed")):
+        if key in reason:
+            return tag + at
+    return (reason.split(": ")[-1][:20] or "failed") + at
+
+
 def stability(rows, d):
     methods = [m for m in sorted({r["method"] for r in rows}) if m != "reference"
                and all(len(r["sweep_pairs"]) == 2 for r in rows if r["method"] == m)]
     if not methods:
         return None
-    fig, axes = plt.subplots(1, len(methods), figsize=(4.2 * len(methods), 3.6), squeeze=False)
-    for ax, m in zip(axes[0], methods):
+    cols = min(3, len(methods))
+    nrows = (len(methods) + cols - 1) // cols
+    fig, axes = plt.subplots(nrows, cols, figsize=(4.6 * cols, 3.6 * nrows), squeeze=False)
+    for ax in axes.flat[len(methods):]:
+        ax.set_axis_off()
+    for ax, m in zip(axes.flat, methods):
         mine = [r for r in rows if r["method"] == m]
         kx, ky = mine[0]["sweep_pairs"][0][0], mine[0]["sweep_pairs"][1][0]
         xs = sorted({number(r["sweep_pairs"][0][1]) for r in mine})
@@ -124,8 +141,9 @@ def stability(rows, d):
             i, j = xs.index(number(r["sweep_pairs"][0][1])), ys.index(number(r["sweep_pairs"][1][1]))
             ok = r["status"] == "ok"
             ax.add_patch(plt.Rectangle((i - 0.5, j - 0.5), 1, 1, color="#7fc97f" if ok else "#f0027f", alpha=0.8))
-            text = "ok" if ok else (r["reason"].split(": ")[-1][:28] or "failed")
-            ax.text(i, j, text, ha="center", va="center", fontsize=6, wrap=True)
+            vol = number(r["volume_error"])
+            text = (f"ok\nvolume error\n{vol:.1e}" if np.isfinite(vol) else "ok") if ok else short_reason(r["reason"])
+            ax.text(i, j, text, ha="center", va="center", fontsize=7)
         ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs])
         ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys])
         ax.set_xlim(-0.5, len(xs) - 0.5)
@@ -133,6 +151,7 @@ def stability(rows, d):
         ax.set_xlabel(kx)
         ax.set_ylabel(ky)
         ax.set_title(m)
+    fig.tight_layout()
     return save(fig, d, "stability")
 
 
