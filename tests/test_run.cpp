@@ -314,3 +314,18 @@ TEST(BackwardEulerRun, KrylovAndCholmodStepsAgree) {
   }
   for (int k = 0; k < 11; ++k) EXPECT_LT((frames[1][k] - frames[0][k]).cwiseAbs().maxCoeff(), 1e-5) << "frame " << k;
 }
+
+TEST(Scene, StaticsRejectTheReducedLinearSolvers) {
+  // KINSOL solves the KKT system with KLU; the reduced and krylov solvers are IDA's and backward
+  // Euler's: asking statics for them is an error that names the key.
+  for (const char* s : {"reduced", "krylov"}) {
+    const std::string e = test::error_of([&] {
+      load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/two_tets.toml", {std::string("integrator.linear_solver=") + s});
+    });
+    EXPECT_NE(e.find("integrator.linear_solver: statics solve the KKT system with KLU"), std::string::npos) << e;
+  }
+  EXPECT_EQ(test::error_of([&] {
+              load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/two_tets.toml", {"integrator.linear_solver=klu"});
+            }),
+            "");
+}
