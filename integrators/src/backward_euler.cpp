@@ -124,6 +124,7 @@ struct BackwardEuler::Impl {
           ok = kkt->factor(kv.data());
         } else {
           ok = S->factor(Sv.data());
+          stats.symbolic_seconds = S->analyse_seconds();
         }
         stats.factor_seconds += seconds_since(tf);
         stats.jacobian_evals++;

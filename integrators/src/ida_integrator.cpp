@@ -119,6 +119,7 @@ int reduced_setup(SUNLinearSolver S, SUNMatrix A) {
   s->stats.factor_seconds += seconds_since(t0);
   s->stats.fresh_factorisations++;
   s->stats.factor_nnz = s->reduced->factor_nnz();
+  s->stats.symbolic_seconds = s->reduced->analyse_seconds();
   return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;  // not positive definite: retry smaller step
 }
 int reduced_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype) {

@@ -51,6 +51,7 @@ ReducedSolver::~ReducedSolver() = default;
 
 double ReducedSolver::factor_nnz() const { return impl_->S->factor_nnz(); }
 long ReducedSolver::iterations() const { return impl_->S->iterations(); }
+double ReducedSolver::analyse_seconds() const { return impl_->S->analyse_seconds(); }
 
 bool ReducedSolver::setup(double cj, const double* vals) {
   Impl& s = *impl_;

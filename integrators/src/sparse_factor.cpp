@@ -2,6 +2,8 @@
 
 #include <cholmod.h>
 
+#include <chrono>
+
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -15,6 +17,13 @@ struct SymmetricFactor::Impl {
   cholmod_factor* L = nullptr;
   cholmod_dense *B = nullptr, *X = nullptr, *Y = nullptr, *E = nullptr;
   bool ldlt = false;
+  double analyse = 0;  // seconds in cholmod_l_analyze (METIS ordering and symbolic factorisation)
+  cholmod_factor* analyze() {
+    const auto t0 = std::chrono::steady_clock::now();
+    cholmod_factor* f = cholmod_l_analyze(A, &c);
+    analyse += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return f;
+  }
 
   explicit Impl(const SparsePattern& p) : n(p.n) {
     cholmod_l_start(&c);
@@ -44,7 +53,7 @@ SymmetricFactor::~SymmetricFactor() = default;
 bool SymmetricFactor::factor(const double* values) {
   Impl& s = *impl_;
   std::memcpy(s.A->x, values, sizeof(double) * s.A->nzmax);
-  if (!s.L) s.L = cholmod_l_analyze(s.A, &s.c);
+  if (!s.L) s.L = s.analyze();
   cholmod_l_factorize(s.A, s.L, &s.c);
   if (s.c.status == CHOLMOD_NOT_POSDEF && !s.ldlt) {
     // Indefinite: from now on a simplicial LDL^T (no pivoting, fine while no pivot is zero).
@@ -52,7 +61,7 @@ bool SymmetricFactor::factor(const double* values) {
     cholmod_l_free_factor(&s.L, &s.c);
     s.c.supernodal = CHOLMOD_SIMPLICIAL;
     s.c.final_ll = 0;
-    s.L = cholmod_l_analyze(s.A, &s.c);
+    s.L = s.analyze();
     cholmod_l_factorize(s.A, s.L, &s.c);
   }
   if (std::getenv("ISOCHOR_DEBUG_CHOLMOD"))
@@ -70,6 +79,7 @@ bool SymmetricFactor::solve(const double* b, double* x) {
 }
 
 bool SymmetricFactor::used_ldlt() const { return impl_->ldlt; }
+double SymmetricFactor::analyse_seconds() const { return impl_->analyse; }
 
 double SymmetricFactor::factor_nnz() const {
   const cholmod_factor* L = impl_->L;

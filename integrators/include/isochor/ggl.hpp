@@ -63,6 +63,7 @@ class ReducedSolver {
   bool solve(const double* b, double* x, int refine = 0);
   double factor_nnz() const;
   long iterations() const;  // PCG iterations so far (0 for the direct solver)
+  double analyse_seconds() const;  // CHOLMOD's ordering and symbolic analysis so far
 
  private:
   void solve_once(const double* b, double* x);

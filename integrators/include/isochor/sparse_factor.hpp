@@ -24,6 +24,7 @@ class SymmetricSolver {
   virtual bool solve(const double* b, double* x) = 0;
   virtual double factor_nnz() const = 0;   // entries of the factor (0 for an iterative solver)
   virtual long iterations() const { return 0; }  // iterative: iterations over all solves so far
+  virtual double analyse_seconds() const { return 0; }  // direct: ordering and symbolic analysis so far
 };
 
 // kind: "cholmod" or "pcg" (relative residual tolerance `tol`: the GGL residual of a reduced solve
@@ -38,6 +39,7 @@ class SymmetricFactor : public SymmetricSolver {
   bool solve(const double* b, double* x) override;
   bool used_ldlt() const;
   double factor_nnz() const override;
+  double analyse_seconds() const override;
 
  private:
   struct Impl;
