@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "isochor/bvh.hpp"
 #include "isochor/error.hpp"
