@@ -261,10 +261,10 @@ std::shared_ptr<Skeleton> parse_skeleton(const Section& s, const SceneFile& file
     }
     const std::string joint = b.string("joint", "weld", {"weld", "pin", "universal", "ball"});
     bone.origin = b.vec3("origin", Eigen::Vector3d::Zero());
-    bone.direction = unit(b, "direction", Eigen::Vector3d::UnitX());
-    bone.length = b.number("length", 0.0, Range::non_negative());
-    bone.start = b.number("start", 0.0, Range::non_negative());
-    if (bone.start > bone.length && b.has("start")) b.fail("start", "expected start <= length");
+    const Eigen::Vector3d direction = unit(b, "direction", Eigen::Vector3d::UnitX());
+    double length = b.number("length", 0.0, Range::non_negative());
+    const double start = b.number("start", 0.0, Range::non_negative());
+    if (start > length && b.has("start")) b.fail("start", "expected start <= length");
     bone.radius = b.number("radius", 0.0, Range::non_negative());
     if (joint == "weld") {
       bone.joint = BoneSpec::Joint::weld;
@@ -310,9 +310,9 @@ std::shared_ptr<Skeleton> parse_skeleton(const Section& s, const SceneFile& file
     }
     // Nodes: listed explicitly, or (below) those near the capsule.
     if (Section sel = b.table("select"); sel.exists()) bone.nodes = select_nodes(mesh, Selection::parse(sel));
-    bone.length = std::max(bone.length, bone.start);
-    bone.from = b.vec3("from", bone.origin + bone.start * bone.direction);
-    bone.to = b.vec3("to", bone.origin + bone.length * bone.direction);
+    length = std::max(length, start);
+    bone.from = b.vec3("from", bone.origin + start * direction);
+    bone.to = b.vec3("to", bone.origin + length * direction);
     if ((b.has("from") || b.has("to")) && (b.has("start") || b.has("length") || b.has("direction")))
       b.fail(b.has("from") ? "from" : "to", "give the capsule either by from and to or by direction, start and length, not both");
     index[bone.name] = static_cast<int>(bones.size());
@@ -328,14 +328,18 @@ std::shared_ptr<Skeleton> parse_skeleton(const Section& s, const SceneFile& file
       bound_to[v] = static_cast<int>(i);
     }
   std::vector<double> attach(bones.size());
-  for (std::size_t i = 0; i < bones.size(); ++i) attach[i] = bone_sections[i].number("attach_distance", 0.0, Range::non_negative());
+  std::vector<char> listed(bones.size());  // the bone's nodes are given by `select`
+  for (std::size_t i = 0; i < bones.size(); ++i) {
+    attach[i] = bone_sections[i].number("attach_distance", 0.0, Range::non_negative());
+    listed[i] = bone_sections[i].table("select").exists();
+  }
   const Points& X = mesh.rest_positions();
   for (int v = 0; v < mesh.num_nodes(); ++v) {
     if (bound_to[v] >= 0) continue;
     double best = std::numeric_limits<double>::infinity();
     int which = -1;
     for (std::size_t i = 0; i < bones.size(); ++i) {
-      if (bones[i].radius <= 0 || bone_sections[i].table("select").exists()) continue;
+      if (bones[i].radius <= 0 || listed[i]) continue;
       const double d = bones[i].segment_distance(X.col(v)) - bones[i].radius;
       if (d <= attach[i] && d < best) best = d, which = static_cast<int>(i);
     }
@@ -343,12 +347,11 @@ std::shared_ptr<Skeleton> parse_skeleton(const Section& s, const SceneFile& file
   }
   for (std::size_t i = 0; i < bones.size(); ++i) {
     std::sort(bones[i].nodes.begin(), bones[i].nodes.end());
-    const bool wants = bones[i].radius > 0 || bone_sections[i].table("select").exists();
-    if (wants && bones[i].nodes.empty())
+    if ((bones[i].radius > 0 || listed[i]) && bones[i].nodes.empty())
       bone_sections[i].fail("radius", "bone \"" + bones[i].name + "\" binds no mesh node (expected its capsule, the segment from-to with this radius, to hold mesh nodes)");
     for (int v : bones[i].nodes)
       if (driven_by[v] >= 0)
-        bone_sections[i].fail(bone_sections[i].table("select").exists() ? "select" : "radius",
+        bone_sections[i].fail(listed[i] ? "select" : "radius",
                               "node " + std::to_string(v) + " of bone \"" + bones[i].name + "\" is already driven by boundary[" +
                                   std::to_string(driven_by[v]) + "] (expected each node driven once)");
   }

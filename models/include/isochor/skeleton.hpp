@@ -27,15 +27,14 @@ struct BoneSpec {
   int parent = -1;  // index of the parent bone, -1: the ground
   Joint joint = Joint::weld;
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();      // the joint, rest pose, world
-  Eigen::Vector3d direction = Eigen::Vector3d::UnitX();  // along the bone (unit)
-  double length = 0, start = 0, radius = 0;              // capsule: origin + s dir, s in [start, length]
-  Eigen::Vector3d from = Eigen::Vector3d::Zero(), to = Eigen::Vector3d::Zero();  // the capsule's axis segment
+  // The capsule that binds nodes by distance: its axis segment from-to (rest pose) and radius.
+  Eigen::Vector3d from = Eigen::Vector3d::Zero(), to = Eigen::Vector3d::Zero();
+  double radius = 0;
   Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();    // columns: the joint's rotation axes in order
   int angles = 0;                                        // 0 weld, 1 pin, 2 universal, 3 ball
   Driver motion;  // angles (rad) of the joint in x, y, z of its values; Kind::fixed: zero
   std::vector<int> nodes;  // bound mesh nodes
 
-  int num_angles() const { return angles; }
   // The joint rotation relative to the parent, and its angular velocity (parent frame), at t.
   Eigen::Matrix3d rotation(double t, Eigen::Vector3d* omega = nullptr) const;
   // Distance from a rest-pose point to the capsule's axis segment.
