@@ -77,7 +77,7 @@ double XpbdMeshSystem::constraint(int c, const Eigen::VectorXd& x, std::vector<i
     value = F.determinant() - gamma_;
     dC = cofactor_vec(F);
   }
-  const Vec12 g = s.dFdx.transpose() * dC;
+  const Vec12 g = s.scatter(Eigen::Map<const Mat3>(dC.data()));
   points.assign(t.begin(), t.end());
   grad.assign(g.data(), g.data() + 12);
   return value;

@@ -19,13 +19,16 @@ using Mat12 = Eigen::Matrix<double, 12, 12>;
 struct TetShape {
   Mat3 Dm_inv;
   double rest_volume = 0;
-  Eigen::Matrix<double, 9, 12> dFdx;
 
   static TetShape make(const Vec3& X0, const Vec3& X1, const Vec3& X2, const Vec3& X3);
   Mat3 F(const Vec12& x) const;
+  // dFdx^T vec(P) (the gradient of an energy density with first Piola P, per unit volume) and
+  // dFdx^T A dFdx (its Hessian for A = dP/dF), using dFdx's structure.
+  Vec12 scatter(const Mat3& P) const;
+  Mat12 pull_back(const Mat9& A) const;
 };
 
-// Energy V psi(F) of a tet; gradient V dFdx^T vec(P), Hessian V dFdx^T dP/dF dFdx.
+// Energy V psi(F) of a tet; gradient V dFdx^T vec(P), Hessian V dFdx^T dP/dF dFdx (dFdx = dvec(F)/dx).
 // With dir and hess_dir, also hess_dir = H dir (computed without H when hess is null).
 double tet_energy(const Material& m, const TetShape& s, const Vec12& x, Vec12* grad, Mat12* hess,
                   const Vec12* dir = nullptr, Vec12* hess_dir = nullptr);
