@@ -104,7 +104,11 @@ RunSummary run_system(const Scene& sc, System& sys, const std::string& output, b
   };
   try {
     if (kind == "ida") summary.stats = IdaIntegrator(sys, o).run(times, on_frame);
-    else if (kind == "static") summary.stats = StaticSolver(sys, StaticOptions{}).run(times, on_frame);
+    else if (kind == "static") {
+      StaticOptions so;
+      so.linear_solver = sc.integrator.linear_solver == "auto" ? "klu" : sc.integrator.linear_solver;
+      summary.stats = StaticSolver(sys, so).run(times, on_frame);
+    }
     else if (kind == "backward_euler" || kind == "semi_implicit") summary.stats = BackwardEuler(sys, be).run(times, on_frame);
     else if (kind == "mass_spring") {
       if constexpr (std::is_same_v<System, MassSpringSystem>) {

@@ -7,6 +7,7 @@
 
 #include "isochor/fixed_step.hpp"
 #include "isochor/sparse_factor.hpp"
+#include "bordered.hpp"
 #include "kkt.hpp"
 
 namespace isochor {
@@ -15,7 +16,7 @@ struct BackwardEuler::Impl {
   ConstrainedSystem& sys;
   BackwardEulerOptions opt;
   Index n, m;
-  std::unique_ptr<SymmetricSolver> S;
+  std::unique_ptr<BorderedSolver> S;  // the step matrix and the borders by a Schur complement
   std::vector<double> K, D, Sv;
   std::vector<Index> diag;
   std::vector<std::vector<double>> G;
@@ -28,8 +29,9 @@ struct BackwardEuler::Impl {
 
   Impl(ConstrainedSystem& s, BackwardEulerOptions o)
       : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()),
-        S(make_symmetric_solver(s.pattern(), o.linear_solver == "krylov" ? "pcg" : "cholmod")),
         use_kkt(o.linear_solver == "klu" || m > o.schur_max_constraints) {
+    if (!use_kkt)
+      S = std::make_unique<BorderedSolver>(s.pattern(), s.constraint_rows(), o.linear_solver == "krylov" ? "pcg" : "cholmod");
     if (use_kkt) {
       layout = std::make_unique<KktLayout>(s.pattern(), s.constraint_rows());
       kkt = std::make_unique<KktFactor>(*layout, s.pattern(), s.dofs_per_group(), s.constraint_rows());
@@ -78,8 +80,7 @@ struct BackwardEuler::Impl {
     // the semi-implicit variant, whose single iteration starts from it, use q_n + h v_n).
     if (have_previous && !opt.semi_implicit) q = qn + h * (2 * vn - v_previous);
     else q = qn + h * vn;
-    VectorXd f(n), R1(n), R2(m), g(m), y(n), dq(n), rhs(n);
-    Eigen::MatrixXd Z(n, use_kkt ? 0 : m), Gt(n, use_kkt ? 0 : m);
+    VectorXd f(n), R1(n), R2(m), g(m), dq(n), dl(m), rhs(n);
     VectorXd kr(use_kkt ? n + m : 0);
     const double tol = opt.newton_tol * std::max(1.0, qn.cwiseAbs().maxCoeff());
     const int iterations = opt.semi_implicit ? 1 : opt.max_newton;
@@ -95,15 +96,8 @@ struct BackwardEuler::Impl {
       if (m) {
         sys.constraint(t1, q, g);
         sys.constraint_jacobian(t1, q, G, nullptr);
-        if (use_kkt) {
-          for (Index j = 0; j < m; ++j)
-            for (std::size_t k = 0; k < G[j].size(); ++k) R1[sys.constraint_rows()[j][k]] += G[j][k] * lambda[j];
-        } else {
-          Gt.setZero();
-          for (Index j = 0; j < m; ++j)
-            for (std::size_t k = 0; k < G[j].size(); ++k) Gt(sys.constraint_rows()[j][k], j) = G[j][k];
-          R1 += Gt * lambda;
-        }
+        for (Index j = 0; j < m; ++j)
+          for (std::size_t k = 0; k < G[j].size(); ++k) R1[sys.constraint_rows()[j][k]] += G[j][k] * lambda[j];
         R2 = g;
       }
       if (!R1.allFinite()) {
@@ -124,7 +118,7 @@ struct BackwardEuler::Impl {
           ok = kkt->factor(kv.data());
         } else {
           ok = S->factor(Sv.data());
-          stats.symbolic_seconds = S->analyse_seconds();
+          stats.symbolic_seconds = S->symmetric().analyse_seconds();
         }
         stats.factor_seconds += seconds_since(tf);
         stats.jacobian_evals++;
@@ -143,17 +137,13 @@ struct BackwardEuler::Impl {
         dq = kr.head(n);
         lambda += kr.tail(m);
       } else {
+        // The current borders with the (possibly reused) factor of the step matrix.
         rhs = -R1;
-        bool solved = S->solve(rhs.data(), y.data());
-        dq = y;
-        if (m) {
-          for (Index j = 0; j < m; ++j) solved = S->solve(Gt.col(j).data(), Z.col(j).data()) && solved;
-          // (G Z) dl = R2 - G S^-1 R1 = R2 + G y;  dq = y - Z dl.
-          const VectorXd dl = (Gt.transpose() * Z).partialPivLu().solve(R2 + Gt.transpose() * y);
-          dq -= Z * dl;
-          lambda += dl;
-        }
-        stats.linear_iterations = S->iterations();
+        const VectorXd r2 = -R2;
+        bool solved = S->set_borders(G);
+        solved = S->solve(rhs.data(), r2.data(), dq.data(), dl.data()) && solved;
+        if (m) lambda += dl;
+        stats.linear_iterations = S->symmetric().iterations();
         if (!solved) {
           stats.solve_seconds += seconds_since(ts);
           reason = "the linear solve failed (PCG did not converge, or the step matrix is indefinite)";

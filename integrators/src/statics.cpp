@@ -1,4 +1,5 @@
 #include "isochor/statics.hpp"
+#include "bordered.hpp"
 #include "kkt.hpp"
 #include "klu_order.hpp"
 #include "timing.hpp"
@@ -26,6 +27,7 @@ struct StaticSolver::Impl {
   double t = 0;
   IdaStats stats;
   std::vector<Index> order;  // METIS order for KLU
+  std::unique_ptr<BorderedSolver> bordered;  // reduced/krylov: A = K + H_lambda and the borders
 
   Impl(ConstrainedSystem& s, StaticOptions o)
       : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()), kkt(s.pattern(), s.constraint_rows()) {
@@ -36,6 +38,8 @@ struct StaticSolver::Impl {
     v0 = VectorXd::Zero(n);
     f.resize(n);
     g.resize(m);
+    if (opt.linear_solver != "klu")
+      bordered = std::make_unique<BorderedSolver>(S, sys.constraint_rows(), opt.linear_solver == "krylov" ? "pcg" : "cholmod");
   }
 
   int residual(N_Vector u, N_Vector fv) {
@@ -72,7 +76,7 @@ struct StaticSolver::Impl {
       sys.add_constraint_hessian(t, q, lambda, 1.0, K.data());
       sys.constraint_jacobian(t, q, G, nullptr);
     }
-    kkt.fill(K.data(), G, SM_DATA_S(J));
+    if (!bordered) kkt.fill(K.data(), G, SM_DATA_S(J));  // the bordered solver reads K and G
     stats.jacobian_evals++;
     stats.assembly_seconds += seconds_since(t0);
     return 0;
@@ -84,6 +88,37 @@ void kin_quiet(int, const char*, const char*, char*, void*) {}  // failures are 
 int kin_res(N_Vector u, N_Vector f, void* data) { return static_cast<StaticSolver::Impl*>(data)->residual(u, f); }
 int kin_jac(N_Vector u, N_Vector, SUNMatrix J, void* data, N_Vector, N_Vector) {
   return static_cast<StaticSolver::Impl*>(data)->jacobian(u, J);
+}
+// The bordered solver as a matrix-based SUNLinearSolver: setup factors A = K + H_lambda and the
+// borders that the Jacobian function just assembled; the KKT matrix itself is not filled.
+SUNLinearSolver_Type bordered_type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
+SUNLinearSolver_ID bordered_id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
+int bordered_initialize(SUNLinearSolver) { return SUNLS_SUCCESS; }
+int bordered_setup(SUNLinearSolver LS, SUNMatrix) {
+  auto& s = *static_cast<StaticSolver::Impl*>(LS->content);
+  const auto t0 = Clock::now();
+  const bool ok = s.bordered->factor(s.K.data()) && s.bordered->set_borders(s.G);
+  s.stats.factor_seconds += seconds_since(t0);
+  s.stats.fresh_factorisations++;
+  s.stats.factor_nnz = s.bordered->symmetric().factor_nnz();
+  s.stats.symbolic_seconds = s.bordered->symmetric().analyse_seconds();
+  return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_UNREC;
+}
+int bordered_solve(SUNLinearSolver LS, SUNMatrix, N_Vector x, N_Vector b, realtype) {
+  auto& s = *static_cast<StaticSolver::Impl*>(LS->content);
+  const auto t0 = Clock::now();
+  const double* r = N_VGetArrayPointer(b);
+  double* y = N_VGetArrayPointer(x);
+  const bool ok = s.bordered->solve(r, r + s.n, y, y + s.n);
+  s.stats.solve_seconds += seconds_since(t0);
+  s.stats.linear_iterations = s.bordered->symmetric().iterations();
+  return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_UNREC;
+}
+sunindextype bordered_lastflag(SUNLinearSolver) { return 0; }
+int bordered_free(SUNLinearSolver LS) {
+  LS->content = nullptr;
+  SUNLinSolFreeEmpty(LS);
+  return SUNLS_SUCCESS;
 }
 }  // namespace
 
@@ -118,9 +153,22 @@ IdaStats StaticSolver::run(const std::vector<double>& times, const FrameCallback
   KINSetMaxNewtonStep(mem, 1e10);
   if (std::getenv("ISOCHOR_KINSOL_PRINT")) KINSetPrintLevel(mem, 2);
   SUNMatrix J = SUNSparseMatrix(N, N, s.kkt.p.nnz(), CSC_MAT, ctx);
-  SUNLinearSolver LS = SUNLinSol_KLU(u, J, ctx);
-  s.order = metis_order(s.sys.pattern(), s.sys.dofs_per_group(), s.n, 1, s.sys.constraint_rows(), 1);
-  use_klu_order(LS, &s.order);
+  SUNLinearSolver LS;
+  if (s.bordered) {
+    LS = SUNLinSolNewEmpty(ctx);
+    LS->content = &s;
+    LS->ops->gettype = bordered_type;
+    LS->ops->getid = bordered_id;
+    LS->ops->initialize = bordered_initialize;
+    LS->ops->setup = bordered_setup;
+    LS->ops->solve = bordered_solve;
+    LS->ops->lastflag = bordered_lastflag;
+    LS->ops->free = bordered_free;
+  } else {
+    LS = SUNLinSol_KLU(u, J, ctx);
+    s.order = metis_order(s.sys.pattern(), s.sys.dofs_per_group(), s.n, 1, s.sys.constraint_rows(), 1);
+    use_klu_order(LS, &s.order);
+  }
   KINSetLinearSolver(mem, LS, J);
   KINSetJacFn(mem, kin_jac);
   auto cleanup = [&]() {

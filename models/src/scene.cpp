@@ -243,8 +243,6 @@ Scene parse_scene(SceneFile file) {
   ig.max_steps = in.integer("max_steps", ig.max_steps, 1, 1000000000000L);
   ig.ordering = in.string("ordering", ig.ordering, {"metis", "colamd", "amd"});
   ig.linear_solver = in.string("linear_solver", ig.linear_solver, {"auto", "klu", "reduced", "krylov"});
-  if (ig.kind == "static" && ig.linear_solver != "auto" && ig.linear_solver != "klu")
-    in.fail("linear_solver", "statics solve the KKT system with KLU (expected \"auto\" or \"klu\")");
   ig.substeps = static_cast<int>(in.integer("substeps", ig.substeps, 1, 100000));
   ig.iterations = static_cast<int>(in.integer("iterations", ig.iterations, 1, 100000));
   ig.rescale_volume = in.boolean("rescale_volume", false);

@@ -1,10 +1,13 @@
 // Statics with KINSOL: for each frame's (pseudo-)time t, unknowns (q, lambda) with
 //   -f(q, 0, t) + G^T lambda = 0,   g(q, t) = 0,
 // Newton with a line search, KKT Jacobian [K + sum lambda_j H_j, G^T; G, 0] in a pattern built
-// once and factored by KLU. Each frame starts from the previous solution, so drivers that move
+// once and factored by KLU (linear_solver "klu"), or reduced to its n x n block A = K + sum
+// lambda_j H_j with the constraint borders by a Schur complement: A factored by CHOLMOD
+// ("reduced") or solved by block-Jacobi PCG ("krylov", A positive definite only). Each frame starts from the previous solution, so drivers that move
 // with t apply their displacement in increments.
 #pragma once
 #include <memory>
+#include <string>
 
 #include "isochor/ida_integrator.hpp"
 
@@ -13,6 +16,7 @@ namespace isochor {
 struct StaticOptions {
   double residual_tol = 1e-9;  // KINSOL's scaled residual norm (forces over the system's force scale)
   long max_iterations = 200;   // Newton iterations per frame
+  std::string linear_solver = "klu";  // "klu", "reduced" or "krylov"
 };
 
 class StaticSolver {
