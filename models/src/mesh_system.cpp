@@ -80,13 +80,9 @@ void MeshSystem::initial_state(double t0, VectorXd& q, VectorXd& v) {
 }
 
 void MeshSystem::force(double t, const VectorXd& q, const VectorXd& v, VectorXd& f) {
-  set_state(t, q, v);
-  elastic_->gradient(x_, grad_);
-  external_->add_gradient(x_, grad_);
-  grad_ = -grad_;  // forces
-  if (damping_.alpha != 0 || damping_.beta != 0) damping_.add_force(*elastic_, node_mass_, x_, xdot_, grad_);
-  f.resize(num_dofs());
-  for (int k = 0; k < dofs_.num_free(); ++k) f.segment<3>(3 * k) = grad_.segment<3>(3 * dofs_.free_nodes[k]);
+  // One pass over the elements for the elastic force and the Rayleigh term beta K v (each
+  // element's F and material evaluated once).
+  force_and_jacobians(t, q, v, f, nullptr, nullptr);
 }
 
 void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq, double* neg_dfdv) {
