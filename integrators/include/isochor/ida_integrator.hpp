@@ -28,6 +28,9 @@ struct IdaOptions {
   std::string ordering = "metis";  // KLU: "metis" (node-grouped nested dissection), "colamd", "amd"
   // "klu": the whole GGL matrix; "reduced": eliminate dv, factor S with CHOLMOD (ggl.hpp).
   std::string linear_solver = "klu";
+  // Called with every Jacobian IDA asks for (its values in the GGL form's pattern, ggl.hpp), e.g.
+  // to test linear solvers on the matrices of a real integration.
+  std::function<void(double t, double cj, const double* y, const double* yp, const double* values)> on_jacobian;
 };
 
 // Statistics of a run; per-frame series are sampled at each frame.
