@@ -27,6 +27,7 @@ void write_totals(OutputWriter& w, const IdaStats& s) {
   w.set_stat("rejected_steps_newton", static_cast<double>(s.newton_failures));
   w.set_stat("rejected_steps_error_test", static_cast<double>(s.error_test_failures));
   w.set_stat("fresh_factorisations", static_cast<double>(s.fresh_factorisations));
+  w.set_stat("reused_jacobians", static_cast<double>(s.reused_jacobians));
   w.set_stat("wall_seconds", s.wall_seconds);
   w.set_stat("assembly_seconds", s.assembly_seconds);
   w.set_stat("factorisation_seconds", s.factor_seconds);
@@ -59,6 +60,7 @@ RunSummary run_system(const Scene& sc, System& sys, const std::string& output, b
   o.max_steps = sc.integrator.max_steps;
   o.ordering = sc.integrator.ordering;
   o.linear_solver = sc.integrator.linear_solver == "auto" ? "klu" : sc.integrator.linear_solver;
+  o.jacobian_age = sc.integrator.jacobian_age;
   BackwardEulerOptions be;
   be.dt = sc.integrator.dt;
   be.newton_tol = sc.integrator.newton_tol;

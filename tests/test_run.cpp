@@ -276,25 +276,33 @@ TEST(IdaRun, FixedBottomCubeStartsAtTightTolerances) {
 
 TEST(IdaRun, BallDropFramesAgreeAcrossLinearSolvers) {
   // The same drop (through the impact: contact, large deformation) with KLU on the whole GGL
-  // matrix, the reduced system by CHOLMOD, and the reduced system by PCG: the same frames to the
-  // integration tolerance (50 times rtol |x| + atol, |x| ~ 0.5 m).
+  // matrix, the reduced system by CHOLMOD, the reduced system by PCG, and PCG with Jacobians
+  // reused across c_j changes (integrator.jacobian_age): the same frames to the integration
+  // tolerance (50 times rtol |x| + atol, |x| ~ 0.5 m).
   const auto dir = test::temp_dir();
-  std::vector<Points> frames[3];
-  const char* solvers[3] = {"klu", "reduced", "krylov"};
-  for (int s = 0; s < 3; ++s) {
+  std::vector<Points> frames[4];
+  std::map<std::string, double> totals[4];
+  const char* solvers[4] = {"klu", "reduced", "krylov", "krylov"};
+  for (int s = 0; s < 4; ++s) {
     Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/ball_drop.toml",
                           {"mesh.target_tets=1000", "frames.duration=0.04", "frames.rate=250.0",
-                           std::string("integrator.linear_solver=") + solvers[s]});
-    const RunFile f(run_scene(sc, (dir / (std::string(solvers[s]) + ".h5")).string(), false).output);
+                           std::string("integrator.linear_solver=") + solvers[s],
+                           std::string("integrator.jacobian_age=") + (s == 3 ? "20" : "0")});
+    const RunFile f(run_scene(sc, (dir / (std::to_string(s) + ".h5")).string(), false).output);
     ASSERT_EQ(f.num_frames(), 11);
     for (int k = 0; k < f.num_frames(); ++k) frames[s].push_back(f.positions(k));
+    totals[s] = f.stat_totals();
   }
   const double tol = 50 * (1e-6 * 0.5 + 1e-8);
-  for (int s = 1; s < 3; ++s)
+  for (int s = 1; s < 4; ++s)
     for (int k = 0; k < 11; ++k)
-      EXPECT_LT((frames[s][k] - frames[0][k]).cwiseAbs().maxCoeff(), tol) << solvers[s] << " frame " << k;
+      EXPECT_LT((frames[s][k] - frames[0][k]).cwiseAbs().maxCoeff(), tol) << solvers[s] << " run " << s << " frame " << k;
   // Through the impact: the ball has moved and deformed.
   EXPECT_GT((frames[0][10] - frames[0][0]).cwiseAbs().maxCoeff(), 0.3);
+  // Reuse replaced assemblies: fewer Jacobians assembled than setups.
+  EXPECT_GT(totals[3].at("reused_jacobians"), 0.0);
+  EXPECT_EQ(totals[2].at("reused_jacobians"), 0.0);
+  EXPECT_LT(totals[3].at("jacobian_evaluations"), totals[2].at("jacobian_evaluations"));
 }
 
 TEST(BackwardEulerRun, KrylovAndCholmodStepsAgree) {

@@ -60,21 +60,46 @@ struct IdaIntegrator::Impl {
     return ok ? 0 : 1;  // not finite: recoverable, IDA retries with a smaller step
   }
 
+  // The last assembled Jacobian (jacobian_age > 0): values, c_j, step count.
+  std::vector<double> fresh_vals;
+  double fresh_cj = 0;
+  long fresh_step = -1;
+
   int jacobian(double t, double cj, N_Vector yy, N_Vector yp, SUNMatrix J) {
     const auto t0 = Clock::now();
-    if (!reduced) {
-      // A Newton failure since the last Jacobian: the pivot order of the first factorisation may
-      // have gone stale (c_j changed, contact): ask KLU for a fresh factorisation.
-      long nfail = 0;
-      IDAGetNumNonlinSolvConvFails(ida_mem, &nfail);
-      if (nfail > last_newton_failures && stats.jacobian_evals > 0) SUNLinSol_KLUReInit(LS, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
-      last_newton_failures = nfail;
-    }
-    stats.jacobian_evals++;
+    long nfail = 0, nst = 0;
+    IDAGetNumNonlinSolvConvFails(ida_mem, &nfail);
+    IDAGetNumSteps(ida_mem, &nst);
+    const bool failed = nfail > last_newton_failures;
+    last_newton_failures = nfail;
+    // A Newton failure since the last Jacobian: the pivot order of KLU's first factorisation may
+    // have gone stale (c_j changed, contact): ask KLU for a fresh factorisation.
+    if (!reduced && failed && stats.jacobian_evals > 0) SUNLinSol_KLUReInit(LS, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
     // SUNMatZero cleared the index arrays too: copy the pattern back, then the values.
     std::memcpy(SM_INDEXPTRS_S(J), ggl.pattern().col_ptr.data(), sizeof(sunindextype) * (ggl.size() + 1));
     std::memcpy(SM_INDEXVALS_S(J), ggl.pattern().row_ind.data(), sizeof(sunindextype) * ggl.pattern().nnz());
-    ggl.jacobian(t, cj, N_VGetArrayPointer(yy), N_VGetArrayPointer(yp), SM_DATA_S(J));
+    double* vals = SM_DATA_S(J);
+    if (opt.jacobian_age > 0 && !failed && fresh_step >= 0 && nst - fresh_step < opt.jacobian_age) {
+      // IDA asks for a setup because c_j changed: the last assembled Jacobian with the new c_j
+      // (it enters only the diagonals c_j I and c_j M), as CVODE does with its saved Jacobian.
+      std::memcpy(vals, fresh_vals.data(), sizeof(double) * fresh_vals.size());
+      const double d = cj - fresh_cj;
+      const VectorXd& M = sys.mass();
+      for (Index i = 0; i < n; ++i) {
+        vals[ggl.q_diag[i]] += d;
+        vals[ggl.v_diag[i]] += d * M[i];
+      }
+      stats.reused_jacobians++;
+      stats.assembly_seconds += seconds_since(t0);
+      return 0;
+    }
+    stats.jacobian_evals++;
+    ggl.jacobian(t, cj, N_VGetArrayPointer(yy), N_VGetArrayPointer(yp), vals);
+    if (opt.jacobian_age > 0) {
+      fresh_vals.assign(vals, vals + ggl.pattern().nnz());
+      fresh_cj = cj;
+      fresh_step = nst;
+    }
     stats.assembly_seconds += seconds_since(t0);
     if (opt.on_jacobian) opt.on_jacobian(t, cj, N_VGetArrayPointer(yy), N_VGetArrayPointer(yp), SM_DATA_S(J));
     return 0;

@@ -241,6 +241,7 @@ Scene parse_scene(SceneFile file) {
   ig.max_step = in.number("max_step", 0.0, Range::non_negative());
   ig.newton_coef = in.number("newton_coef", ig.newton_coef, {0.0, 1.0, true, true});
   ig.max_steps = in.integer("max_steps", ig.max_steps, 1, 1000000000000L);
+  ig.jacobian_age = in.integer("jacobian_age", ig.jacobian_age, 0, 1000000000L);
   ig.ordering = in.string("ordering", ig.ordering, {"metis", "colamd", "amd"});
   ig.linear_solver = in.string("linear_solver", ig.linear_solver, {"auto", "klu", "reduced", "krylov"});
   ig.substeps = static_cast<int>(in.integer("substeps", ig.substeps, 1, 100000));

@@ -28,6 +28,9 @@ struct IdaOptions {
   std::string ordering = "metis";  // KLU: "metis" (node-grouped nested dissection), "colamd", "amd"
   // "klu": the whole GGL matrix; "reduced": eliminate dv, factor S with CHOLMOD (ggl.hpp).
   std::string linear_solver = "klu";
+  // Reuse the last assembled Jacobian (with the current c_j) for setups within this many steps of
+  // it, unless Newton failed since; 0: assemble at every setup.
+  long jacobian_age = 0;
   // Called with every Jacobian IDA asks for (its values in the GGL form's pattern, ggl.hpp), e.g.
   // to test linear solvers on the matrices of a real integration.
   std::function<void(double t, double cj, const double* y, const double* yp, const double* values)> on_jacobian;
@@ -36,7 +39,7 @@ struct IdaOptions {
 // Statistics of a run; per-frame series are sampled at each frame.
 struct IdaStats {
   long steps = 0, residual_evals = 0, jacobian_evals = 0, linear_setups = 0, newton_iterations = 0,
-       newton_failures = 0, error_test_failures = 0, fresh_factorisations = 0;
+       newton_failures = 0, error_test_failures = 0, fresh_factorisations = 0, reused_jacobians = 0;
   double wall_seconds = 0, assembly_seconds = 0, factor_seconds = 0, solve_seconds = 0;
   double factor_nnz = 0;  // nnz(L) + nnz(U) of the last factorisation
   long linear_iterations = 0;  // krylov: PCG iterations over the run

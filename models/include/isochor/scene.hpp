@@ -33,6 +33,7 @@ struct IntegratorSpec {
   double newton_tol = 1e-8;  // backward Euler: Newton stops when |dq|_inf <= newton_tol * max(1, |q|_inf)
   int max_order = 5;
   double max_step = 0.0;      // s, 0: none
+  long jacobian_age = 0;       // IDA: reuse the last Jacobian (new c_j) within this many steps; 0: never
   double newton_coef = 0.33;  // IDA: Newton stops when its estimated error is below this fraction of the tolerance
   long max_steps = 10000000;
   std::string ordering = "metis";
