@@ -132,6 +132,20 @@ TEST(VolumeConstraints, ZoneVolumesDerivativesAndTimeDerivative) {
   EXPECT_NEAR(vol[0], tets_volume(s.x, s.mesh.tets()), 1e-14);
   EXPECT_NEAR(vol[0], surface_volume(s.x, s.mesh.surface()), 1e-13);  // the whole mesh: divergence theorem
   EXPECT_NEAR(c.rest_volumes()[0], 0.48, 1e-14);
+  // The zone of every other tet (scattered): the sum of exactly those tets' volumes.
+  std::vector<Tet> odd;
+  for (int e : half) odd.push_back(s.mesh.tets()[e]);
+  EXPECT_NEAR(vol[1], tets_volume(s.x, odd), 1e-14);
+  // Zones are evaluated on their boundary faces: no row entry for a node inside the whole-mesh
+  // zone (its contributions cancel), an entry for every free node on the surface.
+  std::vector<char> on_surface(s.mesh.num_nodes(), 0);
+  for (const Tri& f : s.mesh.surface())
+    for (int v : f) on_surface[v] = 1;
+  int free_surface = 0, interior = 0;
+  for (int v = 0; v < s.mesh.num_nodes(); ++v)
+    if (s.dofs.free_index[v] >= 0) (on_surface[v] ? free_surface : interior)++;
+  EXPECT_GT(interior, 0);
+  EXPECT_EQ(c.row_dofs(0).size(), static_cast<std::size_t>(3 * free_surface));
   // Gradient rows against central differences of the volume.
   std::vector<std::vector<double>> rows;
   c.gradient(s.x, rows);
@@ -271,6 +285,6 @@ TEST(VolumeConstraints, MultiplierPressureOnOverlappingZones) {
   const std::vector<std::vector<int>> zones{{0, 1}, {1}};
   VolumeConstraints c = VolumeConstraints::zones(m, zones, dofs, a.pattern());
   std::vector<double> p(2, 0.0);
-  c.add_multiplier_pressure(Eigen::Vector2d(2.0, 5.0), VolumeConstraints::element_tets(zones), p);
+  c.add_multiplier_pressure(Eigen::Vector2d(2.0, 5.0), p);
   EXPECT_EQ(p, (std::vector<double>{-2.0, -7.0}));
 }

@@ -36,10 +36,9 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
   zone_volumes_ = VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern());
   const auto zt = scene.keep_zones ? all_zones : std::vector<std::vector<int>>{};
   constraints_ = VolumeConstraints::zones(scene.mesh, zt, dofs_, elastic_->pattern());
-  constraint_tets_ = VolumeConstraints::element_tets(zt);
   for (int j = 0; j < constraints_.size(); ++j) {
     if (constraints_.row_dofs(j).empty())
-      throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first + "\" has only driven nodes: its volume cannot be kept");
+      throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first + "\" has only driven nodes on its boundary: its volume cannot be kept");
     rows_.push_back(constraints_.row_dofs(j));
   }
   Eigen::VectorXd z0;
@@ -174,7 +173,7 @@ std::vector<double> MeshSystem::volumes() const {
 
 void MeshSystem::pressures(const VectorXd& lambda, std::vector<double>& p) const {
   elastic_->pressures(x_, p);
-  if (lambda.size()) constraints_.add_multiplier_pressure(lambda, constraint_tets_, p);
+  if (lambda.size()) constraints_.add_multiplier_pressure(lambda, p);
 }
 
 }  // namespace isochor

@@ -14,7 +14,8 @@ namespace isochor {
 
 class VolumeConstraints {
  public:
-  // Zone constraints: each zone a list of tets (zones may overlap).
+  // Zone constraints: each zone a list of tets (zones may overlap); evaluated on each zone's
+  // boundary faces (the same volume, interior contributions cancelling exactly).
   static VolumeConstraints zones(const Mesh& mesh, const std::vector<std::vector<int>>& zone_tets, const DofMap& dofs,
                                  const Pattern& pattern);
   // One constraint on the volume enclosed by the mesh's surface triangles.
@@ -37,17 +38,14 @@ class VolumeConstraints {
   // values[slot] += scale * sum_j lambda_j H_j over the free dofs.
   void add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const;
   // Per-tet pressure from the multipliers: p_e -= lambda_j for every zone j holding tet e (the
-  // constraint force -lambda_j dV/dx is that of a hydrostatic stress lambda_j I). Tet constraints only.
-  void add_multiplier_pressure(const Eigen::VectorXd& lambda, const std::vector<int>& tet_of_element,
-                               std::vector<double>& p) const;
-  // The tet index of each element, for zone constraints built from `zone_tets`.
-  static std::vector<int> element_tets(const std::vector<std::vector<int>>& zone_tets);
+  // constraint force -lambda_j dV/dx is that of a hydrostatic stress lambda_j I). Zone constraints only.
+  void add_multiplier_pressure(const Eigen::VectorXd& lambda, std::vector<double>& p) const;
   // Full gradient of g_j with respect to every node (3 N), for tests and diagnostics.
   Eigen::VectorXd full_gradient(const Points& x, int j) const;
 
  private:
   struct Element {
-    int nodes[4];  // tets; for surface triangles nodes[0] = -1 stands for the origin
+    int nodes[4];  // (origin, a, b, c): nodes[0] = -1 stands for the constraint's origin point
     int constraint;
   };
   std::vector<Element> elements_;
@@ -56,6 +54,8 @@ class VolumeConstraints {
   std::vector<std::vector<Index>> row_dofs_;
   std::vector<std::vector<int>> row_slot_;  // per element: 12 entries, position in its row or -1
   std::vector<double> rest_;
+  std::vector<Vec3> origins_;                 // per constraint
+  std::vector<std::vector<int>> zone_tets_;   // zone constraints: the tets of each zone
   DofMap dofs_;
   Vec12 element_x(const Points& x, const Element& e) const;
   void finish(int num_nodes, const DofMap& dofs, const Pattern& pattern);

@@ -67,7 +67,6 @@ class MeshSystem : public ConstrainedSystem {
   std::unique_ptr<ExternalPotential> external_;
   RayleighDamping damping_;
   VolumeConstraints constraints_, zone_volumes_;  // the kept zones; every zone (for volumes())
-  std::vector<int> constraint_tets_;
   std::vector<std::vector<Index>> rows_;
   Eigen::VectorXd node_mass_, dof_mass_;
   std::vector<double> zone_rest_volume_;

@@ -1,3 +1,4 @@
+#include <array>
 #include <limits>
 #include <algorithm>
 
@@ -7,20 +8,47 @@ namespace isochor {
 
 Vec12 VolumeConstraints::element_x(const Points& x, const Element& e) const {
   Vec12 v;
-  for (int k = 0; k < 4; ++k) v.segment<3>(3 * k) = e.nodes[k] < 0 ? Vec3::Zero() : Vec3(x.col(e.nodes[k]));
+  for (int k = 0; k < 4; ++k) v.segment<3>(3 * k) = e.nodes[k] < 0 ? origins_[e.constraint] : Vec3(x.col(e.nodes[k]));
   return v;
 }
 
 VolumeConstraints VolumeConstraints::zones(const Mesh& mesh, const std::vector<std::vector<int>>& zone_tets,
                                            const DofMap& dofs, const Pattern& pattern) {
+  // A zone's volume is the sum of its tets' signed volumes; the faces two of its tets share cancel
+  // in that sum, so it equals the sum over the zone's boundary faces (outward) of the signed
+  // volume of the tet (origin, face): the divergence theorem. Its gradient and Hessian then live
+  // on the boundary nodes only (an interior node's contributions cancel exactly), and evaluating
+  // them costs O(boundary) instead of O(volume): 6.8K faces instead of 64K tets for the global
+  // zone of the fine ball. The origin is the zone's rest centroid (small terms, little cancellation).
   VolumeConstraints c;
+  c.zone_tets_ = zone_tets;
+  const Points& X = mesh.rest_positions();
+  // Outward faces of a positively oriented tet (0, 1, 2, 3), opposite each of its nodes.
+  static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   for (int j = 0; j < static_cast<int>(zone_tets.size()); ++j) {
     double v0 = 0;
+    Vec3 centre = Vec3::Zero();
+    std::vector<std::pair<std::array<int, 3>, std::array<int, 3>>> faces;  // sorted nodes, oriented face
+    faces.reserve(4 * zone_tets[j].size());
     for (int e : zone_tets[j]) {
       const Tet& t = mesh.tets()[e];
-      c.elements_.push_back({{t[0], t[1], t[2], t[3]}, j});
       v0 += mesh.rest_volumes()[e];
+      for (int k = 0; k < 4; ++k) centre += X.col(t[k]);
+      for (const auto& f : kFaces) {
+        const std::array<int, 3> o{t[f[0]], t[f[1]], t[f[2]]};
+        std::array<int, 3> key = o;
+        std::sort(key.begin(), key.end());
+        faces.emplace_back(key, o);
+      }
     }
+    std::sort(faces.begin(), faces.end());
+    for (std::size_t a = 0; a < faces.size();) {
+      std::size_t b = a + 1;
+      while (b < faces.size() && faces[b].first == faces[a].first) ++b;
+      if (b - a == 1) c.elements_.push_back({{-1, faces[a].second[0], faces[a].second[1], faces[a].second[2]}, j});
+      a = b;
+    }
+    c.origins_.push_back(zone_tets[j].empty() ? centre : Vec3(centre / (4.0 * zone_tets[j].size())));
     c.rest_.push_back(v0);
   }
   c.finish(mesh.num_nodes(), dofs, pattern);
@@ -29,9 +57,10 @@ VolumeConstraints VolumeConstraints::zones(const Mesh& mesh, const std::vector<s
 
 VolumeConstraints VolumeConstraints::surface(const Mesh& mesh, const DofMap& dofs, const Pattern& pattern) {
   // The enclosed volume is the sum over outward triangles (a, b, c) of the signed volume of the
-  // tet (origin, a, b, c): the divergence theorem. The origin is node -1.
+  // tet (origin, a, b, c): the divergence theorem. The origin (node -1) is the world's.
   VolumeConstraints c;
   for (const Tri& f : mesh.surface()) c.elements_.push_back({{-1, f[0], f[1], f[2]}, 0});
+  c.origins_.push_back(Vec3::Zero());
   c.rest_.push_back(surface_volume(mesh.rest_positions(), mesh.surface()));
   c.finish(mesh.num_nodes(), dofs, pattern);
   return c;
@@ -155,15 +184,9 @@ void VolumeConstraints::add_hessian(const Points& x, const Eigen::VectorXd& lamb
   });
 }
 
-void VolumeConstraints::add_multiplier_pressure(const Eigen::VectorXd& lambda, const std::vector<int>& tet_of_element,
-                                                std::vector<double>& p) const {
-  for (std::size_t i = 0; i < elements_.size(); ++i) p[tet_of_element[i]] -= lambda[elements_[i].constraint];
-}
-
-std::vector<int> VolumeConstraints::element_tets(const std::vector<std::vector<int>>& zone_tets) {
-  std::vector<int> out;
-  for (const auto& z : zone_tets) out.insert(out.end(), z.begin(), z.end());
-  return out;
+void VolumeConstraints::add_multiplier_pressure(const Eigen::VectorXd& lambda, std::vector<double>& p) const {
+  for (std::size_t j = 0; j < zone_tets_.size(); ++j)
+    for (int e : zone_tets_[j]) p[e] -= lambda[static_cast<Index>(j)];
 }
 
 std::vector<std::vector<int>> ring_zones(const Mesh& mesh, int k, const DofMap& dofs) {
