@@ -71,6 +71,27 @@ TEST(Materials, StressAndTangentMatchCentralDifferences) {
   }
 }
 
+TEST(Materials, DirectionalTangentMatchesCentralDifferencesOfTheStress) {
+  // dP/dF : dF without dP/dF (evaluate_directional) against the central difference of P along dF,
+  // and its psi and P against evaluate().
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (auto& c : all_materials()) {
+    for (int trial = 0; trial < 20; ++trial) {
+      const Mat3 F = random_F(rng, c.inverts && trial % 2 == 1);
+      Mat3 dF;
+      for (int k = 0; k < 9; ++k) dF(k % 3, k / 3) = u(rng);
+      const double h = 1e-6;
+      const Mat3 fd = (c.m->P(F + h * dF) - c.m->P(F - h * dF)) / (2 * h);
+      Mat3 P, dP;
+      const double psi = c.m->evaluate_directional(F, dF, &P, dP);
+      EXPECT_LT(rel_err(dP, fd), 1e-6) << c.name << " J = " << F.determinant();
+      EXPECT_EQ(psi, c.m->psi(F)) << c.name;
+      EXPECT_LT(rel_err(P, c.m->P(F)), 1e-15) << c.name;
+    }
+  }
+}
+
 TEST(Materials, ZeroEnergyAndStressAtRest) {
   for (auto& c : all_materials()) {
     EXPECT_NEAR(c.m->psi(Mat3::Identity()), 0.0, 1e-14) << c.name;

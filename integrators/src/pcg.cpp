@@ -73,11 +73,16 @@ class BlockJacobiPcg : public SymmetricSolver {
 
  private:
   int max_iterations() const { return static_cast<int>(std::max<Index>(1000, n_ / 10)); }
+  // out = S v. S is symmetric (both triangles stored): row c of S is its column c, so each entry
+  // of out is a gather over one column, in parallel and in the same order for any thread count.
   void multiply(const VectorXd& v, VectorXd& out) const {
-    out.setZero();
+    const Index* cp = p_.col_ptr.data();
+    const Index* ri = p_.row_ind.data();
+#pragma omp parallel for schedule(static)
     for (Index c = 0; c < n_; ++c) {
-      const double vc = v[c];
-      for (Index k = p_.col_ptr[c]; k < p_.col_ptr[c + 1]; ++k) out[p_.row_ind[k]] += vals_[k] * vc;
+      double sum = 0;
+      for (Index k = cp[c]; k < cp[c + 1]; ++k) sum += vals_[k] * v[ri[k]];
+      out[c] = sum;
     }
   }
   void precondition(const VectorXd& r, VectorXd& z) const {

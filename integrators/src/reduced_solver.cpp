@@ -36,12 +36,20 @@ struct ReducedSolver::Impl {
     b1.resize(n), y.resize(n), dq.resize(n), tmp.resize(n);
   }
 
-  // out = X x over the K pattern, X the block of the Jacobian at `slots` (v-v: V, v-q: A).
-  void times(const std::vector<Index>& slots, const double* x, double* out) const {
+  // out = X x over the K pattern, X a symmetric block of the Jacobian at `slots` (v-v: V, v-q: A,
+  // q-q: c I + H_mu): row i of X is its column i, so each out[i] is a gather (parallel, and summed
+  // in the same order for any thread count).
+  void times(const std::vector<Index>& slots, const double* x, double* out, bool add = false) const {
     const SparsePattern& K = form.system().pattern();
-    std::fill(out, out + n, 0.0);
-    for (Index col = 0; col < n; ++col)
-      for (Index k = K.col_ptr[col]; k < K.col_ptr[col + 1]; ++k) out[K.row_ind[k]] += vals[slots[k]] * x[col];
+    const Index* cp = K.col_ptr.data();
+    const Index* ri = K.row_ind.data();
+    const Index* sl = slots.data();
+#pragma omp parallel for schedule(static)
+    for (Index i = 0; i < n; ++i) {
+      double sum = 0;
+      for (Index k = cp[i]; k < cp[i + 1]; ++k) sum += vals[sl[k]] * x[ri[k]];
+      out[i] = add ? out[i] + sum : sum;
+    }
   }
   void solve_S(const double* b, double* x) { ok = S->solve(b, x) && ok; }
 };
@@ -127,9 +135,7 @@ void ReducedSolver::solve_once(const double* b, double* x) {
   Eigen::Map<VectorXd> dv(x + n, n);
   dv = -r1;
   if (m) dv += s.Gt * dm;
-  const SparsePattern& K = f.system().pattern();
-  for (Index col = 0; col < n; ++col)
-    for (Index k = K.col_ptr[col]; k < K.col_ptr[col + 1]; ++k) dv[K.row_ind[k]] += s.vals[f.qq[k]] * s.dq[col];
+  s.times(f.qq, s.dq.data(), dv.data(), true);
   Eigen::Map<VectorXd>(x, n) = s.dq;
   if (m) {
     Eigen::Map<VectorXd>(x + 2 * n, m) = dl;

@@ -57,12 +57,18 @@ Mat12 TetShape::pull_back(const Mat9& A) const {
 double tet_energy(const Material& m, const TetShape& s, const Vec12& x, Vec12* grad, Mat12* hess, const Vec12* dir,
                   Vec12* hess_dir) {
   Mat3 P;
+  if (hess_dir && !hess) {
+    // H d without forming H or dP/dF: dF = F(d), dP = dP/dF : dF, then scattered like a gradient.
+    Mat3 dP;
+    const double psi = m.evaluate_directional(s.F(x), s.F(*dir), grad ? &P : nullptr, dP);
+    if (grad) *grad = s.rest_volume * s.scatter(P);
+    *hess_dir = s.rest_volume * s.scatter(dP);
+    return s.rest_volume * psi;
+  }
   Mat9 dPdF;
-  const bool second = hess || hess_dir;
-  const double psi = m.evaluate(s.F(x), grad ? &P : nullptr, second ? &dPdF : nullptr);
+  const double psi = m.evaluate(s.F(x), grad ? &P : nullptr, hess ? &dPdF : nullptr);
   if (grad) *grad = s.rest_volume * s.scatter(P);
   if (hess) *hess = s.rest_volume * s.pull_back(dPdF);
-  // H d without forming H: dF = F(d), dP = dP/dF : dF, then scattered like a gradient.
   if (hess_dir) {
     const Mat3 dF = s.F(*dir);
     Mat3 dP;

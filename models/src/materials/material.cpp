@@ -66,6 +66,23 @@ double Material::evaluate(const Mat3& F, Mat3* P, Mat9* dPdF) const {
   return w.W;
 }
 
+double Material::evaluate_directional(const Mat3& F, const Mat3& dF, Mat3* P, Mat3& dP) const {
+  // dP = dP/dF : dF term by term as in evaluate(), with d = vec(dF) and the derivative of cof F
+  // along dF (columns: d(f1 x f2) = df1 x f2 + f1 x df2, ...) in place of det_hessian(F) d.
+  const double I = F.squaredNorm(), J = F.determinant();
+  const InvariantDerivatives w = invariants(I, J);
+  const Vec9 f = vec(F), c = cofactor_vec(F), d = vec(dF);
+  if (P) *P = Eigen::Map<const Mat3>(Vec9(2.0 * w.W_I * f + w.W_J * c).data());
+  Mat3 dC;
+  dC.col(0) = dF.col(1).cross(F.col(2)) + F.col(1).cross(dF.col(2));
+  dC.col(1) = dF.col(2).cross(F.col(0)) + F.col(2).cross(dF.col(0));
+  dC.col(2) = dF.col(0).cross(F.col(1)) + F.col(0).cross(dF.col(1));
+  const double fd = f.dot(d), cd = c.dot(d);
+  Eigen::Map<Vec9>(dP.data()) = 2.0 * w.W_I * d + (4.0 * w.W_II * fd + 2.0 * w.W_IJ * cd) * f +
+                                (2.0 * w.W_IJ * fd + w.W_JJ * cd) * c + w.W_J * vec(dC);
+  return w.W;
+}
+
 double Material::psi(const Mat3& F) const { return evaluate(F, nullptr, nullptr); }
 Mat3 Material::P(const Mat3& F) const {
   Mat3 p;
