@@ -23,10 +23,13 @@ class BlockJacobiPcg : public SymmetricSolver {
       }
     inv_.resize(n_ / 3 + 1);
     r_.resize(n_), z_.resize(n_), d_.resize(n_), q_.resize(n_);
+    build_blocks();
   }
 
   bool factor(const double* values) override {
     vals_ = values;
+    if (!block_col_.empty())  // the values as contiguous 3x3 blocks
+      for (std::size_t k = 0; k < block_slot_.size(); ++k) block_vals_[k] = values[block_slot_[k]];
     for (Index k = 0; 3 * k < n_; ++k) {
       Eigen::Matrix3d B = Eigen::Matrix3d::Identity();
       for (int a = 0; a < 3 && 3 * k + a < n_; ++a)
@@ -76,6 +79,19 @@ class BlockJacobiPcg : public SymmetricSolver {
   // out = S v. S is symmetric (both triangles stored): row c of S is its column c, so each entry
   // of out is a gather over one column, in parallel and in the same order for any thread count.
   void multiply(const VectorXd& v, VectorXd& out) const {
+    if (!block_col_.empty()) {
+      // Block form: out_c = sum over the blocks B of block column c of B^T v_r (S symmetric).
+      const int nb = static_cast<int>(block_col_.size()) - 1;
+#pragma omp parallel for schedule(static)
+      for (int c = 0; c < nb; ++c) {
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (Index b = block_col_[c]; b < block_col_[c + 1]; ++b)
+          sum.noalias() += Eigen::Map<const Eigen::Matrix3d>(block_vals_.data() + 9 * b).transpose() *
+                           v.segment<3>(3 * static_cast<Index>(block_row_[b]));
+        out.segment<3>(3 * static_cast<Index>(c)) = sum;
+      }
+      return;
+    }
     const Index* cp = p_.col_ptr.data();
     const Index* ri = p_.row_ind.data();
 #pragma omp parallel for schedule(static)
@@ -95,6 +111,41 @@ class BlockJacobiPcg : public SymmetricSolver {
       }
     }
   }
+  // When the pattern is made of full 3x3 node blocks (mesh systems), a block copy of the values
+  // (block column c: block rows, 9 values each in column order) halves the index traffic of a
+  // product and lets it use 3x3 arithmetic.
+  void build_blocks() {
+    if (n_ % 3 != 0) return;
+    const Index nb = n_ / 3;
+    std::vector<Index> cols{0};
+    std::vector<int> rows;
+    std::vector<Index> slots;
+    for (Index c = 0; c < nb; ++c) {
+      const Index k0 = p_.col_ptr[3 * c], len = p_.col_ptr[3 * c + 1] - k0;
+      if (len % 3 != 0) return;
+      for (int b = 1; b < 3; ++b)
+        if (p_.col_ptr[3 * c + b + 1] - p_.col_ptr[3 * c + b] != len) return;
+      for (Index k = k0; k < k0 + len; k += 3) {
+        const Index r = p_.row_ind[k];
+        if (r % 3 != 0) return;
+        rows.push_back(static_cast<int>(r / 3));
+        for (int b = 0; b < 3; ++b)
+          for (int a = 0; a < 3; ++a) {
+            const Index kk = p_.col_ptr[3 * c + b] + (k - k0) + a;
+            if (p_.row_ind[kk] != r + a) return;
+            slots.push_back(kk);
+          }
+      }
+      cols.push_back(static_cast<Index>(rows.size()));
+    }
+    block_col_ = std::move(cols);
+    block_row_ = std::move(rows);
+    block_slot_ = std::move(slots);
+    block_vals_.resize(block_slot_.size());
+  }
+  std::vector<Index> block_col_, block_slot_;
+  std::vector<int> block_row_;
+  std::vector<double> block_vals_;
   const SparsePattern& p_;
   double tol_;
   Index n_;

@@ -23,6 +23,7 @@ struct ReducedSolver::Impl {
   Index n, m;
   std::unique_ptr<SymmetricSolver> S;
   std::vector<double> Sx;  // values of S in the system's pattern
+  std::vector<double> Vx, Qx, Ax;  // the v-v (V), q-q (c I + H_mu) and v-q (A) blocks, contiguous in that pattern
   Eigen::MatrixXd Gt, W, Z1, Z2, Z3, Bt;  // n x m: G^T, A G^T, S^-1 G^T, S^-1 V G^T, S^-1 A G^T, B^T
   Eigen::PartialPivLU<Eigen::MatrixXd> small;
   const double* vals = nullptr;
@@ -32,22 +33,23 @@ struct ReducedSolver::Impl {
   bool ok = true;  // every solve of S in the current setup/solve succeeded
   Impl(const GglForm& f, const std::string& kind) : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind)) {
     Sx.resize(f.system().pattern().nnz());
+    Vx.resize(Sx.size()), Qx.resize(Sx.size()), Ax.resize(Sx.size());
     Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);
     b1.resize(n), y.resize(n), dq.resize(n), tmp.resize(n);
   }
 
-  // out = X x over the K pattern, X a symmetric block of the Jacobian at `slots` (v-v: V, v-q: A,
+  // out = X x over the K pattern, X a symmetric block of the Jacobian copied contiguously (v-v: V, v-q: A,
   // q-q: c I + H_mu): row i of X is its column i, so each out[i] is a gather (parallel, and summed
   // in the same order for any thread count).
-  void times(const std::vector<Index>& slots, const double* x, double* out, bool add = false) const {
+  void times(const std::vector<double>& X, const double* x, double* out, bool add = false) const {
     const SparsePattern& K = form.system().pattern();
     const Index* cp = K.col_ptr.data();
     const Index* ri = K.row_ind.data();
-    const Index* sl = slots.data();
+    const double* xv = X.data();
 #pragma omp parallel for schedule(static)
     for (Index i = 0; i < n; ++i) {
       double sum = 0;
-      for (Index k = cp[i]; k < cp[i + 1]; ++k) sum += vals[sl[k]] * x[ri[k]];
+      for (Index k = cp[i]; k < cp[i + 1]; ++k) sum += xv[k] * x[ri[k]];
       out[i] = add ? out[i] + sum : sum;
     }
   }
@@ -67,7 +69,12 @@ bool ReducedSolver::setup(double cj, const double* vals) {
   s.cj = cj;
   const GglForm& f = s.form;
   const Index m = s.m;
-  for (std::size_t k = 0; k < f.vq.size(); ++k) s.Sx[k] = vals[f.vq[k]] + cj * vals[f.vv[k]];
+  for (std::size_t k = 0; k < f.vq.size(); ++k) {
+    s.Vx[k] = vals[f.vv[k]];
+    s.Qx[k] = vals[f.qq[k]];
+    s.Ax[k] = vals[f.vq[k]];
+    s.Sx[k] = s.Ax[k] + cj * s.Vx[k];
+  }
   if (!s.S->factor(s.Sx.data())) return false;
   if (m == 0) return true;
   s.ok = true;
@@ -80,7 +87,7 @@ bool ReducedSolver::setup(double cj, const double* vals) {
       s.Bt(rows[j][k], j) = vals[f.gvq[j][k]];
     }
   for (Index j = 0; j < m; ++j) {
-    s.times(f.vq, s.Gt.col(j).data(), s.W.col(j).data());
+    s.times(s.Ax, s.Gt.col(j).data(), s.W.col(j).data());
     s.solve_S(s.Gt.col(j).data(), s.Z1.col(j).data());
     s.solve_S(s.W.col(j).data(), s.Z3.col(j).data());
   }
@@ -116,7 +123,7 @@ void ReducedSolver::solve_once(const double* b, double* x) {
   const GglForm& f = s.form;
   const Index n = s.n, m = s.m;
   Eigen::Map<const VectorXd> r1(b, n), r2(b + n, n), r3(b + 2 * n, m), r4(b + 2 * n + m, m);
-  s.times(f.vv, r1.data(), s.tmp.data());
+  s.times(s.Vx, r1.data(), s.tmp.data());
   s.b1 = r2 + s.tmp;
   s.solve_S(s.b1.data(), s.y.data());
   VectorXd dl = VectorXd::Zero(m), dm = VectorXd::Zero(m);
@@ -135,7 +142,7 @@ void ReducedSolver::solve_once(const double* b, double* x) {
   Eigen::Map<VectorXd> dv(x + n, n);
   dv = -r1;
   if (m) dv += s.Gt * dm;
-  s.times(f.qq, s.dq.data(), dv.data(), true);
+  s.times(s.Qx, s.dq.data(), dv.data(), true);
   Eigen::Map<VectorXd>(x, n) = s.dq;
   if (m) {
     Eigen::Map<VectorXd>(x + 2 * n, m) = dl;
