@@ -97,3 +97,35 @@ TEST(Forces, CnhPressureIsThePenaltyStress) {
     EXPECT_NEAR(cnh->pressure(F), -50.0 * penalty_U(F.determinant(), 2.0).dU, 1e-10 * 50.0);
   }
 }
+
+TEST(Forces, PerAreaContactIsTheSameGroundAtEveryResolution) {
+  // A box (0.4 x 0.3 x 0.2) lowered until its bottom is p below the contact thickness: with the
+  // per-area law the ground pushes k p^2 times the bottom nodes' surface areas. Those areas add up
+  // to the bottom (A = 0.12) plus half of the first row of side cells (each side quad is two
+  // triangles, one with two corners on the bottom edge and one with one: w h / 2 per quad), so
+  // the force is k p^2 (A + P h / 2) with P the perimeter and h the cell height: independent of
+  // the resolution as h -> 0. The per-node law pushes k p^2 per bottom node instead.
+  const double k = 1e9, delta = 0.01, p = 0.004;
+  for (int cells : {2, 4, 8}) {
+    Mesh m = make_box(Eigen::Vector3d(0.4, 0.3, 0.2), {cells, cells, cells}, Eigen::Vector3d(0, 0, 0.1), 6);
+    const Eigen::VectorXd area = surface_areas(m);
+    EXPECT_NEAR(area.sum(), 2 * (0.4 * 0.3 + 0.3 * 0.2 + 0.4 * 0.2), 1e-12);  // the whole surface
+    DofMap dofs = DofMap::make(m.num_nodes(), {});
+    ElasticAssembly a(m, make_snh(1, 1), dofs);
+    Points x = m.rest_positions();
+    x.row(2).array() += delta - p;  // the bottom (z = 0 at rest) at delta - p
+    int bottom = 0;
+    for (int n = 0; n < m.num_nodes(); ++n) bottom += m.rest_positions()(2, n) == 0.0;
+    for (bool per_area : {true, false}) {
+      GroundSpec ground{true, Vec3::Zero(), Vec3::UnitZ(), k, delta};
+      ground.per_area = per_area;
+      ExternalPotential ext(Eigen::VectorXd::Zero(m.num_nodes()), Vec3::Zero(), {ground}, dofs, a.pattern(), area);
+      Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
+      ext.add_gradient(x, g);
+      double force = 0;
+      for (int n = 0; n < m.num_nodes(); ++n) force -= g[3 * n + 2];
+      const double h = 0.2 / cells, expected = per_area ? k * p * p * (0.12 + 1.4 * h / 2) : k * p * p * bottom;
+      EXPECT_NEAR(force, expected, 1e-9 * expected) << cells << " cells, per area " << per_area;
+    }
+  }
+}

@@ -1,5 +1,7 @@
 #include "isochor/assembly.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 
@@ -88,6 +90,16 @@ Eigen::VectorXd lumped_mass(const Mesh& mesh, double density) {
   for (int e = 0; e < mesh.num_tets(); ++e)
     for (int v : mesh.tets()[e]) m[v] += density * mesh.rest_volumes()[e] / 4.0;
   return m;
+}
+
+Eigen::VectorXd surface_areas(const Mesh& mesh) {
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(mesh.num_nodes());
+  const Points& X = mesh.rest_positions();
+  for (const Tri& t : mesh.surface()) {
+    const double area = 0.5 * (X.col(t[1]) - X.col(t[0])).cross(X.col(t[2]) - X.col(t[0])).norm();
+    for (int v : t) a[v] += area / 3.0;
+  }
+  return a;
 }
 
 namespace {

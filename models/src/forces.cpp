@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <map>
 #include <set>
+#include <stdexcept>
 
 namespace isochor {
 
@@ -11,11 +12,13 @@ Vec3 GroundSpec::point_at(double t) const {
 }
 
 ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::vector<GroundSpec> planes, const DofMap& dofs,
-                                     const Pattern& pattern)
-    : mass_(std::move(mass)), gravity_(gravity), dofs_(dofs) {
+                                     const Pattern& pattern, Eigen::VectorXd area)
+    : mass_(std::move(mass)), gravity_(gravity), dofs_(dofs), area_(std::move(area)) {
   for (GroundSpec& p : planes)
     if (p.enabled) {
       p.normal.normalize();
+      if (p.per_area && area_.size() != mass_.size())
+        throw std::invalid_argument("ExternalPotential: a per-area contact plane needs every node's surface area");
       planes_.push_back(p);
       points_.push_back(p.point);
     }
@@ -42,7 +45,7 @@ double ExternalPotential::add_gradient(const Points& x, Eigen::VectorXd& grad) c
     grad.segment<3>(3 * i) -= mass_[i] * gravity;
     for (std::size_t k = 0; k < planes_.size(); ++k) {
       Vec3 gk;
-      E += ground_energy(planes_[k].stiffness, planes_[k].thickness, points_[k], planes_[k].normal, x.col(i), &gk, nullptr);
+      E += ground_energy(stiffness(k, i), planes_[k].thickness, points_[k], planes_[k].normal, x.col(i), &gk, nullptr);
       grad.segment<3>(3 * i) += gk;
     }
   }
@@ -54,7 +57,7 @@ void ExternalPotential::add_hessian(const Points& x, double scale, double* value
   for (int f = 0; f < dofs_.num_free(); ++f)
     for (std::size_t k = 0; k < planes_.size(); ++k) {
       Mat3 H;
-      ground_energy(planes_[k].stiffness, planes_[k].thickness, points_[k], planes_[k].normal, x.col(dofs_.free_nodes[f]),
+      ground_energy(stiffness(k, dofs_.free_nodes[f]), planes_[k].thickness, points_[k], planes_[k].normal, x.col(dofs_.free_nodes[f]),
                     nullptr, &H);
       for (int c = 0; c < 9; ++c) values[diag_slots_[9 * f + c]] += scale * H(c / 3, c % 3);
     }

@@ -30,7 +30,8 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
   elastic_ = std::make_unique<ElasticAssembly>(scene.mesh, material_, dofs_,
                                                EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
   node_mass_ = lumped_mass(scene.mesh, scene.material.density);
-  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.contact_planes(), dofs_, elastic_->pattern());
+  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.contact_planes(), dofs_, elastic_->pattern(),
+                                                  surface_areas(scene.mesh));
   damping_ = scene.damping;
   const auto all_zones = scene_zone_tets(scene);
   zone_volumes_ = VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern());

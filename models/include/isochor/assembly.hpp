@@ -108,6 +108,9 @@ class ElasticAssembly {
 
 // Lumped mass per node: density times a quarter of the volume of every tet around it.
 Eigen::VectorXd lumped_mass(const Mesh& mesh, double density);
+// Each node's rest surface area: a third of the area of every surface triangle it is a corner of
+// (0 inside); the per-area contact law's weights.
+Eigen::VectorXd surface_areas(const Mesh& mesh);
 
 // Tets gathered from Eigen-style views of the positions.
 inline Vec12 gather(const Points& x, const Tet& t) {

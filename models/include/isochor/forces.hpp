@@ -12,6 +12,10 @@ struct GroundSpec {
   Vec3 point = Vec3::Zero(), normal = Vec3::UnitZ();
   double stiffness = 1e6;   // k in k/3 (delta - s)^3, N/m^3
   double thickness = 1e-3;  // delta, m
+  // Per node (false): energy k/3 (delta - s)^3 at every node, k in N/m^3. Per area (true): the
+  // same times the node's rest surface area A_i (a third of its surface triangles'), k in N/m^4:
+  // a pressure k p^2 at penetration p, the same ground for a coarse and a fine mesh.
+  bool per_area = false;
   // A moving plane: its point travels by `displacement` between t0 and t1 (linearly).
   Vec3 displacement = Vec3::Zero();
   double t0 = 0.0, t1 = 1.0;
@@ -22,8 +26,9 @@ struct GroundSpec {
 class ExternalPotential {
  public:
   // planes: the ground and any other contact planes (only enabled ones act).
+  // area: each node's rest surface area (per_area planes; empty if none is per area).
   ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::vector<GroundSpec> planes, const DofMap& dofs,
-                    const Pattern& pattern);
+                    const Pattern& pattern, Eigen::VectorXd area = {});
   double energy(const Points& x) const;
   // grad += gradient over every node (3 N).
   double add_gradient(const Points& x, Eigen::VectorXd& grad) const;
@@ -44,6 +49,10 @@ class ExternalPotential {
   std::vector<Vec3> points_;  // where each plane is now
   DofMap dofs_;
   std::vector<Index> diag_slots_;  // 9 per free node
+  Eigen::VectorXd area_;
+  double stiffness(std::size_t plane, int node) const {
+    return planes_[plane].per_area ? planes_[plane].stiffness * area_[node] : planes_[plane].stiffness;
+  }
 };
 
 // Rayleigh damping f = -(alpha M + beta K(x)) v. Its derivative by v is -(alpha M + beta K); the
