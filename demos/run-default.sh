@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The default demo: the coarse ball of the CNH paper hitting the ground, on IDA with the reduced
-# solver (about four minutes on two cores), then its report: cost per frame and volume error, and
+# The default demo: the coarse ball of the CNH paper hitting the ground, on IDA with the krylov
+# solver (under three minutes on two cores), then its report: cost per frame and volume error, and
 # the picture shown in the README (docs/images/ball_drop.png).
 set -euo pipefail
 build=${1:-build}
