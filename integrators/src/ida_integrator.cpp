@@ -167,6 +167,7 @@ int reduced_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype
   const bool ok = s->reduced->solve(N_VGetArrayPointer(b), N_VGetArrayPointer(x));
   s->stats.solve_seconds += seconds_since(t0);
   s->stats.linear_iterations = s->reduced->iterations();
+  s->stats.linear_fallbacks = s->reduced->fallbacks();
   return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;  // PCG did not converge: IDA retries a smaller step
 }
 sunindextype reduced_lastflag(SUNLinearSolver) { return 0; }

@@ -31,7 +31,21 @@ struct ReducedSolver::Impl {
   VectorXd b1, y, dq, tmp;
 
   bool ok = true;  // every solve of S in the current setup/solve succeeded
-  Impl(const GglForm& f, const std::string& kind) : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind)) {
+  // PCG (krylov) falls back to CHOLMOD for the rest of a setup where it fails (S indefinite, e.g.
+  // inverted elements, or no convergence): the next setup tries PCG again.
+  const bool fallback;
+  std::unique_ptr<SymmetricSolver> direct;  // created at the first fallback
+  bool use_direct = false;
+  long fallbacks = 0;
+  bool switch_to_direct() {
+    if (!fallback || use_direct) return false;
+    if (!direct) direct = make_symmetric_solver(form.system().pattern(), "cholmod");
+    fallbacks++;
+    use_direct = direct->factor(Sx.data());
+    return use_direct;
+  }
+  Impl(const GglForm& f, const std::string& kind)
+      : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind)), fallback(kind == "pcg") {
     Sx.resize(f.system().pattern().nnz());
     Vx.resize(Sx.size()), Qx.resize(Sx.size()), Ax.resize(Sx.size());
     Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);
@@ -53,7 +67,14 @@ struct ReducedSolver::Impl {
       out[i] = add ? out[i] + sum : sum;
     }
   }
-  void solve_S(const double* b, double* x) { ok = S->solve(b, x) && ok; }
+  void solve_S(const double* b, double* x) {
+    if (!use_direct && S->solve(b, x)) return;
+    if (use_direct || switch_to_direct()) {
+      ok = direct->solve(b, x) && ok;
+      return;
+    }
+    ok = false;
+  }
 };
 
 ReducedSolver::ReducedSolver(const GglForm& form, const std::string& kind) : impl_(std::make_unique<Impl>(form, kind)) {}
@@ -61,6 +82,7 @@ ReducedSolver::~ReducedSolver() = default;
 
 double ReducedSolver::factor_nnz() const { return impl_->S->factor_nnz(); }
 long ReducedSolver::iterations() const { return impl_->S->iterations(); }
+long ReducedSolver::fallbacks() const { return impl_->fallbacks; }
 double ReducedSolver::analyse_seconds() const { return impl_->S->analyse_seconds(); }
 
 bool ReducedSolver::setup(double cj, const double* vals) {
@@ -75,9 +97,10 @@ bool ReducedSolver::setup(double cj, const double* vals) {
     s.Ax[k] = vals[f.vq[k]];
     s.Sx[k] = s.Ax[k] + cj * s.Vx[k];
   }
-  if (!s.S->factor(s.Sx.data())) return false;
-  if (m == 0) return true;
+  s.use_direct = false;
   s.ok = true;
+  if (!s.S->factor(s.Sx.data()) && !s.switch_to_direct()) return false;
+  if (m == 0) return true;
   const auto& rows = f.system().constraint_rows();
   s.Gt.setZero();
   s.Bt.setZero();

@@ -63,6 +63,9 @@ class ReducedSolver {
   bool solve(const double* b, double* x, int refine = 0);
   double factor_nnz() const;
   long iterations() const;  // PCG iterations so far (0 for the direct solver)
+  // Setups in which PCG failed and CHOLMOD solved instead ("pcg" only: a failed block-Jacobi
+  // factor or a failed solve switches the rest of that setup to a CHOLMOD factor of S).
+  long fallbacks() const;
   double analyse_seconds() const;  // CHOLMOD's ordering and symbolic analysis so far
 
  private:

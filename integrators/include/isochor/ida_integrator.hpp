@@ -43,6 +43,7 @@ struct IdaStats {
   double wall_seconds = 0, assembly_seconds = 0, factor_seconds = 0, solve_seconds = 0;
   double factor_nnz = 0;  // nnz(L) + nnz(U) of the last factorisation
   long linear_iterations = 0;  // krylov: PCG iterations over the run
+  long linear_fallbacks = 0;   // krylov: setups solved by CHOLMOD after PCG failed
   double symbolic_seconds = 0;  // of factor_seconds: ordering and symbolic analysis (CHOLMOD paths)
   struct FrameSample {
     long steps, newton_iterations, error_test_failures, newton_failures, jacobian_evals;

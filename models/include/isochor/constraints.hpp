@@ -45,7 +45,7 @@ class VolumeConstraints {
 
  private:
   struct Element {
-    int nodes[4];  // (origin, a, b, c): nodes[0] = -1 stands for the constraint's origin point
+    int nodes[4];  // (origin, a, b, c): nodes[0] = -1 stands for the constraint's origin (origins())
     int constraint;
   };
   std::vector<Element> elements_;
@@ -54,10 +54,11 @@ class VolumeConstraints {
   std::vector<std::vector<Index>> row_dofs_;
   std::vector<std::vector<int>> row_slot_;  // per element: 12 entries, position in its row or -1
   std::vector<double> rest_;
-  std::vector<Vec3> origins_;                 // per constraint
+  std::vector<std::vector<int>> boundary_nodes_;  // per constraint: the nodes of its faces
   std::vector<std::vector<int>> zone_tets_;   // zone constraints: the tets of each zone
   DofMap dofs_;
-  Vec12 element_x(const Points& x, const Element& e) const;
+  std::vector<Vec3> origins(const Points& x) const;  // per constraint, where the origin is now
+  Vec12 element_x(const Points& x, const Element& e, const std::vector<Vec3>& origins) const;
   void finish(int num_nodes, const DofMap& dofs, const Pattern& pattern);
 };
 

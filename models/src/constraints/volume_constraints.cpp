@@ -6,9 +6,23 @@
 
 namespace isochor {
 
-Vec12 VolumeConstraints::element_x(const Points& x, const Element& e) const {
+std::vector<Vec3> VolumeConstraints::origins(const Points& x) const {
+  // The mean current position of each constraint's boundary nodes. A closed surface's enclosed
+  // volume does not depend on the origin (its oriented face areas sum to zero), so neither do its
+  // gradient and Hessian, and the origin may follow the body: a fixed origin far from it (the
+  // ball 0.47 m below its rest centroid at the impact) makes the face terms cancel and cost
+  // digits that IDA at rtol 1e-8 needs (measured: Newton failed at the impact).
+  std::vector<Vec3> o(boundary_nodes_.size(), Vec3::Zero());
+  for (std::size_t j = 0; j < boundary_nodes_.size(); ++j) {
+    for (int v : boundary_nodes_[j]) o[j] += x.col(v);
+    if (!boundary_nodes_[j].empty()) o[j] /= static_cast<double>(boundary_nodes_[j].size());
+  }
+  return o;
+}
+
+Vec12 VolumeConstraints::element_x(const Points& x, const Element& e, const std::vector<Vec3>& o) const {
   Vec12 v;
-  for (int k = 0; k < 4; ++k) v.segment<3>(3 * k) = e.nodes[k] < 0 ? origins_[e.constraint] : Vec3(x.col(e.nodes[k]));
+  for (int k = 0; k < 4; ++k) v.segment<3>(3 * k) = e.nodes[k] < 0 ? o[e.constraint] : Vec3(x.col(e.nodes[k]));
   return v;
 }
 
@@ -19,21 +33,18 @@ VolumeConstraints VolumeConstraints::zones(const Mesh& mesh, const std::vector<s
   // volume of the tet (origin, face): the divergence theorem. Its gradient and Hessian then live
   // on the boundary nodes only (an interior node's contributions cancel exactly), and evaluating
   // them costs O(boundary) instead of O(volume): 6.8K faces instead of 64K tets for the global
-  // zone of the fine ball. The origin is the zone's rest centroid (small terms, little cancellation).
+  // zone of the fine ball. The origin follows the zone (origins()): small terms, little cancellation.
   VolumeConstraints c;
   c.zone_tets_ = zone_tets;
-  const Points& X = mesh.rest_positions();
   // Outward faces of a positively oriented tet (0, 1, 2, 3), opposite each of its nodes.
   static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   for (int j = 0; j < static_cast<int>(zone_tets.size()); ++j) {
     double v0 = 0;
-    Vec3 centre = Vec3::Zero();
     std::vector<std::pair<std::array<int, 3>, std::array<int, 3>>> faces;  // sorted nodes, oriented face
     faces.reserve(4 * zone_tets[j].size());
     for (int e : zone_tets[j]) {
       const Tet& t = mesh.tets()[e];
       v0 += mesh.rest_volumes()[e];
-      for (int k = 0; k < 4; ++k) centre += X.col(t[k]);
       for (const auto& f : kFaces) {
         const std::array<int, 3> o{t[f[0]], t[f[1]], t[f[2]]};
         std::array<int, 3> key = o;
@@ -48,7 +59,6 @@ VolumeConstraints VolumeConstraints::zones(const Mesh& mesh, const std::vector<s
       if (b - a == 1) c.elements_.push_back({{-1, faces[a].second[0], faces[a].second[1], faces[a].second[2]}, j});
       a = b;
     }
-    c.origins_.push_back(zone_tets[j].empty() ? centre : Vec3(centre / (4.0 * zone_tets[j].size())));
     c.rest_.push_back(v0);
   }
   c.finish(mesh.num_nodes(), dofs, pattern);
@@ -57,10 +67,9 @@ VolumeConstraints VolumeConstraints::zones(const Mesh& mesh, const std::vector<s
 
 VolumeConstraints VolumeConstraints::surface(const Mesh& mesh, const DofMap& dofs, const Pattern& pattern) {
   // The enclosed volume is the sum over outward triangles (a, b, c) of the signed volume of the
-  // tet (origin, a, b, c): the divergence theorem. The origin (node -1) is the world's.
+  // tet (origin, a, b, c): the divergence theorem. The origin (node -1) follows the body (origins()).
   VolumeConstraints c;
   for (const Tri& f : mesh.surface()) c.elements_.push_back({{-1, f[0], f[1], f[2]}, 0});
-  c.origins_.push_back(Vec3::Zero());
   c.rest_.push_back(surface_volume(mesh.rest_positions(), mesh.surface()));
   c.finish(mesh.num_nodes(), dofs, pattern);
   return c;
@@ -70,6 +79,15 @@ void VolumeConstraints::finish(int num_nodes, const DofMap& dofs, const Pattern&
   dofs_ = dofs;
   auto dof = [&](int n, int d) { return 3 * static_cast<Index>(dofs.free_index[n]) + d; };
   auto is_free = [&](int n) { return n >= 0 && dofs.free_index[n] >= 0; };
+  // Each constraint's boundary nodes (driven ones too), for the origin.
+  boundary_nodes_.assign(rest_.size(), {});
+  for (const Element& e : elements_)
+    for (int n : e.nodes)
+      if (n >= 0) boundary_nodes_[e.constraint].push_back(n);
+  for (auto& b : boundary_nodes_) {
+    std::sort(b.begin(), b.end());
+    b.erase(std::unique(b.begin(), b.end()), b.end());
+  }
   // Rows of G: the free dofs of every element's nodes.
   row_dofs_.assign(rest_.size(), {});
   for (const Element& e : elements_)
@@ -107,8 +125,9 @@ void VolumeConstraints::finish(int num_nodes, const DofMap& dofs, const Pattern&
 }
 
 void VolumeConstraints::volumes(const Points& x, Eigen::VectorXd& vol) const {
+  const std::vector<Vec3> o = origins(x);
   vol.setZero(size());
-  for (const Element& e : elements_) vol[e.constraint] += tet_volume(element_x(x, e), nullptr, nullptr);
+  for (const Element& e : elements_) vol[e.constraint] += tet_volume(element_x(x, e, o), nullptr, nullptr);
 }
 
 void VolumeConstraints::value(const Points& x, Eigen::VectorXd& g) const {
@@ -117,23 +136,25 @@ void VolumeConstraints::value(const Points& x, Eigen::VectorXd& g) const {
 }
 
 void VolumeConstraints::gradient(const Points& x, std::vector<std::vector<double>>& rows) const {
+  const std::vector<Vec3> o = origins(x);
   rows.resize(size());
   for (int j = 0; j < size(); ++j) rows[j].assign(row_dofs_[j].size(), 0.0);
   for (std::size_t i = 0; i < elements_.size(); ++i) {
     const Element& e = elements_[i];
     Vec12 g;
-    tet_volume(element_x(x, e), &g, nullptr);
+    tet_volume(element_x(x, e, o), &g, nullptr);
     for (int a = 0; a < 12; ++a)
       if (row_slot_[i][a] >= 0) rows[e.constraint][row_slot_[i][a]] += g[a];
   }
 }
 
 Eigen::VectorXd VolumeConstraints::full_gradient(const Points& x, int j) const {
+  const std::vector<Vec3> o = origins(x);
   Eigen::VectorXd out = Eigen::VectorXd::Zero(3 * x.cols());
   for (const Element& e : elements_) {
     if (e.constraint != j) continue;
     Vec12 g;
-    tet_volume(element_x(x, e), &g, nullptr);
+    tet_volume(element_x(x, e, o), &g, nullptr);
     for (int k = 0; k < 4; ++k)
       if (e.nodes[k] >= 0) out.segment<3>(3 * e.nodes[k]) += g.segment<3>(3 * k);
   }
@@ -141,13 +162,14 @@ Eigen::VectorXd VolumeConstraints::full_gradient(const Points& x, int j) const {
 }
 
 void VolumeConstraints::time_derivative(const Points& x, const Eigen::VectorXd& v, Eigen::VectorXd& gt) const {
+  const std::vector<Vec3> o = origins(x);
   gt.setZero(size());
   for (const Element& e : elements_) {
     bool driven = false;
     for (int n : e.nodes) driven |= n >= 0 && dofs_.free_index[n] < 0;
     if (!driven) continue;
     Vec12 g;
-    tet_volume(element_x(x, e), &g, nullptr);
+    tet_volume(element_x(x, e, o), &g, nullptr);
     for (int k = 0; k < 4; ++k)
       if (e.nodes[k] >= 0 && dofs_.free_index[e.nodes[k]] < 0)
         gt[e.constraint] += g.segment<3>(3 * k).dot(v.segment<3>(3 * e.nodes[k]));
@@ -156,12 +178,13 @@ void VolumeConstraints::time_derivative(const Points& x, const Eigen::VectorXd& 
 
 void VolumeConstraints::hessian_times(const Points& x, const Eigen::VectorXd& xdot,
                                       std::vector<std::vector<double>>& rows) const {
+  const std::vector<Vec3> o = origins(x);
   rows.resize(size());
   for (int j = 0; j < size(); ++j) rows[j].assign(row_dofs_[j].size(), 0.0);
   for (std::size_t i = 0; i < elements_.size(); ++i) {
     const Element& e = elements_[i];
     Mat12 H;
-    tet_volume(element_x(x, e), nullptr, &H);
+    tet_volume(element_x(x, e, o), nullptr, &H);
     Vec12 ve;
     for (int k = 0; k < 4; ++k) ve.segment<3>(3 * k) = e.nodes[k] < 0 ? Vec3::Zero() : Vec3(xdot.segment<3>(3 * e.nodes[k]));
     const Vec12 hv = H * ve;
@@ -171,12 +194,13 @@ void VolumeConstraints::hessian_times(const Points& x, const Eigen::VectorXd& xd
 }
 
 void VolumeConstraints::add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const {
+  const std::vector<Vec3> o = origins(x);
   for_each_coloured(colours_, [&](int i) {
     const Element& e = elements_[i];
     const double w = scale * lambda[e.constraint];
     if (w == 0.0) return 0.0;
     Mat12 H;
-    tet_volume(element_x(x, e), nullptr, &H);
+    tet_volume(element_x(x, e, o), nullptr, &H);
     const Index* s = slots_.data() + 144 * static_cast<std::size_t>(i);
     for (int a = 0; a < 144; ++a)
       if (s[a] >= 0) values[s[a]] += w * H(a / 12, a % 12);
