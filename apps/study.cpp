@@ -188,19 +188,8 @@ int run_study(const Study& s, const std::string& exe, bool resume, bool progress
       }
     }
   };
-  // The reference first, alone: every other case is measured against it.
-  next = 1;
-  {
-    const StudyCase& r = s.cases[0];
-    const auto cpu = s.output / "cases" / "reference.cpu";
-    Outcome o;
-    const bool kept = resume && std::filesystem::exists(cpu);
-    if (!kept) o = run_case(s, r, exe);
-    ++done;
-    if (progress)
-      std::fprintf(stderr, "[1/%zu] reference %s\n", s.cases.size(),
-                   kept ? "kept" : o.status == 0 ? "ok" : "FAILED: every case runs, but errors against it are not computed (see cases/reference.log)");
-  }
+  // The reference is started first, but not alone: errors are computed once every case is done,
+  // so the other core need not wait for it (the reference is usually the longest case).
   std::vector<std::thread> pool;
   for (int j = 0; j < s.jobs; ++j) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
