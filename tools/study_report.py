@@ -75,6 +75,50 @@ def work_precision(rows, d):
     return save(fig, d, "work_precision")
 
 
+def cost_at_error(points, target):
+    """The cost at which a method reaches an error: points are (cost, error) of its finished cases.
+
+    On the method's Pareto front (no case both cheaper and more accurate), the cheapest case at or
+    below the target, interpolated log-log from the next cheaper case when that one is above it;
+    None when no case reaches the target.
+    >>> cost_at_error([(1, 1e-2), (10, 1e-4)], 1e-3)  # halfway in log-log: 10^(1/2)
+    3.162...
+    >>> cost_at_error([(1, 1e-2), (10, 1e-4), (5, 1e-5)], 1e-3)  # (10, 1e-4) is dominated: 5^(1/3)
+    1.709...
+    >>> cost_at_error([(1, 1e-4)], 1e-3), cost_at_error([(1, 1e-2)], 1e-3)
+    (1, None)
+    """
+    front = []
+    for c, e in sorted(points):
+        if e > 0 and (not front or e < front[-1][1]):
+            front.append((c, e))
+    for i, (c, e) in enumerate(front):
+        if e <= target:
+            if i == 0:
+                return c
+            c0, e0 = front[i - 1]
+            w = math.log(e0 / target) / math.log(e0 / e)
+            return math.exp(math.log(c0) + w * math.log(c / c0))
+    return None
+
+
+def equal_error_table(rows, targets=(1e-2, 1e-3, 1e-4, 1e-5)):
+    """Markdown: each method's cost (integration seconds) at equal error, both error measures."""
+    methods = sorted({r["method"] for r in rows if r["method"] != "reference"})
+    lines = []
+    for key, what in (("error_l2", "error of all positions"), ("error_centroid", "error of the centroid's path")):
+        lines += [f"Integration seconds to reach a given {what} (log-log interpolation on each method's "
+                  "Pareto front; — where no case gets there):", "",
+                  "| method | " + " | ".join(f"{t:g}" for t in targets) + " |",
+                  "|---|" + "---|" * len(targets)]
+        for m in methods:
+            pts = [(cost(r), r[key]) for r in rows if r["method"] == m and r["status"] == "ok" and cost(r) > 0]
+            cells = [cost_at_error(pts, t) for t in targets]
+            lines.append(f"| {m} | " + " | ".join("—" if c is None else f"{c:.3g}" for c in cells) + " |")
+        lines.append("")
+    return lines
+
+
 def series(d, rows):
     for r in rows:
         p = os.path.join(d, "cases", r["label"] + ".h5")
@@ -199,6 +243,7 @@ def report(rows, d, images):
     for img in images:
         if img:
             lines += [f"![{img[:-4]}]({img})", ""]
+    lines += equal_error_table(rows)
     lines += ["| method | case | status | frames | CPU s | error (L2) | centroid error | volume error | reason |",
               "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
