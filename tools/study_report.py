@@ -61,9 +61,14 @@ def work_precision(rows, d):
     for ax, key, what in ((axes[0], "error_l2", "relative L2 error of all positions, all frames"),
                           (axes[1], "error_centroid", "relative L2 error of the centroid's path")):
         for m in methods:
-            pts = sorted((cost(r), r[key]) for r in rows if r["method"] == m and r["status"] == "ok" and r[key] > 0)
-            if pts:
-                ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", label=m)
+            # In sweep order (the table's), each point labelled with its swept value(s).
+            ok = [r for r in rows if r["method"] == m and r["status"] == "ok" and r[key] > 0]
+            if ok:
+                line, = ax.loglog([cost(r) for r in ok], [r[key] for r in ok], "o-", label=m)
+                for r in ok:
+                    text = ",".join(f"{number(v):g}" if not math.isnan(number(v)) else v for _, v in r["sweep_pairs"])
+                    ax.annotate(text, (cost(r), r[key]), textcoords="offset points", xytext=(4, 3), fontsize=6,
+                                color=line.get_color())
             bad = [r for r in rows if r["method"] == m and r["status"] != "ok"]
             if bad:
                 ax.plot([], [], "x", color="gray", label=f"{m}: {len(bad)} failed")
@@ -130,6 +135,8 @@ def series(d, rows):
                 V = f["/frames/volume"][()]
                 E = f["/frames/energy"][()]
         except (OSError, KeyError):
+            continue
+        if len(t) == 0:  # failed before its first frame
             continue
         yield r, t, np.max(np.abs(V / V[0] - 1), axis=1), E.sum(axis=1)
 
