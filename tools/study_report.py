@@ -142,12 +142,26 @@ def series(d, rows):
 
 
 def over_time(rows, d):
-    figv, axv = plt.subplots(figsize=(7, 4.5))
-    fige, axe = plt.subplots(figsize=(7, 4.5))
+    """Volume error and energy against time: one colour per method, its cases from light (first in
+    the sweep) to dark (last), the reference in black."""
+    figv, axv = plt.subplots(figsize=(8.5, 4.5))
+    fige, axe = plt.subplots(figsize=(8.5, 4.5))
+    methods = [m for m in dict.fromkeys(r["method"] for r in rows) if m != "reference"]
+    colour = {m: plt.cm.tab10(i % 10) for i, m in enumerate(methods)}
+    count = {m: sum(1 for r in rows if r["method"] == m) for m in methods}
+    seen = {}
+    labelled = set()
     for r, t, dv, e in series(d, rows):
-        style = "k-" if r["method"] == "reference" else "-"
-        axv.semilogy(t, np.maximum(dv, 1e-16), style, lw=0.8, label=r["label"])
-        axe.plot(t, e, style, lw=0.8, label=r["label"])
+        m = r["method"]
+        if m == "reference":
+            kw = dict(color="k", lw=1.2, label="reference")
+        else:
+            k = seen[m] = seen.get(m, -1) + 1
+            kw = dict(color=colour[m], lw=0.8, alpha=0.35 + 0.65 * (k + 1) / count[m],
+                      label=None if m in labelled else f"{m} ({count[m]} cases, light to dark in sweep order)")
+            labelled.add(m)
+        axv.semilogy(t, np.maximum(dv, 1e-16), **kw)
+        axe.plot(t, e, **kw)
     axv.set_xlabel("time (s)")
     axv.set_ylabel("worst |V - V0| / V0 over zones")
     axv.set_title("volume error")
@@ -156,7 +170,7 @@ def over_time(rows, d):
     axe.set_title("energy")
     for ax in (axv, axe):
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=6, ncol=2)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     return save(figv, d, "volume_error"), save(fige, d, "energy")
 
 
