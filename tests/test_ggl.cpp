@@ -162,7 +162,9 @@ void check_reduced_solve(const std::string& kind, double unrefined) {
       std::printf("%s cj %g: residual %.2e, refined %.2e, dense LU %.2e, %ld CG iterations\n", kind.c_str(), cj, res0, res,
                   dense, rs.iterations());
     }
-    if (kind == "pcg") EXPECT_GT(rs.iterations(), 0);
+    if (kind == "pcg") {
+      EXPECT_GT(rs.iterations(), 0);
+    }
   }
 }
 }  // namespace

@@ -44,8 +44,8 @@ struct ReducedSolver::Impl {
     use_direct = direct->factor(Sx.data());
     return use_direct;
   }
-  Impl(const GglForm& f, const std::string& kind)
-      : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind)), fallback(kind == "pcg") {
+  Impl(const GglForm& f, const std::string& kind, double pcg_tol)
+      : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind, pcg_tol)), fallback(kind == "pcg") {
     Sx.resize(f.system().pattern().nnz());
     Vx.resize(Sx.size()), Qx.resize(Sx.size()), Ax.resize(Sx.size());
     Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);
@@ -77,7 +77,8 @@ struct ReducedSolver::Impl {
   }
 };
 
-ReducedSolver::ReducedSolver(const GglForm& form, const std::string& kind) : impl_(std::make_unique<Impl>(form, kind)) {}
+ReducedSolver::ReducedSolver(const GglForm& form, const std::string& kind, double pcg_tol)
+    : impl_(std::make_unique<Impl>(form, kind, pcg_tol)) {}
 ReducedSolver::~ReducedSolver() = default;
 
 double ReducedSolver::factor_nnz() const { return impl_->S->factor_nnz(); }

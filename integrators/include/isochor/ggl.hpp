@@ -52,8 +52,9 @@ class GglForm {
 // approximation otherwise, which Newton's iteration absorbs.
 class ReducedSolver {
  public:
-  // kind: "cholmod" (direct) or "pcg" (the krylov solver: no factor).
-  explicit ReducedSolver(const GglForm& form, const std::string& kind = "cholmod");
+  // kind: "cholmod" (direct) or "pcg" (the krylov solver: no factor; pcg_tol its relative
+  // residual).
+  explicit ReducedSolver(const GglForm& form, const std::string& kind = "cholmod", double pcg_tol = 1e-12);
   ~ReducedSolver();
   // Factors S for this Jacobian (LDL^T once S is found indefinite); false when it is singular.
   bool setup(double cj, const double* values);
