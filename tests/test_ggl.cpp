@@ -11,6 +11,7 @@
 #include "isochor/ida_integrator.hpp"
 #include "isochor/scene.hpp"
 #include "isochor/mesh_system.hpp"
+#include "isochor/sparse_factor.hpp"
 
 using namespace isochor;
 
@@ -311,4 +312,67 @@ TEST(Ggl, SolversOnJacobiansCapturedFromABallDrop) {
     }
   }
   EXPECT_EQ(with_inverted >= 2, true) << "no Jacobian with inverted elements was captured";
+}
+
+// CHOLMOD's factor: supernodal LL^T while the matrix is positive definite, simplicial LDL^T when
+// it is not, and LL^T again within 8 factorisations once the matrix is definite again (the slow
+// LDL^T must not stay for the rest of a run after one indefinite matrix). Every solve exact.
+TEST(SymmetricFactor, BackToLLtOnceTheMatrixIsDefiniteAgain) {
+  const int k = 16, n = k * k * k;  // 7-point Laplacian on a k^3 grid: eigenvalues in (0, 12)
+  auto id = [&](int i, int j, int l) { return (i * k + j) * k + l; };
+  std::vector<std::vector<Index>> cols(n);
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j)
+      for (int l = 0; l < k; ++l) {
+        const int a = id(i, j, l);
+        cols[a].push_back(a);
+        if (i > 0) cols[a].push_back(id(i - 1, j, l));
+        if (i + 1 < k) cols[a].push_back(id(i + 1, j, l));
+        if (j > 0) cols[a].push_back(id(i, j - 1, l));
+        if (j + 1 < k) cols[a].push_back(id(i, j + 1, l));
+        if (l > 0) cols[a].push_back(id(i, j, l - 1));
+        if (l + 1 < k) cols[a].push_back(id(i, j, l + 1));
+        std::sort(cols[a].begin(), cols[a].end());
+      }
+  SparsePattern p;
+  p.n = n;
+  p.col_ptr.push_back(0);
+  for (const auto& c : cols) {
+    p.row_ind.insert(p.row_ind.end(), c.begin(), c.end());
+    p.col_ptr.push_back(static_cast<Index>(p.row_ind.size()));
+  }
+  // values of L + shift I
+  auto values = [&](double shift) {
+    std::vector<double> v(p.nnz());
+    for (Index c = 0; c < n; ++c)
+      for (Index q = p.col_ptr[c]; q < p.col_ptr[c + 1]; ++q) v[q] = p.row_ind[q] == c ? 6.0 + shift : -1.0;
+    return v;
+  };
+  auto residual = [&](const std::vector<double>& v, const VectorXd& x, const VectorXd& b) {
+    VectorXd r = -b;
+    for (Index c = 0; c < n; ++c)
+      for (Index q = p.col_ptr[c]; q < p.col_ptr[c + 1]; ++q) r[p.row_ind[q]] += v[q] * x[c];
+    return r.norm() / b.norm();
+  };
+  SymmetricFactor f(p);
+  const VectorXd b = VectorXd::LinSpaced(n, -1.0, 2.0);
+  VectorXd x(n);
+  const std::vector<double> spd = values(0.5), indefinite = values(-6.03);  // -6.03: between eigenvalues
+  ASSERT_TRUE(f.factor(spd.data()));
+  EXPECT_FALSE(f.used_ldlt());
+  f.solve(b.data(), x.data());
+  EXPECT_LT(residual(spd, x, b), 1e-12);
+  ASSERT_TRUE(f.factor(indefinite.data()));
+  EXPECT_TRUE(f.used_ldlt());
+  f.solve(b.data(), x.data());
+  EXPECT_LT(residual(indefinite, x, b), 1e-9);
+  int back = -1;
+  for (int t = 1; t <= 8; ++t) {
+    ASSERT_TRUE(f.factor(spd.data()));
+    f.solve(b.data(), x.data());
+    EXPECT_LT(residual(spd, x, b), 1e-12) << "factorisation " << t;
+    if (!f.used_ldlt() && back < 0) back = t;
+  }
+  EXPECT_EQ(back, 8);  // LL^T retried at the 8th factorisation after the switch, and kept
+  EXPECT_FALSE(f.used_ldlt());
 }
