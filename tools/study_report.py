@@ -55,20 +55,27 @@ def cost(r):
     return r["wall_seconds"] if r["wall_seconds"] > 0 else r["cpu_seconds"]
 
 
+def method_colours(rows):
+    """One colour per method (table order), the same in every chart."""
+    methods = [m for m in dict.fromkeys(r["method"] for r in rows) if m != "reference"]
+    return {m: plt.cm.tab10(i % 10) for i, m in enumerate(methods)}
+
+
 def work_precision(rows, d):
     fig, axes = plt.subplots(1, 2, figsize=(13, 5))
     methods = sorted({r["method"] for r in rows if r["method"] != "reference"})
+    colour = method_colours(rows)
     for ax, key, what in ((axes[0], "error_l2", "relative L2 error of all positions, all frames"),
                           (axes[1], "error_centroid", "relative L2 error of the centroid's path")):
         for m in methods:
             # In sweep order (the table's), each point labelled with its swept value(s).
             ok = [r for r in rows if r["method"] == m and r["status"] == "ok" and r[key] > 0]
             if ok:
-                line, = ax.loglog([cost(r) for r in ok], [r[key] for r in ok], "o-", label=m)
+                ax.loglog([cost(r) for r in ok], [r[key] for r in ok], "o-", color=colour[m], label=m)
                 for r in ok:
                     text = ",".join(f"{number(v):g}" if not math.isnan(number(v)) else v for _, v in r["sweep_pairs"])
                     ax.annotate(text, (cost(r), r[key]), textcoords="offset points", xytext=(4, 3), fontsize=6,
-                                color=line.get_color())
+                                color=colour[m])
             bad = [r for r in rows if r["method"] == m and r["status"] != "ok"]
             if bad:
                 ax.plot([], [], "x", color="gray", label=f"{m}: {len(bad)} failed")
@@ -146,11 +153,9 @@ def over_time(rows, d):
     the sweep) to dark (last), the reference in black."""
     figv, axv = plt.subplots(figsize=(8.5, 4.5))
     fige, axe = plt.subplots(figsize=(8.5, 4.5))
-    methods = [m for m in dict.fromkeys(r["method"] for r in rows) if m != "reference"]
-    colour = {m: plt.cm.tab10(i % 10) for i, m in enumerate(methods)}
-    count = {m: sum(1 for r in rows if r["method"] == m) for m in methods}
-    seen = {}
-    labelled = set()
+    colour = method_colours(rows)
+    count = {m: sum(1 for r in rows if r["method"] == m) for m in colour}
+    seen = {}  # method -> index of its last case drawn
     for r, t, dv, e in series(d, rows):
         m = r["method"]
         if m == "reference":
@@ -158,8 +163,7 @@ def over_time(rows, d):
         else:
             k = seen[m] = seen.get(m, -1) + 1
             kw = dict(color=colour[m], lw=0.8, alpha=0.35 + 0.65 * (k + 1) / count[m],
-                      label=None if m in labelled else f"{m} ({count[m]} cases, light to dark in sweep order)")
-            labelled.add(m)
+                      label=f"{m} ({count[m]} cases, light to dark in sweep order)" if k == 0 else None)
         axv.semilogy(t, np.maximum(dv, 1e-16), **kw)
         axe.plot(t, e, **kw)
     axv.set_xlabel("time (s)")

@@ -144,7 +144,6 @@ bool ReducedSolver::solve(const double* b, double* x, int refine) {
 
 void ReducedSolver::solve_once(const double* b, double* x) {
   Impl& s = *impl_;
-  const GglForm& f = s.form;
   const Index n = s.n, m = s.m;
   Eigen::Map<const VectorXd> r1(b, n), r2(b + n, n), r3(b + 2 * n, m), r4(b + 2 * n + m, m);
   s.times(s.Vx, r1.data(), s.tmp.data());

@@ -78,7 +78,7 @@ bool SymmetricFactor::factor(const double* values) {
     s.c.final_ll = 0;
     cholmod_l_factorize(s.A, s.Lldl, &s.c);
     s.L = s.Lldl;
-    if (!s.ldlt) s.since_ldlt = 0;
+    if (try_ll) s.since_ldlt = 0;  // LL^T just failed: count again from here
     s.ldlt = true;
   }
   if (std::getenv("ISOCHOR_DEBUG_CHOLMOD"))

@@ -56,7 +56,8 @@ class ReducedSolver {
   // residual).
   explicit ReducedSolver(const GglForm& form, const std::string& kind = "cholmod", double pcg_tol = 1e-12);
   ~ReducedSolver();
-  // Factors S for this Jacobian (LDL^T once S is found indefinite); false when it is singular.
+  // Factors S for this Jacobian (LDL^T while S is indefinite; "pcg": CHOLMOD where PCG fails);
+  // false when it is singular.
   bool setup(double cj, const double* values);
   // x = J^-1 b, then `refine` steps of iterative refinement with the exact J (each one more
   // sparse product and reduced solve).
