@@ -3,13 +3,17 @@
 JOBS ?= $(shell nproc)
 BUILD ?= build
 
-.PHONY: demo test deps configure build bench clean
+.PHONY: demo test test-long deps configure build bench clean
 
 demo: build
 	./demos/run-default.sh $(BUILD)
 
+# The default suite; `make test-long` runs the whole-scene tests labelled `long`.
 test: build
-	cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
+	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) -LE long
+
+test-long: build
+	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) -L long
 
 bench: build
 	cmake --build $(BUILD) -j$(JOBS) --target isochor_bench

@@ -118,7 +118,7 @@ int main(int argc, char** argv) {
     if (run->parsed()) {
       Scene sc = load_scene(scene_path, overrides);
       RunSummary r = run_scene(sc, out_path, !quiet);
-      const IdaStats& s = r.stats;
+      const RunStats& s = r.stats;
       std::printf("%s: %d frames, %ld steps, %ld Newton iterations, %ld Jacobians, %.2f s wall "
                   "(assembly %.2f, factorisation %.2f, solve %.2f",
                   scene_path.c_str(), r.frames, s.steps, s.newton_iterations, s.jacobian_evals, s.wall_seconds,

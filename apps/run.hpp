@@ -1,8 +1,8 @@
-// Running a dynamic scene end to end: scene -> MeshSystem -> integrator -> output file.
+// Running a scene end to end: scene -> its system -> its integrator (by kind) -> output file.
 #pragma once
 #include <string>
 
-#include "isochor/ida_integrator.hpp"
+#include "isochor/run_stats.hpp"
 #include "isochor/scene.hpp"
 
 namespace isochor {
@@ -10,7 +10,7 @@ namespace isochor {
 struct RunSummary {
   std::string output;
   int frames = 0;
-  IdaStats stats;
+  RunStats stats;
   double simbody_seconds = 0;  // realizing the skeleton (0 without one)
 };
 

@@ -16,6 +16,12 @@
 using namespace isochor;
 
 namespace {
+SymmetricSolverKind solver_kind(const std::string& name) {
+  return name == "pcg" ? SymmetricSolverKind::pcg : SymmetricSolverKind::cholmod;
+}
+}  // namespace
+
+namespace {
 
 const char* kScene = R"(
 [mesh]
@@ -145,7 +151,7 @@ void check_reduced_solve(const std::string& kind, double unrefined) {
     const Eigen::MatrixXd J = f.dense_jacobian(0.1, cj);
     std::vector<double> vals(f.form.pattern().nnz());
     f.form.jacobian(0.1, cj, f.y.data(), f.yp.data(), vals.data());
-    ReducedSolver rs(f.form, kind);
+    ReducedSolver rs(f.form, solver_kind(kind));
     ASSERT_TRUE(rs.setup(cj, vals.data()));
     std::mt19937 rng(5);
     std::normal_distribution<double> nd;
@@ -237,7 +243,7 @@ TEST(Ggl, ReducedSolversWithAnInvertedElement) {
     const VectorXd xd = J.partialPivLu().solve(b);
     const double dense = (J * xd - b).norm() / b.norm();
     for (const char* kind : {"cholmod", "pcg"}) {
-      ReducedSolver rs(f.form, kind);
+      ReducedSolver rs(f.form, solver_kind(kind));
       VectorXd x(f.form.size());
       const bool ok = rs.setup(cj, vals.data()) && rs.solve(b.data(), x.data(), 1);
       ASSERT_TRUE(ok) << kind << " cj " << cj;
@@ -269,7 +275,7 @@ TEST(Ggl, SolversOnJacobiansCapturedFromABallDrop) {
   IdaOptions o;
   o.rtol = 1e-4;
   o.atol_q = 1e-7;
-  o.linear_solver = "klu";
+  o.linear_solver = LinearSolverKind::klu;
   GglForm form(sys);
   const Index N = form.size();
   int count = 0, with_contact = 0, with_inverted = 0;
@@ -281,7 +287,7 @@ TEST(Ggl, SolversOnJacobiansCapturedFromABallDrop) {
     captured.push_back({t, cj, inverted, std::vector<double>(y, y + N), std::vector<double>(values, values + form.pattern().nnz())});
   };
   IdaIntegrator(sys, o).run(scene.frames.times(), [](int, double, const VectorXd&, const VectorXd&, const VectorXd&,
-                                                     const IdaStats::FrameSample&) {});
+                                                     const RunStats::FrameSample&) {});
   ASSERT_EQ(captured.size(), 4u);
   const SparsePattern& p = form.pattern();
   const Index n = form.n();
@@ -297,7 +303,7 @@ TEST(Ggl, SolversOnJacobiansCapturedFromABallDrop) {
     std::mt19937 rng(7);
     std::normal_distribution<double> nd;
     for (const char* kind : {"cholmod", "pcg"}) {
-      ReducedSolver rs(form, kind);
+      ReducedSolver rs(form, solver_kind(kind));
       ASSERT_TRUE(rs.setup(c.cj, c.values.data())) << kind << " t " << c.t;
       for (int trial = 0; trial < 2; ++trial) {
         VectorXd b(N), x(N);

@@ -6,6 +6,9 @@
 
 #include "isochor/backward_euler.hpp"
 #include "isochor/ida_integrator.hpp"
+#include "isochor/initial_state.hpp"
+
+#include "test_util.hpp"
 
 using namespace isochor;
 
@@ -79,16 +82,11 @@ std::vector<double> reference_angles(const std::vector<double>& times) {
   return out;
 }
 
-std::vector<double> frame_times(double end, double dt) {
-  std::vector<double> t;
-  for (int k = 0; k * dt <= end + 1e-12; ++k) t.push_back(k * dt);
-  return t;
-}
 
 }  // namespace
 
 TEST(Ida, PendulumErrorFallsWithTheTolerance) {
-  const auto times = frame_times(3.0, 0.05);
+  const auto times = test::frame_times(3.0, 0.05);
   const auto ref = reference_angles(times);
   std::vector<double> errors;
   for (double rtol : {1e-4, 1e-5, 1e-6, 1e-7}) {
@@ -99,7 +97,7 @@ TEST(Ida, PendulumErrorFallsWithTheTolerance) {
     o.atol_v = rtol;
     IdaIntegrator ida(p, o);
     double worst = 0;
-    ida.run(times, [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const IdaStats::FrameSample&) {
+    ida.run(times, [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {
       const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
       worst = std::max(worst, (q - exact).norm());
     });
@@ -113,7 +111,7 @@ TEST(Ida, PendulumErrorFallsWithTheTolerance) {
 
 TEST(Ida, PendulumStaysOnTheCircleForTenPeriods) {
   const double period = 2 * M_PI * std::sqrt(kL / kG) * 1.08;  // about 10% longer at 60 degrees
-  const auto times = frame_times(10 * period, 0.01);
+  const auto times = test::frame_times(10 * period, 0.01);
   Pendulum p;
   IdaOptions o;
   o.rtol = 1e-8;
@@ -122,7 +120,7 @@ TEST(Ida, PendulumStaysOnTheCircleForTenPeriods) {
   IdaIntegrator ida(p, o);
   double worst = 0;
   int frames = 0;
-  IdaStats st = ida.run(times, [&](int, double, const VectorXd& q, const VectorXd&, const VectorXd& lambda, const IdaStats::FrameSample&) {
+  RunStats st = ida.run(times, [&](int, double, const VectorXd& q, const VectorXd&, const VectorXd& lambda, const RunStats::FrameSample&) {
     worst = std::max(worst, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
     EXPECT_GT(lambda[0], 0.0);  // the rod pulls: tension (lambda > 0 with F_v = M v' - f + G^T lambda)
     frames++;
@@ -137,7 +135,7 @@ TEST(Ida, PendulumStaysOnTheCircleForTenPeriods) {
 TEST(Ida, ConsistentInitialStateSatisfiesPositionVelocityAndAccelerationLevels) {
   Pendulum p;
   VectorXd q, v, a, lambda;
-  IdaIntegrator::consistent_initial_state(p, 0.0, q, v, a, lambda);
+  consistent_initial_state(p, 0.0, q, v, a, lambda);
   EXPECT_NEAR(q.norm(), kL, 1e-14);
   EXPECT_NEAR(q.dot(v), 0.0, 1e-14);
   // d2/dt2 of |q|^2 / 2 = |v|^2 + q . a = 0, and M a = f - G^T lambda.
@@ -147,7 +145,7 @@ TEST(Ida, ConsistentInitialStateSatisfiesPositionVelocityAndAccelerationLevels) 
 }
 
 TEST(BackwardEuler, PendulumConvergesWithOrderOne) {
-  const auto times = frame_times(1.0, 0.05);
+  const auto times = test::frame_times(1.0, 0.05);
   const auto ref = reference_angles(times);
   std::vector<double> errors;
   for (double h : {5e-3, 2.5e-3, 1.25e-3, 6.25e-4}) {  // frames every 0.05 s fall on steps
@@ -156,7 +154,7 @@ TEST(BackwardEuler, PendulumConvergesWithOrderOne) {
     o.dt = h;
     BackwardEuler be(p, o);
     double worst = 0, worst_g = 0;
-    be.run(times, [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const IdaStats::FrameSample&) {
+    be.run(times, [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {
       const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
       worst = std::max(worst, (q - exact).norm());
       worst_g = std::max(worst_g, std::abs(0.5 * (q.squaredNorm() - kL * kL)));

@@ -153,13 +153,14 @@ select = { kind = "set", name = "zmax" }
   }
 }
 
-// The coarse ball of the CNH paper (demos/ball_drop.toml) through impact and rebound start.
-TEST(BallDrop, CnhKeepsTheVolumeAtEveryFrame) {
+// The coarse ball of the CNH paper (demos/ball_drop.toml) through impact and rebound start
+// (label long: ctest -L long); the default suite runs the same check on a 1,000-tet ball.
+static void ball_keeps_its_volume(const std::vector<std::string>& overrides, int min_tets, int frames) {
   const auto dir = test::temp_dir();
-  Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/ball_drop.toml", {"frames.duration=0.1"});
-  ASSERT_GT(sc.mesh.num_tets(), 4000);
+  Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/ball_drop.toml", overrides);
+  ASSERT_GT(sc.mesh.num_tets(), min_tets);
   RunFile f(run_scene(sc, (dir / "cnh.h5").string(), false).output);
-  ASSERT_EQ(f.num_frames(), 101);
+  ASSERT_EQ(f.num_frames(), frames);
   double worst = 0, lowest_z = 1;
   for (int k = 0; k < f.num_frames(); ++k) {
     worst = std::max(worst, std::abs(f.volumes()[k][0] / f.volumes()[0][0] - 1.0));
@@ -170,17 +171,26 @@ TEST(BallDrop, CnhKeepsTheVolumeAtEveryFrame) {
   EXPECT_LT(lowest_z, 0.002);  // it did reach the ground (contact layer 2 mm)
   EXPECT_LT(worst, 1e-8);
 }
+TEST(BallDropLong, CnhKeepsTheVolumeAtEveryFrame) { ball_keeps_its_volume({"frames.duration=0.1"}, 4000, 101); }
+TEST(BallDrop, CoarseCnhKeepsTheVolumeAtEveryFrame) {
+  ball_keeps_its_volume({"frames.duration=0.05", "mesh.target_tets=1000"}, 500, 51);
+}
 
-TEST(BallDrop, UnhAtNu045LosesMoreThanAFifthAtImpact) {
+static void unh_loses_a_fifth(const std::vector<std::string>& extra) {
   const auto dir = test::temp_dir();
-  Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/ball_drop.toml",
-                        {"frames.duration=0.1", "material.model=unh", "integrator.rtol=1e-4", "integrator.atol=1e-6"});
+  std::vector<std::string> o = {"material.model=unh", "integrator.rtol=1e-4", "integrator.atol=1e-6"};
+  o.insert(o.end(), extra.begin(), extra.end());
+  Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/ball_drop.toml", o);
   EXPECT_TRUE(sc.zones.empty());
   RunFile f(run_scene(sc, (dir / "unh.h5").string(), false).output);
   double lowest = 1;
   for (const auto& v : f.volumes()) lowest = std::min(lowest, v[0] / f.volumes()[0][0]);
   std::printf("coarse ball, unh nu = 0.45: lowest volume %.4f of V0\n", lowest);
   EXPECT_LT(lowest, 0.8);
+}
+TEST(BallDropLong, UnhAtNu045LosesMoreThanAFifthAtImpact) { unh_loses_a_fifth({"frames.duration=0.1"}); }
+TEST(BallDrop, CoarseUnhAtNu045LosesMoreThanAFifthAtImpact) {
+  unh_loses_a_fifth({"frames.duration=0.05", "mesh.target_tets=1000"});
 }
 
 // The CNH paper's Figure 2 (demos/two_tets.toml), statics with KINSOL.
@@ -240,7 +250,7 @@ duration = 0.2
     o.newton_tol = 1e-12;
     o.schur_max_constraints = path == 0 ? 32 : 100000;
     BackwardEuler(sys, o).run(sc.frames.times(), [&](int, double, const VectorXd& q, const VectorXd&, const VectorXd&,
-                                                     const IdaStats::FrameSample&) { frames[path].push_back(q); });
+                                                     const RunStats::FrameSample&) { frames[path].push_back(q); });
   }
   ASSERT_EQ(frames[0].size(), frames[1].size());
   double worst = 0, moved = 0;

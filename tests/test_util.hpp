@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "isochor/error.hpp"
 #include "isochor/mesh.hpp"
@@ -18,6 +19,13 @@ inline std::filesystem::path temp_dir() {
   std::filesystem::remove_all(d);
   std::filesystem::create_directories(d);
   return d;
+}
+
+// Frame times 0, dt, 2 dt, ... up to end.
+inline std::vector<double> frame_times(double end, double dt) {
+  std::vector<double> t;
+  for (int k = 0; k * dt <= end + 1e-12; ++k) t.push_back(k * dt);
+  return t;
 }
 
 inline std::string write_file(const std::filesystem::path& p, const std::string& text) {

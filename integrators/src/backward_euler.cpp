@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "isochor/fixed_step.hpp"
+#include "isochor/initial_state.hpp"
 #include "isochor/sparse_factor.hpp"
 #include "bordered.hpp"
 #include "kkt.hpp"
@@ -20,7 +21,7 @@ struct BackwardEuler::Impl {
   std::vector<double> K, D, Sv;
   std::vector<Index> diag;
   std::vector<std::vector<double>> G;
-  IdaStats stats;
+  RunStats stats;
   // Many constraints: KLU on the whole KKT matrix instead of m solves for a dense Schur complement.
   bool use_kkt;
   std::unique_ptr<KktLayout> layout;
@@ -28,10 +29,12 @@ struct BackwardEuler::Impl {
   std::vector<double> kv;
 
   Impl(ConstrainedSystem& s, BackwardEulerOptions o)
-      : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()),
-        use_kkt(o.linear_solver == "klu" || m > o.schur_max_constraints) {
+      : sys(s), opt(o), n((check_system(s), s.num_dofs())), m(s.num_constraints()),
+        use_kkt(o.linear_solver == LinearSolverKind::klu || m > o.schur_max_constraints) {
     if (!use_kkt)
-      S = std::make_unique<BorderedSolver>(s.pattern(), s.constraint_rows(), o.linear_solver == "krylov" ? "pcg" : "cholmod");
+      S = std::make_unique<BorderedSolver>(s.pattern(), s.constraint_rows(), o.linear_solver == LinearSolverKind::krylov
+                                                                               ? SymmetricSolverKind::pcg
+                                                                               : SymmetricSolverKind::cholmod);
     if (use_kkt) {
       layout = std::make_unique<KktLayout>(s.pattern(), s.constraint_rows());
       kkt = std::make_unique<KktFactor>(*layout, s.pattern(), s.dofs_per_group(), s.constraint_rows());
@@ -57,24 +60,33 @@ struct BackwardEuler::Impl {
   // iterations and steps while the iterations contract well (rate below 1/4); a slow or failing
   // iteration refreshes it, and a step that fails with a reused factorisation is redone with
   // fresh ones. The semi-implicit variant takes exactly one iteration with a fresh matrix.
-  bool step(double t, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v, VectorXd& lambda,
+  bool step(double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v, VectorXd& lambda,
             std::string& reason) {
     const VectorXd lambda0 = lambda;
-    bool ok = step_once(t, qn, vn, q, v, lambda, reason, false);
+    bool ok = step_once(t1, qn, vn, q, v, lambda, reason, false);
     if (!ok && !opt.semi_implicit) {
       lambda = lambda0;
       refresh = true;
       have_previous = false;
-      ok = step_once(t, qn, vn, q, v, lambda, reason, true);
+      ok = step_once(t1, qn, vn, q, v, lambda, reason, true);
     }
     v_previous = vn;
     have_previous = true;
     return ok;
   }
 
-  bool step_once(double t, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v, VectorXd& lambda,
+  // Newton's convergence test, as IDA's: with the contraction rate r of the iterations since the
+  // last factorisation (r^m = |dq_m| / |dq_0|), the error left after iteration m is about
+  // r / (1 - r) |dq_m|; Newton stops once that is below the tolerance, newton_tol times the step's
+  // displacement |q - q_n|_inf (so that the velocity (q - q_n) / h is as accurate at every h)
+  // plus newton_atol. The factor ss = r / (1 - r) carries over between steps and is reset to a
+  // cautious 20 by a factorisation; a reused matrix with r > 0.9 fails the attempt (step()
+  // redoes it with fresh matrices).
+  double ss = 20.0;
+
+  bool step_once(double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v, VectorXd& lambda,
                  std::string& reason, bool always_fresh) {
-    const double h = opt.dt, t1 = t + h;
+    const double h = opt.dt;
     const VectorXd& M = sys.mass();
     // Predictor: the velocity extrapolated linearly from the last two steps (the first step and
     // the semi-implicit variant, whose single iteration starts from it, use q_n + h v_n).
@@ -82,9 +94,10 @@ struct BackwardEuler::Impl {
     else q = qn + h * vn;
     VectorXd f(n), R1(n), R2(m), g(m), dq(n), dl(m), rhs(n);
     VectorXd kr(use_kkt ? n + m : 0);
-    const double tol = opt.newton_tol * std::max(1.0, qn.cwiseAbs().maxCoeff());
     const int iterations = opt.semi_implicit ? 1 : opt.max_newton;
-    double previous = 0;
+    double first = 0;              // |dq| of the first iteration since the last factorisation
+    int since = 0;                 // iterations since then
+    bool fresh_this_step = false;  // a factorisation of this step's matrix
     for (int it = 0; it < iterations; ++it) {
       const auto ta = Clock::now();
       v = (q - qn) / h;
@@ -93,13 +106,8 @@ struct BackwardEuler::Impl {
       std::fill(D.begin(), D.end(), 0.0);
       sys.force_and_jacobians(t1, q, v, f, fresh ? K.data() : nullptr, fresh ? D.data() : nullptr);
       R1 = M.cwiseProduct(q - qn - h * vn) / (h * h) - f;
-      if (m) {
-        sys.constraint(t1, q, g);
-        sys.constraint_jacobian(t1, q, G, nullptr);
-        for (Index j = 0; j < m; ++j)
-          for (std::size_t k = 0; k < G[j].size(); ++k) R1[sys.constraint_rows()[j][k]] += G[j][k] * lambda[j];
-        R2 = g;
-      }
+      add_constraint_terms(sys, t1, q, lambda, G, g, R1.data());
+      if (m) R2 = g;
       if (!R1.allFinite()) {
         reason = "the forces are not finite (an element inverted or exploded)";
         return false;
@@ -125,6 +133,8 @@ struct BackwardEuler::Impl {
         stats.fresh_factorisations++;
         factored = ok;
         refresh = false;
+        fresh_this_step = true;
+        ss = 20.0;
         if (!ok) {
           reason = "the step matrix is singular";
           return false;
@@ -157,10 +167,27 @@ struct BackwardEuler::Impl {
         reason = "Newton produced a non-finite state";
         return false;
       }
+      if (opt.semi_implicit) break;
       const double size = dq.cwiseAbs().maxCoeff();
-      if (it > 0 && size > 0.25 * previous) refresh = true;  // slow contraction: a fresh matrix next
-      previous = size;
-      if (size <= tol) {
+      const double tol = opt.newton_tol * (q - qn).cwiseAbs().maxCoeff() + opt.newton_atol;
+      if (fresh || it == 0) {  // the rate is measured from the last factorisation on
+        first = size;
+        since = 0;
+      } else {
+        const double rate = std::pow(size / first, 1.0 / ++since);
+        if (rate > 0.25) refresh = true;  // slow contraction: a fresh matrix for the next step
+        if (rate > 0.9 && !fresh_this_step) {
+          // A reused matrix that no longer contracts: step() redoes the step with fresh ones.
+          reason = "Newton stalled with a reused matrix (contraction rate " + std::to_string(rate) + ")";
+          return false;
+        }
+        ss = rate < 0.9 ? rate / (1.0 - rate) : 1e300;  // no estimate yet: iterate on
+      }
+      // A first iteration is trusted only when it is tiny against the tolerance, or within it and
+      // the matrix contracted well so far (ss carried from earlier steps, not after a
+      // factorisation): a sudden contact shows as a large first correction and is iterated on.
+      const bool done = since == 0 ? size <= 1e-4 * tol || (size <= tol && ss <= 1.0 && !fresh) : ss * size <= tol;
+      if (done) {
         v = (q - qn) / h;
         return true;
       }
@@ -177,22 +204,22 @@ BackwardEuler::BackwardEuler(ConstrainedSystem& system, BackwardEulerOptions opt
     : impl_(std::make_unique<Impl>(system, options)) {}
 BackwardEuler::~BackwardEuler() = default;
 
-IdaStats BackwardEuler::run(const std::vector<double>& times, const FrameCallback& on_frame) {
+RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallback& on_frame) {
   Impl& s = *impl_;
   const double h = s.opt.dt;
   VectorXd q, v, a, lambda;
-  IdaIntegrator::consistent_initial_state(s.sys, times.front(), q, v, a, lambda);
-  auto step = [&](double t, const VectorXd& qn, const VectorXd& vn, VectorXd& q1, VectorXd& v1, VectorXd& l1,
+  consistent_initial_state(s.sys, times.front(), q, v, a, lambda);
+  auto step = [&](double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q1, VectorXd& v1, VectorXd& l1,
                   std::string& reason) {
-    if (!s.step(t, qn, vn, q1, v1, l1, reason)) return false;
-    if (s.opt.rescale_volume && !s.sys.rescale_volume(t + h, q1)) {
+    if (!s.step(t, t1, qn, vn, q1, v1, l1, reason)) return false;
+    if (s.opt.rescale_volume && !s.sys.rescale_volume(t1, q1)) {
       reason = "this model has no volume rescaling";
       return false;
     }
     return true;
   };
   auto sample = [&]() {
-    return IdaStats::FrameSample{s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 1, h};
+    return RunStats::FrameSample{s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 1, h};
   };
   run_fixed_steps(times, h, s.opt.max_steps, q, v, lambda, step, s.stats, sample, on_frame);
   return s.stats;

@@ -17,8 +17,8 @@ namespace isochor {
 
 class BorderedSolver {
  public:
-  // A's pattern (both triangles), the dofs of each constraint row, kind "cholmod" or "pcg".
-  BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows, const std::string& kind);
+  // A's pattern (both triangles), the dofs of each constraint row, and the solver of A.
+  BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows, SymmetricSolverKind kind);
   bool factor(const double* A_values);  // false: singular, or indefinite for PCG
   // The borders' values (G[j][k] at rows[j][k]): Z and C for the current factor. False if a
   // solve failed.

@@ -6,11 +6,12 @@
 namespace isochor {
 
 void run_fixed_steps(const std::vector<double>& times, double h, long max_steps, VectorXd q, VectorXd v,
-                     VectorXd lambda, const FixedStep& step, IdaStats& stats,
-                     const std::function<IdaStats::FrameSample()>& sample, const FrameCallback& on_frame) {
+                     VectorXd lambda, const FixedStep& step, RunStats& stats,
+                     const std::function<RunStats::FrameSample()>& sample, const FrameCallback& on_frame) {
   const auto wall0 = Clock::now();
   VectorXd q1, v1, l1 = lambda;
-  double t = times.front();
+  const double t0 = times.front();
+  double t = t0;
   std::size_t k = 0;
   stats.steps = 0;
   while (k < times.size() && times[k] <= t + 1e-12 * h) {
@@ -19,8 +20,8 @@ void run_fixed_steps(const std::vector<double>& times, double h, long max_steps,
   }
   while (k < times.size()) {
     std::string reason;
-    const double t1 = t + h;
-    if (!step(t, q, v, q1, v1, l1, reason)) {
+    const double t1 = t0 + static_cast<double>(stats.steps + 1) * h;
+    if (!step(t, t1, q, v, q1, v1, l1, reason)) {
       stats.wall_seconds = seconds_since(wall0);
       throw IntegrationError(t1, reason + " (step " + std::to_string(stats.steps + 1) + ", h = " + std::to_string(h) + " s)");
     }

@@ -6,8 +6,8 @@ namespace isochor {
 
 HongStep::HongStep(ConstrainedSystem& system, HongOptions options) : sys_(system), opt_(std::move(options)) {}
 
-IdaStats HongStep::run(const std::vector<double>& times, const FrameCallback& on_frame) {
-  IdaStats stats;
+RunStats HongStep::run(const std::vector<double>& times, const FrameCallback& on_frame) {
+  RunStats stats;
   const Index n = sys_.num_dofs(), m = sys_.num_constraints();
   if (m > 1) throw IntegrationError(times.front(), "Hong's step enforces one constraint, this system has " + std::to_string(m));
   const int group = sys_.dofs_per_group();
@@ -20,7 +20,7 @@ IdaStats HongStep::run(const std::vector<double>& times, const FrameCallback& on
   std::vector<std::vector<double>> G(m);
   if (m) G[0].resize(sys_.constraint_rows()[0].size());
   sys_.initial_state(times.front(), q0, v0);
-  auto step = [&](double t, const VectorXd& q, const VectorXd& v, VectorXd& q1, VectorXd& v1, VectorXd& l1,
+  auto step = [&](double t, double, const VectorXd& q, const VectorXd& v, VectorXd& q1, VectorXd& v1, VectorXd& l1,
                   std::string& reason) {
     sys_.force(t, q, v, f);
     stats.residual_evals++;
@@ -46,7 +46,7 @@ IdaStats HongStep::run(const std::vector<double>& times, const FrameCallback& on
     }
     return true;
   };
-  auto sample = [&]() { return IdaStats::FrameSample{stats.steps, 0, 0, 0, 0, 1, h}; };
+  auto sample = [&]() { return RunStats::FrameSample{stats.steps, 0, 0, 0, 0, 1, h}; };
   run_fixed_steps(times, h, opt_.max_steps, q0, v0, VectorXd::Zero(m), step, stats, sample, on_frame);
   return stats;
 }

@@ -1,8 +1,10 @@
 #include "isochor/ida_integrator.hpp"
 #include "klu_order.hpp"
+#include "sundials_util.hpp"
 #include "timing.hpp"
 
 #include "isochor/ggl.hpp"
+#include "isochor/initial_state.hpp"
 
 #include <ida/ida.h>
 #include <klu.h>
@@ -11,19 +13,13 @@
 #include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
-#include <Eigen/Dense>
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 
 namespace isochor {
-
-namespace {
-
-}  // namespace
 
 struct IdaIntegrator::Impl {
   ConstrainedSystem& sys;
@@ -32,25 +28,24 @@ struct IdaIntegrator::Impl {
   GglForm ggl;
   std::unique_ptr<ReducedSolver> reduced;
   std::vector<Index> order;
-  IdaStats stats;
+  RunStats stats;
   SUNContext ctx = nullptr;
-  SUNLinearSolver LS = nullptr;
+  SUNLinearSolver LS = nullptr;   // what IDA calls: the reduced solver, or KLU wrapped to time it
+  SUNLinearSolver klu = nullptr;  // klu: SUNDIALS' KLU solver inside LS
   long last_newton_failures = 0;
-  // KLU's own setup and solve, wrapped to time them.
-  int (*klu_setup)(SUNLinearSolver, SUNMatrix) = nullptr;
-  int (*klu_solve)(SUNLinearSolver, SUNMatrix, N_Vector, N_Vector, realtype) = nullptr;
   void* ida_mem = nullptr;
 
-  Impl(ConstrainedSystem& s, IdaOptions o) : sys(s), opt(std::move(o)), ggl(s) {
+  Impl(ConstrainedSystem& s, IdaOptions o) : sys(s), opt(std::move(o)), ggl((check_system(s), s)) {
     n = sys.num_dofs();
     m = sys.num_constraints();
-    if (opt.linear_solver == "reduced" || opt.linear_solver == "krylov")
+    if (opt.linear_solver != LinearSolverKind::klu)
       // CG's residual must sit below what IDA's Newton test can see: 1e-12 serves rtol >= 1e-6;
       // at rtol 1e-8, atol 1e-11 it did not (a 600-tet ball, undamped: IDA_CONV_FAIL at 92 ms),
       // 1e-14 did. So 1e-6 rtol, at most 1e-12.
-      reduced = std::make_unique<ReducedSolver>(ggl, opt.linear_solver == "krylov" ? "pcg" : "cholmod",
-                                                std::min(1e-12, 1e-6 * opt.rtol));
-    else if (opt.ordering == "metis") {
+      reduced = std::make_unique<ReducedSolver>(
+          ggl, opt.linear_solver == LinearSolverKind::krylov ? SymmetricSolverKind::pcg : SymmetricSolverKind::cholmod,
+          std::min(1e-12, 1e-6 * opt.rtol));
+    else if (opt.ordering == KluOrdering::metis) {
       const auto t0 = Clock::now();
       order = metis_order(sys.pattern(), sys.dofs_per_group(), n, 2, sys.constraint_rows(), 2);
       stats.symbolic_seconds += seconds_since(t0);
@@ -72,13 +67,13 @@ struct IdaIntegrator::Impl {
   int jacobian(double t, double cj, N_Vector yy, N_Vector yp, SUNMatrix J) {
     const auto t0 = Clock::now();
     long nfail = 0, nst = 0;
-    IDAGetNumNonlinSolvConvFails(ida_mem, &nfail);
-    IDAGetNumSteps(ida_mem, &nst);
+    check(IDAGetNumNonlinSolvConvFails(ida_mem, &nfail), "IDAGetNumNonlinSolvConvFails", t);
+    check(IDAGetNumSteps(ida_mem, &nst), "IDAGetNumSteps", t);
     const bool failed = nfail > last_newton_failures;
     last_newton_failures = nfail;
     // A Newton failure since the last Jacobian: the pivot order of KLU's first factorisation may
     // have gone stale (c_j changed, contact): ask KLU for a fresh factorisation.
-    if (!reduced && failed && stats.jacobian_evals > 0) SUNLinSol_KLUReInit(LS, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
+    if (klu && failed && stats.jacobian_evals > 0) SUNLinSol_KLUReInit(klu, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
     // SUNMatZero cleared the index arrays too: copy the pattern back, then the values.
     std::memcpy(SM_INDEXPTRS_S(J), ggl.pattern().col_ptr.data(), sizeof(sunindextype) * (ggl.size() + 1));
     std::memcpy(SM_INDEXVALS_S(J), ggl.pattern().row_ind.data(), sizeof(sunindextype) * ggl.pattern().nnz());
@@ -118,67 +113,56 @@ int jac_fn(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector, SUNMatri
            N_Vector) {
   return static_cast<IdaIntegrator::Impl*>(data)->jacobian(t, cj, yy, yp, J);
 }
-// Timing wrappers around KLU's setup (factorisation) and solve.
-IdaIntegrator::Impl* g_timed = nullptr;  // one integration at a time per process
-int timed_setup(SUNLinearSolver S, SUNMatrix A) {
-  if (!SUNLinSol_KLUGetSymbolic(S)) {
+// KLU inside a custom linear solver whose content is the integration, to time its setup
+// (factorisation) and solve.
+int timed_klu_setup(SUNLinearSolver S, SUNMatrix A) {
+  auto& s = *static_cast<IdaIntegrator::Impl*>(S->content);
+  if (!SUNLinSol_KLUGetSymbolic(s.klu)) {
     // KLU's symbolic analysis happens inside SUNDIALS' first setup; to report it apart, the same
     // analysis (same ordering and options) is timed once on its own and discarded.
-    klu_l_common c = *SUNLinSol_KLUGetCommon(S);
+    klu_l_common c = *SUNLinSol_KLUGetCommon(s.klu);
     const auto ta = Clock::now();
     klu_l_symbolic* sym = klu_l_analyze(SM_COLUMNS_S(A), SM_INDEXPTRS_S(A), SM_INDEXVALS_S(A), &c);
-    g_timed->stats.symbolic_seconds += seconds_since(ta);
+    s.stats.symbolic_seconds += seconds_since(ta);
     if (sym) klu_l_free_symbolic(&sym, &c);
   }
   const auto t0 = Clock::now();
-  const klu_l_numeric* before = SUNLinSol_KLUGetNumeric(S);
-  const int r = g_timed->klu_setup(S, A);
-  const double dt = seconds_since(t0);
-  g_timed->stats.factor_seconds += dt;
-  const klu_l_numeric* num = SUNLinSol_KLUGetNumeric(S);
-  if (num != before) g_timed->stats.fresh_factorisations++;
-  if (num) g_timed->stats.factor_nnz = static_cast<double>(num->lnz + num->unz);
-  if (std::getenv("ISOCHOR_DEBUG_KLU"))
-    std::fprintf(stderr, "klu setup %.3f s, fresh %d, L+U %ld, rcond %.2e\n", dt, num != before,
-                 num ? static_cast<long>(num->lnz + num->unz) : -1L, SUNLinSol_KLUGetCommon(S)->rcond);
+  const klu_l_numeric* before = SUNLinSol_KLUGetNumeric(s.klu);
+  const int r = SUNLinSolSetup(s.klu, A);
+  s.stats.factor_seconds += seconds_since(t0);
+  const klu_l_numeric* num = SUNLinSol_KLUGetNumeric(s.klu);
+  if (num != before) s.stats.fresh_factorisations++;
+  if (num) s.stats.factor_nnz = static_cast<double>(num->lnz + num->unz);
   return r;
 }
-int timed_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, realtype tol) {
+int timed_klu_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, realtype tol) {
+  auto& s = *static_cast<IdaIntegrator::Impl*>(S->content);
   const auto t0 = Clock::now();
-  const int r = g_timed->klu_solve(S, A, x, b, tol);
-  g_timed->stats.solve_seconds += seconds_since(t0);
+  const int r = SUNLinSolSolve(s.klu, A, x, b, tol);
+  s.stats.solve_seconds += seconds_since(t0);
   return r;
 }
-// The reduced solver as a SUNLinearSolver of direct (matrix-based) type: it reads the filled GGL matrix.
-SUNLinearSolver_Type reduced_type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
-SUNLinearSolver_ID reduced_id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
-int reduced_initialize(SUNLinearSolver) { return SUNLS_SUCCESS; }
+// The reduced solver reads the filled GGL matrix.
 int reduced_setup(SUNLinearSolver S, SUNMatrix A) {
-  auto* s = static_cast<IdaIntegrator::Impl*>(S->content);
+  auto& s = *static_cast<IdaIntegrator::Impl*>(S->content);
   const auto t0 = Clock::now();
   double cj = 0;
-  IDAGetCurrentCj(s->ida_mem, &cj);
-  const bool ok = s->reduced->setup(cj, SM_DATA_S(A));
-  s->stats.factor_seconds += seconds_since(t0);
-  s->stats.fresh_factorisations++;
-  s->stats.factor_nnz = s->reduced->factor_nnz();
-  s->stats.symbolic_seconds = s->reduced->analyse_seconds();
+  if (IDAGetCurrentCj(s.ida_mem, &cj) < 0) return SUNLS_PACKAGE_FAIL_UNREC;
+  const bool ok = s.reduced->setup(cj, SM_DATA_S(A));
+  s.stats.factor_seconds += seconds_since(t0);
+  s.stats.fresh_factorisations++;
+  s.stats.factor_nnz = s.reduced->factor_nnz();
+  s.stats.symbolic_seconds = s.reduced->analyse_seconds();
   return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;  // not positive definite: retry smaller step
 }
 int reduced_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype) {
-  auto* s = static_cast<IdaIntegrator::Impl*>(S->content);
+  auto& s = *static_cast<IdaIntegrator::Impl*>(S->content);
   const auto t0 = Clock::now();
-  const bool ok = s->reduced->solve(N_VGetArrayPointer(b), N_VGetArrayPointer(x));
-  s->stats.solve_seconds += seconds_since(t0);
-  s->stats.linear_iterations = s->reduced->iterations();
-  s->stats.linear_fallbacks = s->reduced->fallbacks();
+  const bool ok = s.reduced->solve(N_VGetArrayPointer(b), N_VGetArrayPointer(x));
+  s.stats.solve_seconds += seconds_since(t0);
+  s.stats.linear_iterations = s.reduced->iterations();
+  s.stats.linear_fallbacks = s.reduced->fallbacks();
   return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;  // PCG did not converge: IDA retries a smaller step
-}
-sunindextype reduced_lastflag(SUNLinearSolver) { return 0; }
-int reduced_free(SUNLinearSolver S) {
-  S->content = nullptr;
-  SUNLinSolFreeEmpty(S);
-  return SUNLS_SUCCESS;
 }
 
 }  // namespace
@@ -186,65 +170,7 @@ int reduced_free(SUNLinearSolver S) {
 IdaIntegrator::IdaIntegrator(ConstrainedSystem& system, IdaOptions options) : impl_(new Impl(system, std::move(options))) {}
 IdaIntegrator::~IdaIntegrator() { delete impl_; }
 
-void IdaIntegrator::consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, VectorXd& v, VectorXd& a,
-                                             VectorXd& lambda) {
-  const Index n = sys.num_dofs(), m = sys.num_constraints();
-  sys.initial_state(t0, q, v);
-  const VectorXd& M = sys.mass();
-  const VectorXd Minv = M.cwiseInverse();
-  std::vector<std::vector<double>> G(m);
-  for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
-  auto sparse_G = [&]() {
-    std::vector<Eigen::Triplet<double>> tr;
-    for (Index j = 0; j < m; ++j)
-      for (std::size_t k = 0; k < G[j].size(); ++k) tr.emplace_back(j, sys.constraint_rows()[j][k], G[j][k]);
-    Eigen::SparseMatrix<double> S(m, n);
-    S.setFromTriplets(tr.begin(), tr.end());
-    return S;
-  };
-  VectorXd g(m), gt(m);
-  if (m > 0) {
-    // 1. Positions onto g = 0: minimum-norm (mass-weighted) Newton steps.
-    for (int it = 0; it < 50; ++it) {
-      sys.constraint(t0, q, g);
-      sys.constraint_jacobian(t0, q, G, nullptr);
-      if (g.norm() < 1e-14 * (1.0 + q.norm())) break;
-      const Eigen::SparseMatrix<double> S = sparse_G();
-      const Eigen::SparseMatrix<double> A = S * Minv.asDiagonal() * S.transpose();
-      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
-      q -= Minv.asDiagonal() * (S.transpose() * ldlt.solve(g));
-    }
-    // 2. Velocities: [M G^T; G 0][v; nu] = [M v0; -g_t].
-    sys.constraint_jacobian(t0, q, G, &gt);
-    const Eigen::SparseMatrix<double> S = sparse_G();
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Eigen::SparseMatrix<double>(S * Minv.asDiagonal() * S.transpose()));
-    v -= Minv.asDiagonal() * (S.transpose() * ldlt.solve(VectorXd(S * v + gt)));
-    // 3. Accelerations: M a + G^T lambda = f, G a = -w, where w = d/dt (G v + g_t) at a = 0,
-    //    taken by a central difference along x(t +- h) = x +- h v (drivers exact).
-    VectorXd f(n);
-    sys.force(t0, q, v, f);
-    const double h = 1e-6 * std::max(1.0, std::abs(t0));
-    auto velocity_constraint = [&](double t, const VectorXd& qq) {
-      std::vector<std::vector<double>> Gh(G);
-      VectorXd gth(m);
-      sys.constraint_jacobian(t, qq, Gh, &gth);
-      VectorXd out = gth;
-      for (Index j = 0; j < m; ++j)
-        for (std::size_t k = 0; k < Gh[j].size(); ++k) out[j] += Gh[j][k] * v[sys.constraint_rows()[j][k]];
-      return out;
-    };
-    const VectorXd w = (velocity_constraint(t0 + h, q + h * v) - velocity_constraint(t0 - h, q - h * v)) / (2 * h);
-    lambda = ldlt.solve(VectorXd(S * Minv.cwiseProduct(f) + w));
-    a = Minv.cwiseProduct(f - S.transpose() * lambda);
-  } else {
-    VectorXd f(n);
-    sys.force(t0, q, v, f);
-    a = Minv.cwiseProduct(f);
-    lambda.resize(0);
-  }
-}
-
-IdaStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallback& on_frame) {
+RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallback& on_frame) {
   Impl& s = *impl_;
   const auto wall0 = Clock::now();
   const Index n = s.n, m = s.m, N = 2 * n + 2 * m;
@@ -252,9 +178,27 @@ IdaStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   VectorXd q0, v0, a0, l0;
   consistent_initial_state(s.sys, t0, q0, v0, a0, l0);
 
-  SUNContext_Create(nullptr, &s.ctx);
-  N_Vector yy = N_VNew_Serial(N, s.ctx), yp = N_VNew_Serial(N, s.ctx), id = N_VNew_Serial(N, s.ctx),
-           atol = N_VNew_Serial(N, s.ctx);
+  // Everything SUNDIALS allocates is released by this guard, on success or on a throw.
+  N_Vector yy = nullptr, yp = nullptr, id = nullptr, atol = nullptr, yout = nullptr;
+  SUNMatrix J = nullptr;
+  void* mem = nullptr;
+  const OnExit release{[&]() {
+    if (mem) IDAFree(&mem);
+    if (s.LS) SUNLinSolFree(s.LS);
+    if (s.klu) SUNLinSolFree(s.klu);
+    s.LS = s.klu = nullptr;
+    if (J) SUNMatDestroy(J);
+    for (N_Vector* v : {&yy, &yp, &id, &atol, &yout})
+      if (*v) N_VDestroy(*v);
+    if (s.ctx) SUNContext_Free(&s.ctx);
+    s.ida_mem = nullptr;
+  }};
+
+  check(SUNContext_Create(nullptr, &s.ctx), "SUNContext_Create", t0);
+  yy = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
+  yp = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
+  id = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
+  atol = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
   double* y = N_VGetArrayPointer(yy);
   double* d = N_VGetArrayPointer(yp);
   Eigen::Map<VectorXd>(y, N).setZero();
@@ -285,18 +229,18 @@ IdaStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
     }
   }
 
-  void* mem = IDACreate(s.ctx);
+  mem = check_ptr(IDACreate(s.ctx), "IDACreate");
   s.ida_mem = mem;
-  IDAInit(mem, res_fn, t0, yy, yp);
-  IDASVtolerances(mem, s.opt.rtol, atol);
-  IDASetUserData(mem, &s);
-  IDASetId(mem, id);
-  IDASetSuppressAlg(mem, SUNTRUE);
-  IDASetNonlinConvCoef(mem, s.opt.newton_coef);
-  IDASetMaxOrd(mem, s.opt.max_order);
-  if (s.opt.max_step > 0) IDASetMaxStep(mem, s.opt.max_step);
+  check(IDAInit(mem, res_fn, t0, yy, yp), "IDAInit", t0);
+  check(IDASVtolerances(mem, s.opt.rtol, atol), "IDASVtolerances", t0);
+  check(IDASetUserData(mem, &s), "IDASetUserData", t0);
+  check(IDASetId(mem, id), "IDASetId", t0);
+  check(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg", t0);
+  check(IDASetNonlinConvCoef(mem, s.opt.newton_coef), "IDASetNonlinConvCoef", t0);
+  check(IDASetMaxOrd(mem, s.opt.max_order), "IDASetMaxOrd", t0);
+  if (s.opt.max_step > 0) check(IDASetMaxStep(mem, s.opt.max_step), "IDASetMaxStep", t0);
   if (s.opt.initial_step > 0) {
-    IDASetInitStep(mem, s.opt.initial_step);
+    check(IDASetInitStep(mem, s.opt.initial_step), "IDASetInitStep", t0);
   } else if (a0.size() > 0 && times.back() > t0) {
     // IDA's own first step, 0.5 / |y'|, is set by the accelerations over the velocity tolerance:
     // with tight tolerances it is ~1e-10 s, where the GGL matrix (c^2 M against the constraint
@@ -312,109 +256,77 @@ IdaStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
     if (anorm > 0) {
       double h0 = std::min(std::sqrt(2.0 / anorm), 1e-3 * (times.back() - t0));
       if (s.opt.max_step > 0) h0 = std::min(h0, s.opt.max_step);
-      IDASetInitStep(mem, h0);
+      check(IDASetInitStep(mem, h0), "IDASetInitStep", t0);
     }
   }
-  IDASetStopTime(mem, times.back());
-  IDASetMaxNumSteps(mem, 100000);
-  SUNMatrix J = SUNSparseMatrix(N, N, s.ggl.pattern().nnz(), CSC_MAT, s.ctx);
+  check(IDASetStopTime(mem, times.back()), "IDASetStopTime", t0);
+  check(IDASetMaxNumSteps(mem, 100000), "IDASetMaxNumSteps", t0);
+  J = check_ptr(SUNSparseMatrix(N, N, s.ggl.pattern().nnz(), CSC_MAT, s.ctx), "SUNSparseMatrix");
   if (s.reduced) {
-    s.LS = SUNLinSolNewEmpty(s.ctx);
-    s.LS->content = &s;
-    s.LS->ops->gettype = reduced_type;
-    s.LS->ops->getid = reduced_id;
-    s.LS->ops->initialize = reduced_initialize;
-    s.LS->ops->setup = reduced_setup;
-    s.LS->ops->solve = reduced_solve;
-    s.LS->ops->lastflag = reduced_lastflag;
-    s.LS->ops->free = reduced_free;
+    s.LS = make_custom_linear_solver(s.ctx, &s, reduced_setup, reduced_solve);
   } else {
-    s.LS = SUNLinSol_KLU(yy, J, s.ctx);
-    if (s.opt.ordering == "metis") {
-      use_klu_order(s.LS, &s.order);
-    } else {
-      SUNLinSol_KLUSetOrdering(s.LS, s.opt.ordering == "amd" ? 0 : 1);
-    }
-    s.klu_setup = s.LS->ops->setup;
-    s.klu_solve = s.LS->ops->solve;
-    s.LS->ops->setup = timed_setup;
-    s.LS->ops->solve = timed_solve;
+    s.klu = check_ptr(SUNLinSol_KLU(yy, J, s.ctx), "SUNLinSol_KLU");
+    if (s.opt.ordering == KluOrdering::metis)
+      use_klu_order(s.klu, &s.order);
+    else
+      check(SUNLinSol_KLUSetOrdering(s.klu, s.opt.ordering == KluOrdering::amd ? 0 : 1), "SUNLinSol_KLUSetOrdering", t0);
+    check(SUNLinSolInitialize(s.klu), "SUNLinSolInitialize", t0);
+    s.LS = make_custom_linear_solver(s.ctx, &s, timed_klu_setup, timed_klu_solve);
   }
-  g_timed = &s;
-  IDASetLinearSolver(mem, s.LS, J);
-  IDASetJacFn(mem, jac_fn);
+  check(IDASetLinearSolver(mem, s.LS, J), "IDASetLinearSolver", t0);
+  check(IDASetJacFn(mem, jac_fn), "IDASetJacFn", t0);
 
-  auto collect = [&]() {
-    IDAGetNumSteps(mem, &s.stats.steps);
-    IDAGetNumResEvals(mem, &s.stats.residual_evals);
-    IDAGetNumLinSolvSetups(mem, &s.stats.linear_setups);
-    IDAGetNumNonlinSolvIters(mem, &s.stats.newton_iterations);
-    IDAGetNumNonlinSolvConvFails(mem, &s.stats.newton_failures);
-    IDAGetNumErrTestFails(mem, &s.stats.error_test_failures);
+  auto collect = [&](double t) {
+    check(IDAGetNumSteps(mem, &s.stats.steps), "IDAGetNumSteps", t);
+    check(IDAGetNumResEvals(mem, &s.stats.residual_evals), "IDAGetNumResEvals", t);
+    check(IDAGetNumLinSolvSetups(mem, &s.stats.linear_setups), "IDAGetNumLinSolvSetups", t);
+    check(IDAGetNumNonlinSolvIters(mem, &s.stats.newton_iterations), "IDAGetNumNonlinSolvIters", t);
+    check(IDAGetNumNonlinSolvConvFails(mem, &s.stats.newton_failures), "IDAGetNumNonlinSolvConvFails", t);
+    check(IDAGetNumErrTestFails(mem, &s.stats.error_test_failures), "IDAGetNumErrTestFails", t);
     int order = 0;
     double h = 0;
-    IDAGetLastOrder(mem, &order);
-    IDAGetLastStep(mem, &h);
+    check(IDAGetLastOrder(mem, &order), "IDAGetLastOrder", t);
+    check(IDAGetLastStep(mem, &h), "IDAGetLastStep", t);
     s.stats.frames.push_back({s.stats.steps, s.stats.newton_iterations, s.stats.error_test_failures,
                               s.stats.newton_failures, s.stats.jacobian_evals, order, h});
   };
-  auto cleanup = [&]() {
-    IDAFree(&mem);
-    SUNLinSolFree(s.LS);
-    SUNMatDestroy(J);
-    N_VDestroy(yy);
-    N_VDestroy(yp);
-    N_VDestroy(id);
-    N_VDestroy(atol);
-    SUNContext_Free(&s.ctx);
-    g_timed = nullptr;
-  };
 
-  N_Vector yout = N_VClone(yy);
+  yout = check_ptr(N_VClone(yy), "N_VClone");
   double tcur = t0;
   std::size_t k = 0;
-  try {
-    while (k < times.size()) {
-      if (times[k] <= tcur) {
-        const double tf = times[k];
-        if (tf == tcur) {  // a step ended on the frame (the stop time below): no interpolation
-          N_VScale(1.0, yy, yout);
-        } else if (IDAGetDky(mem, tf, 0, yout) < 0) {
-          throw IntegrationError(tf, "IDAGetDky could not interpolate the frame");
-        }
-        const double* yo = N_VGetArrayPointer(yout);
-        collect();
-        on_frame(static_cast<int>(k), tf, Eigen::Map<const VectorXd>(yo, n), Eigen::Map<const VectorXd>(yo + n, n),
-                 Eigen::Map<const VectorXd>(yo + 2 * n, m), s.stats.frames.back());
-        ++k;
-        continue;
+  while (k < times.size()) {
+    if (times[k] <= tcur) {
+      const double tf = times[k];
+      if (tf == tcur) {  // a step ended on the frame (the stop time below): no interpolation
+        N_VScale(1.0, yy, yout);
+      } else if (IDAGetDky(mem, tf, 0, yout) < 0) {
+        throw IntegrationError(tf, "IDAGetDky could not interpolate the frame");
       }
-      // Steps end on every frame time, so that frames are solution points: an interpolated frame
-      // keeps the zone volumes only to the interpolation error (1e-7 of a zone on the rigged arm).
-      IDASetStopTime(mem, times[k]);
-      double tret = tcur;
-      const int flag = IDASolve(mem, times[k], &tret, yy, yp, IDA_ONE_STEP);
-      if (flag < 0) {
-        char* name = IDAGetReturnFlagName(flag);
-        std::string reason = name ? name : "unknown IDA failure";
-        free(name);
-        throw IntegrationError(tret, reason);
-      }
-      tcur = tret;
-      long steps = 0;
-      IDAGetNumSteps(mem, &steps);
-      if (steps > s.opt.max_steps)
-        throw IntegrationError(tcur, "more than " + std::to_string(s.opt.max_steps) + " steps (integrator.max_steps)");
+      const double* yo = N_VGetArrayPointer(yout);
+      collect(tf);
+      on_frame(static_cast<int>(k), tf, Eigen::Map<const VectorXd>(yo, n), Eigen::Map<const VectorXd>(yo + n, n),
+               Eigen::Map<const VectorXd>(yo + 2 * n, m), s.stats.frames.back());
+      ++k;
+      continue;
     }
-  } catch (...) {
-    N_VDestroy(yout);
-    s.stats.wall_seconds = seconds_since(wall0);
-    cleanup();
-    throw;
+    // Steps end on every frame time, so that frames are solution points: an interpolated frame
+    // keeps the zone volumes only to the interpolation error (1e-7 of a zone on the rigged arm).
+    check(IDASetStopTime(mem, times[k]), "IDASetStopTime", tcur);
+    double tret = tcur;
+    const int flag = IDASolve(mem, times[k], &tret, yy, yp, IDA_ONE_STEP);
+    if (flag < 0) {
+      char* name = IDAGetReturnFlagName(flag);
+      std::string reason = name ? name : "unknown IDA failure";
+      free(name);
+      throw IntegrationError(tret, reason);
+    }
+    tcur = tret;
+    long steps = 0;
+    check(IDAGetNumSteps(mem, &steps), "IDAGetNumSteps", tcur);
+    if (steps > s.opt.max_steps)
+      throw IntegrationError(tcur, "more than " + std::to_string(s.opt.max_steps) + " steps (integrator.max_steps)");
   }
-  N_VDestroy(yout);
   s.stats.wall_seconds = seconds_since(wall0);
-  cleanup();
   return s.stats;
 }
 

@@ -6,6 +6,16 @@
 
 namespace isochor {
 
+void add_constraint_terms(ConstrainedSystem& sys, double t, const VectorXd& q, const VectorXd& lambda,
+                          std::vector<std::vector<double>>& G, VectorXd& g, double* r) {
+  if (sys.num_constraints() == 0) return;
+  sys.constraint(t, q, g);
+  sys.constraint_jacobian(t, q, G, nullptr);
+  const auto& rows = sys.constraint_rows();
+  for (std::size_t j = 0; j < G.size(); ++j)
+    for (std::size_t k = 0; k < G[j].size(); ++k) r[rows[j][k]] += G[j][k] * lambda[static_cast<Index>(j)];
+}
+
 KktLayout::KktLayout(const SparsePattern& K, const std::vector<std::vector<Index>>& rows) {
   const Index n = K.n, m = static_cast<Index>(rows.size());
   std::vector<std::pair<Index, Index>> e;  // (col, row)

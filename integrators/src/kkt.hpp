@@ -8,9 +8,15 @@
 #include <memory>
 #include <vector>
 
+#include "isochor/constrained_system.hpp"
 #include "isochor/sparse_pattern.hpp"
 
 namespace isochor {
+
+// The constraint part of a KKT residual at (q, lambda): g = g(q, t), G = dg/dq (rows of the
+// system's constraint_rows()), and r += G^T lambda. r holds n entries.
+void add_constraint_terms(ConstrainedSystem& sys, double t, const VectorXd& q, const VectorXd& lambda,
+                          std::vector<std::vector<double>>& G, VectorXd& g, double* r);
 
 struct KktLayout {
   SparsePattern p;                             // (n + m) x (n + m)

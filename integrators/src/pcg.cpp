@@ -158,9 +158,12 @@ class BlockJacobiPcg : public SymmetricSolver {
 
 }  // namespace
 
-std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, const std::string& kind, double tol) {
-  if (kind == "pcg") return std::make_unique<BlockJacobiPcg>(pattern, tol);
-  return std::make_unique<SymmetricFactor>(pattern);
+std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, SymmetricSolverKind kind, double tol) {
+  switch (kind) {
+    case SymmetricSolverKind::pcg: return std::make_unique<BlockJacobiPcg>(pattern, tol);
+    case SymmetricSolverKind::cholmod: return std::make_unique<SymmetricFactor>(pattern);
+  }
+  return nullptr;
 }
 
 }  // namespace isochor

@@ -39,13 +39,13 @@ struct ReducedSolver::Impl {
   long fallbacks = 0;
   bool switch_to_direct() {
     if (!fallback || use_direct) return false;
-    if (!direct) direct = make_symmetric_solver(form.system().pattern(), "cholmod");
+    if (!direct) direct = make_symmetric_solver(form.system().pattern(), SymmetricSolverKind::cholmod);
     fallbacks++;
     use_direct = direct->factor(Sx.data());
     return use_direct;
   }
-  Impl(const GglForm& f, const std::string& kind, double pcg_tol)
-      : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind, pcg_tol)), fallback(kind == "pcg") {
+  Impl(const GglForm& f, SymmetricSolverKind kind, double pcg_tol)
+      : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind, pcg_tol)), fallback(kind == SymmetricSolverKind::pcg) {
     Sx.resize(f.system().pattern().nnz());
     Vx.resize(Sx.size()), Qx.resize(Sx.size()), Ax.resize(Sx.size());
     Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);
@@ -77,7 +77,7 @@ struct ReducedSolver::Impl {
   }
 };
 
-ReducedSolver::ReducedSolver(const GglForm& form, const std::string& kind, double pcg_tol)
+ReducedSolver::ReducedSolver(const GglForm& form, SymmetricSolverKind kind, double pcg_tol)
     : impl_(std::make_unique<Impl>(form, kind, pcg_tol)) {}
 ReducedSolver::~ReducedSolver() = default;
 

@@ -4,8 +4,7 @@
 
 #include <chrono>
 
-#include <cstdio>
-#include <cstdlib>
+#include <cmath>
 #include <cstring>
 
 namespace isochor {
@@ -81,17 +80,18 @@ bool SymmetricFactor::factor(const double* values) {
     if (try_ll) s.since_ldlt = 0;  // LL^T just failed: count again from here
     s.ldlt = true;
   }
-  if (std::getenv("ISOCHOR_DEBUG_CHOLMOD"))
-    std::fprintf(stderr, "cholmod: %s %s, nnz(L) %.0f, flops %.3g, status %d\n", s.L->is_super ? "supernodal" : "simplicial",
-                 s.ldlt ? "LDLt" : "LLt", factor_nnz(), s.c.fl, s.c.status);
   return s.c.status == CHOLMOD_OK;
 }
 
 bool SymmetricFactor::solve(const double* b, double* x) {
   Impl& s = *impl_;
+  if (!s.L || s.c.status != CHOLMOD_OK) return false;  // no usable factor
   std::memcpy(s.B->x, b, sizeof(double) * s.n);
-  cholmod_l_solve2(CHOLMOD_A, s.L, s.B, nullptr, &s.X, nullptr, &s.Y, &s.E, &s.c);
+  if (!cholmod_l_solve2(CHOLMOD_A, s.L, s.B, nullptr, &s.X, nullptr, &s.Y, &s.E, &s.c)) return false;
   std::memcpy(x, s.X->x, sizeof(double) * s.n);
+  const double* xs = static_cast<const double*>(s.X->x);
+  for (Index i = 0; i < s.n; ++i)
+    if (!std::isfinite(xs[i])) return false;  // a zero pivot of LDL^T
   return true;
 }
 

@@ -2,7 +2,10 @@
 #include "bordered.hpp"
 #include "kkt.hpp"
 #include "klu_order.hpp"
+#include "sundials_util.hpp"
 #include "timing.hpp"
+
+#include "isochor/initial_state.hpp"
 
 #include <kinsol/kinsol.h>
 #include <nvector/nvector_serial.h>
@@ -13,6 +16,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 
 namespace isochor {
 
@@ -25,12 +29,13 @@ struct StaticSolver::Impl {
   std::vector<std::vector<double>> G;
   VectorXd q, v0, lambda, f, g;
   double t = 0;
-  IdaStats stats;
+  RunStats stats;
+  SUNContext ctx = nullptr;
   std::vector<Index> order;  // METIS order for KLU
   std::unique_ptr<BorderedSolver> bordered;  // reduced/krylov: A = K + H_lambda and the borders
 
   Impl(ConstrainedSystem& s, StaticOptions o)
-      : sys(s), opt(o), n(s.num_dofs()), m(s.num_constraints()), kkt(s.pattern(), s.constraint_rows()) {
+      : sys(s), opt(o), n((check_system(s), s.num_dofs())), m(s.num_constraints()), kkt(s.pattern(), s.constraint_rows()) {
     const SparsePattern& S = sys.pattern();
     G.resize(m);
     for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
@@ -38,8 +43,10 @@ struct StaticSolver::Impl {
     v0 = VectorXd::Zero(n);
     f.resize(n);
     g.resize(m);
-    if (opt.linear_solver != "klu")
-      bordered = std::make_unique<BorderedSolver>(S, sys.constraint_rows(), opt.linear_solver == "krylov" ? "pcg" : "cholmod");
+    if (opt.linear_solver != LinearSolverKind::klu)
+      bordered = std::make_unique<BorderedSolver>(S, sys.constraint_rows(), opt.linear_solver == LinearSolverKind::krylov
+                                                                               ? SymmetricSolverKind::pcg
+                                                                               : SymmetricSolverKind::cholmod);
   }
 
   int residual(N_Vector u, N_Vector fv) {
@@ -51,13 +58,8 @@ struct StaticSolver::Impl {
     sys.force(t, q, v0, f);
     Eigen::Map<VectorXd> Rq(r, n), Rg(r + n, m);
     Rq = -f;
-    if (m) {
-      sys.constraint(t, q, g);
-      sys.constraint_jacobian(t, q, G, nullptr);
-      for (Index j = 0; j < m; ++j)
-        for (std::size_t k = 0; k < G[j].size(); ++k) Rq[sys.constraint_rows()[j][k]] += G[j][k] * lambda[j];
-      Rg = g;
-    }
+    add_constraint_terms(sys, t, q, lambda, G, g, r);
+    if (m) Rg = g;
     stats.residual_evals++;
     stats.assembly_seconds += seconds_since(t0);
     return Rq.allFinite() ? 0 : 1;
@@ -91,9 +93,6 @@ int kin_jac(N_Vector u, N_Vector, SUNMatrix J, void* data, N_Vector, N_Vector) {
 }
 // The bordered solver as a matrix-based SUNLinearSolver: setup factors A = K + H_lambda and the
 // borders that the Jacobian function just assembled; the KKT matrix itself is not filled.
-SUNLinearSolver_Type bordered_type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
-SUNLinearSolver_ID bordered_id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
-int bordered_initialize(SUNLinearSolver) { return SUNLS_SUCCESS; }
 int bordered_setup(SUNLinearSolver LS, SUNMatrix) {
   auto& s = *static_cast<StaticSolver::Impl*>(LS->content);
   const auto t0 = Clock::now();
@@ -114,27 +113,35 @@ int bordered_solve(SUNLinearSolver LS, SUNMatrix, N_Vector x, N_Vector b, realty
   s.stats.linear_iterations = s.bordered->symmetric().iterations();
   return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_UNREC;
 }
-sunindextype bordered_lastflag(SUNLinearSolver) { return 0; }
-int bordered_free(SUNLinearSolver LS) {
-  LS->content = nullptr;
-  SUNLinSolFreeEmpty(LS);
-  return SUNLS_SUCCESS;
-}
 }  // namespace
 
 StaticSolver::StaticSolver(ConstrainedSystem& system, StaticOptions options)
     : impl_(std::make_unique<Impl>(system, options)) {}
 StaticSolver::~StaticSolver() = default;
 
-IdaStats StaticSolver::run(const std::vector<double>& times, const FrameCallback& on_frame) {
+RunStats StaticSolver::run(const std::vector<double>& times, const FrameCallback& on_frame) {
   Impl& s = *impl_;
   const auto wall0 = Clock::now();
   const Index N = s.n + s.m;
-  SUNContext ctx = nullptr;
-  SUNContext_Create(nullptr, &ctx);
-  N_Vector u = N_VNew_Serial(N, ctx), uscale = N_VNew_Serial(N, ctx), fscale = N_VNew_Serial(N, ctx);
+  N_Vector u = nullptr, uscale = nullptr, fscale = nullptr;
+  SUNMatrix J = nullptr;
+  SUNLinearSolver LS = nullptr;
+  void* mem = nullptr;
+  const OnExit release{[&]() {
+    if (mem) KINFree(&mem);
+    if (LS) SUNLinSolFree(LS);
+    if (J) SUNMatDestroy(J);
+    for (N_Vector* v : {&u, &uscale, &fscale})
+      if (*v) N_VDestroy(*v);
+    if (s.ctx) SUNContext_Free(&s.ctx);
+  }};
+  const double t0 = times.front();
+  check(SUNContext_Create(nullptr, &s.ctx), "SUNContext_Create", t0);
+  u = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
+  uscale = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
+  fscale = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
   VectorXd q0, v0dummy;
-  s.sys.initial_state(times.front(), q0, v0dummy);
+  s.sys.initial_state(t0, q0, v0dummy);
   double* x = N_VGetArrayPointer(u);
   Eigen::Map<VectorXd>(x, N).setZero();
   Eigen::Map<VectorXd>(x, s.n) = q0;
@@ -142,86 +149,61 @@ IdaStats StaticSolver::run(const std::vector<double>& times, const FrameCallback
   // Forces are measured against the system's force scale, constraint rows against theirs (volumes).
   double* fs = N_VGetArrayPointer(fscale);
   for (Index i = 0; i < N; ++i) fs[i] = i < s.n ? 1.0 / s.sys.force_scale() : 1.0 / s.sys.constraint_scale(static_cast<int>(i - s.n));
-  void* mem = KINCreate(ctx);
-  KINInit(mem, kin_res, u);
-  KINSetUserData(mem, &s);
-  KINSetErrHandlerFn(mem, kin_quiet, nullptr);
-  KINSetFuncNormTol(mem, s.opt.residual_tol);
-  KINSetScaledStepTol(mem, 1e-14);
-  KINSetMaxSetupCalls(mem, 1);  // exact Newton: a fresh Jacobian every iteration
-  KINSetNumMaxIters(mem, s.opt.max_iterations);
-  KINSetMaxNewtonStep(mem, 1e10);
-  if (std::getenv("ISOCHOR_KINSOL_PRINT")) KINSetPrintLevel(mem, 2);
-  SUNMatrix J = SUNSparseMatrix(N, N, s.kkt.p.nnz(), CSC_MAT, ctx);
-  SUNLinearSolver LS;
+  mem = check_ptr(KINCreate(s.ctx), "KINCreate");
+  check(KINInit(mem, kin_res, u), "KINInit", t0);
+  check(KINSetUserData(mem, &s), "KINSetUserData", t0);
+  check(KINSetErrHandlerFn(mem, kin_quiet, nullptr), "KINSetErrHandlerFn", t0);
+  check(KINSetFuncNormTol(mem, s.opt.residual_tol), "KINSetFuncNormTol", t0);
+  check(KINSetScaledStepTol(mem, 1e-14), "KINSetScaledStepTol", t0);
+  check(KINSetMaxSetupCalls(mem, 1), "KINSetMaxSetupCalls", t0);  // exact Newton: a fresh Jacobian every iteration
+  check(KINSetNumMaxIters(mem, s.opt.max_iterations), "KINSetNumMaxIters", t0);
+  check(KINSetMaxNewtonStep(mem, 1e10), "KINSetMaxNewtonStep", t0);
+  J = check_ptr(SUNSparseMatrix(N, N, s.kkt.p.nnz(), CSC_MAT, s.ctx), "SUNSparseMatrix");
   if (s.bordered) {
-    LS = SUNLinSolNewEmpty(ctx);
-    LS->content = &s;
-    LS->ops->gettype = bordered_type;
-    LS->ops->getid = bordered_id;
-    LS->ops->initialize = bordered_initialize;
-    LS->ops->setup = bordered_setup;
-    LS->ops->solve = bordered_solve;
-    LS->ops->lastflag = bordered_lastflag;
-    LS->ops->free = bordered_free;
+    LS = make_custom_linear_solver(s.ctx, &s, bordered_setup, bordered_solve);
   } else {
-    LS = SUNLinSol_KLU(u, J, ctx);
+    LS = check_ptr(SUNLinSol_KLU(u, J, s.ctx), "SUNLinSol_KLU");
     s.order = metis_order(s.sys.pattern(), s.sys.dofs_per_group(), s.n, 1, s.sys.constraint_rows(), 1);
     use_klu_order(LS, &s.order);
   }
-  KINSetLinearSolver(mem, LS, J);
-  KINSetJacFn(mem, kin_jac);
-  auto cleanup = [&]() {
-    KINFree(&mem);
-    SUNLinSolFree(LS);
-    SUNMatDestroy(J);
-    N_VDestroy(u);
-    N_VDestroy(uscale);
-    N_VDestroy(fscale);
-    SUNContext_Free(&ctx);
-  };
-  try {
-    for (std::size_t k = 0; k < times.size(); ++k) {
-      s.t = times[k];
-      // Full Newton steps first: the merit function |F| of a KKT system often rises on a step
-      // that converges (measured: the cantilever's first load increment takes 4 full steps and
-      // 116 line-searched ones). If they fail, start over from the last frame with a line search.
-      const VectorXd start = Eigen::Map<const VectorXd>(N_VGetArrayPointer(u), N);
-      KINSetNumMaxIters(mem, std::min<long>(s.opt.max_iterations, 40));
-      int flag = KINSol(mem, u, KIN_NONE, uscale, fscale);
-      long iters = 0;
-      double fnorm = 0;
-      KINGetNumNonlinSolvIters(mem, &iters);
+  check(KINSetLinearSolver(mem, LS, J), "KINSetLinearSolver", t0);
+  check(KINSetJacFn(mem, kin_jac), "KINSetJacFn", t0);
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    s.t = times[k];
+    // Full Newton steps first: the merit function |F| of a KKT system often rises on a step
+    // that converges (measured: the cantilever's first load increment takes 4 full steps and
+    // 116 line-searched ones). If they fail, start over from the last frame with a line search.
+    const VectorXd start = Eigen::Map<const VectorXd>(N_VGetArrayPointer(u), N);
+    check(KINSetNumMaxIters(mem, std::min<long>(s.opt.max_iterations, 40)), "KINSetNumMaxIters", s.t);
+    int flag = KINSol(mem, u, KIN_NONE, uscale, fscale);
+    long iters = 0;
+    double fnorm = 0;
+    check(KINGetNumNonlinSolvIters(mem, &iters), "KINGetNumNonlinSolvIters", s.t);
+    s.stats.newton_iterations += iters;
+    if (flag < 0 || !Eigen::Map<const VectorXd>(N_VGetArrayPointer(u), N).allFinite()) {
+      s.stats.newton_failures++;
+      Eigen::Map<VectorXd>(N_VGetArrayPointer(u), N) = start;
+      check(KINSetNumMaxIters(mem, s.opt.max_iterations), "KINSetNumMaxIters", s.t);
+      flag = KINSol(mem, u, KIN_LINESEARCH, uscale, fscale);
+      check(KINGetNumNonlinSolvIters(mem, &iters), "KINGetNumNonlinSolvIters", s.t);
       s.stats.newton_iterations += iters;
-      if (flag < 0 || !Eigen::Map<const VectorXd>(N_VGetArrayPointer(u), N).allFinite()) {
-        s.stats.newton_failures++;
-        Eigen::Map<VectorXd>(N_VGetArrayPointer(u), N) = start;
-        KINSetNumMaxIters(mem, s.opt.max_iterations);
-        flag = KINSol(mem, u, KIN_LINESEARCH, uscale, fscale);
-        KINGetNumNonlinSolvIters(mem, &iters);
-        s.stats.newton_iterations += iters;
-      }
-      KINGetFuncNorm(mem, &fnorm);
-      s.stats.steps++;
-      if (flag < 0) {
-        char* name = KINGetReturnFlagName(flag);
-        std::string reason = std::string(name ? name : "KINSOL failure") + " after " + std::to_string(iters) +
-                             " iterations, scaled residual " + std::to_string(fnorm);
-        free(name);
-        throw IntegrationError(s.t, reason);
-      }
-      s.stats.frames.push_back({s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 0, fnorm});
-      const double* y = N_VGetArrayPointer(u);
-      on_frame(static_cast<int>(k), s.t, Eigen::Map<const VectorXd>(y, s.n), s.v0,
-               Eigen::Map<const VectorXd>(y + s.n, s.m), s.stats.frames.back());
     }
-  } catch (...) {
-    s.stats.wall_seconds = seconds_since(wall0);
-    cleanup();
-    throw;
+    check(KINGetFuncNorm(mem, &fnorm), "KINGetFuncNorm", s.t);
+    s.stats.steps++;
+    if (flag < 0) {
+      char* name = KINGetReturnFlagName(flag);
+      std::string reason = std::string(name ? name : "KINSOL failure") + " after " + std::to_string(iters) +
+                           " iterations, scaled residual " + std::to_string(fnorm);
+      free(name);
+      s.stats.wall_seconds = seconds_since(wall0);
+      throw IntegrationError(s.t, reason);
+    }
+    s.stats.frames.push_back({s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 0, fnorm});
+    const double* y = N_VGetArrayPointer(u);
+    on_frame(static_cast<int>(k), s.t, Eigen::Map<const VectorXd>(y, s.n), s.v0,
+             Eigen::Map<const VectorXd>(y + s.n, s.m), s.stats.frames.back());
   }
   s.stats.wall_seconds = seconds_since(wall0);
-  cleanup();
   return s.stats;
 }
 

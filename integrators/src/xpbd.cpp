@@ -8,8 +8,8 @@ namespace isochor {
 
 Xpbd::Xpbd(ProjectiveSystem& system, XpbdOptions options) : sys_(system), opt_(options) {}
 
-IdaStats Xpbd::run(const std::vector<double>& times, const FrameCallback& on_frame) {
-  IdaStats stats;
+RunStats Xpbd::run(const std::vector<double>& times, const FrameCallback& on_frame) {
+  RunStats stats;
   const Eigen::VectorXd& w = sys_.inverse_mass();
   const int P = sys_.num_points(), C = sys_.num_constraints();
   Eigen::VectorXd x0, v0, a, x_prev, lambda(C);
@@ -17,7 +17,7 @@ IdaStats Xpbd::run(const std::vector<double>& times, const FrameCallback& on_fra
   std::vector<int> pts;
   std::vector<double> grad;
   const double h = opt_.dt / opt_.substeps;
-  auto step = [&](double t, const VectorXd& xs, const VectorXd& vs, VectorXd& x, VectorXd& v, VectorXd&,
+  auto step = [&](double t, double, const VectorXd& xs, const VectorXd& vs, VectorXd& x, VectorXd& v, VectorXd&,
                   std::string& reason) {
     x = xs;
     v = vs;
@@ -58,7 +58,7 @@ IdaStats Xpbd::run(const std::vector<double>& times, const FrameCallback& on_fra
     }
     return true;
   };
-  auto sample = [&]() { return IdaStats::FrameSample{stats.steps, stats.newton_iterations, 0, 0, 0, 1, opt_.dt}; };
+  auto sample = [&]() { return RunStats::FrameSample{stats.steps, stats.newton_iterations, 0, 0, 0, 1, opt_.dt}; };
   run_fixed_steps(times, opt_.dt, opt_.max_steps, x0, v0, VectorXd(), step, stats, sample, on_frame);
   return stats;
 }

@@ -209,4 +209,9 @@ Eigen::VectorXd MassSpringSystem::weights(const Eigen::Vector3d& center, double 
   return w * (n / w.sum());
 }
 
+std::unique_ptr<SceneSystem> make_scene_system(const Scene& scene) {
+  if (scene.material.model == MaterialModel::mass_spring) return std::make_unique<MassSpringSystem>(scene);
+  return std::make_unique<MeshSystem>(scene);
+}
+
 }  // namespace isochor

@@ -8,11 +8,14 @@
 namespace isochor {
 
 std::shared_ptr<const Material> make_material(const MaterialSpec& m) {
-  if (m.model == "unh") return make_unh(m.mu, m.lambda);
-  if (m.model == "snh") return make_snh(m.mu, m.lambda);
-  if (m.model == "cnh") return make_cnh(m.mu, m.lambda, m.beta, m.epsilon);
-  if (m.model == "snh_simple") return make_xpbd_pair(m.mu, m.lambda);
-  throw Error("material.model = \"" + m.model + "\" is not a tet material (expected cnh, unh, snh or snh_simple)");
+  switch (m.model) {
+    case MaterialModel::unh: return make_unh(m.mu, m.lambda);
+    case MaterialModel::snh: return make_snh(m.mu, m.lambda);
+    case MaterialModel::cnh: return make_cnh(m.mu, m.lambda, m.beta, m.epsilon);
+    case MaterialModel::snh_simple: return make_xpbd_pair(m.mu, m.lambda);
+    case MaterialModel::mass_spring: break;
+  }
+  throw Error("material.model = \"mass_spring\" is not a tet material (expected cnh, unh, snh or snh_simple)");
 }
 
 DofMap scene_dofs(const Scene& s) {
@@ -172,9 +175,10 @@ std::vector<double> MeshSystem::volumes() const {
   return v;
 }
 
-void MeshSystem::pressures(const VectorXd& lambda, std::vector<double>& p) const {
+bool MeshSystem::pressures(const VectorXd& lambda, std::vector<double>& p) const {
   elastic_->pressures(x_, p);
   if (lambda.size()) constraints_.add_multiplier_pressure(lambda, p);
+  return true;
 }
 
 }  // namespace isochor

@@ -76,9 +76,39 @@ Driver parse_keyframes(const Section& b, const std::string& key, int per_time, d
 
 namespace {
 
+// A string key with a fixed set of choices, as an enum.
+template <class E>
+E parse_choice(const Section& s, std::string_view key, E fallback, const std::vector<std::pair<std::string, E>>& table) {
+  std::vector<std::string> names;
+  std::string name;
+  for (const auto& [n, e] : table) {
+    names.push_back(n);
+    if (e == fallback && name.empty()) name = n;
+  }
+  name = s.string(key, name, names);
+  for (const auto& [n, e] : table)
+    if (n == name) return e;
+  return fallback;
+}
+
+const std::vector<std::pair<std::string, MaterialModel>> kModels = {
+    {"cnh", MaterialModel::cnh}, {"unh", MaterialModel::unh}, {"snh", MaterialModel::snh},
+    {"snh_simple", MaterialModel::snh_simple}, {"mass_spring", MaterialModel::mass_spring}};
+const std::vector<std::pair<std::string, IntegratorKind>> kKinds = {
+    {"ida", IntegratorKind::ida}, {"static", IntegratorKind::statics},
+    {"backward_euler", IntegratorKind::backward_euler}, {"semi_implicit", IntegratorKind::semi_implicit},
+    {"xpbd", IntegratorKind::xpbd}, {"mass_spring", IntegratorKind::mass_spring}};
+
+template <class E>
+const char* name_of(const std::vector<std::pair<std::string, E>>& table, E e) {
+  for (const auto& [n, v] : table)
+    if (v == e) return n.c_str();
+  return "?";
+}
+
 MaterialSpec parse_material(const Section& s) {
   MaterialSpec m;
-  m.model = s.string("model", m.model, {"cnh", "unh", "snh", "snh_simple", "mass_spring"});
+  m.model = parse_choice(s, "model", m.model, kModels);
   m.density = s.number("density", m.density, Range::positive());
   const bool lame = s.has("mu") || s.has("lambda"), young = s.has("E") || s.has("nu");
   if (lame && young) s.fail(s.has("E") ? "E" : "nu", "give either mu and lambda or E and nu, not both");
@@ -183,7 +213,7 @@ Scene parse_scene(SceneFile file) {
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
   sc.mesh = mesh_from_scene(mesh, sc.file);
   sc.material = parse_material(root.table("material"));
-  sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.material.model == "cnh");
+  sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.material.model == MaterialModel::cnh);
   sc.keep_zones = root.table("zones").boolean("keep", true);
   std::vector<int> driven_by(sc.mesh.num_nodes(), -1);
   for (const Section& b : root.tables("boundary")) {
@@ -234,26 +264,45 @@ Scene parse_scene(SceneFile file) {
 
   const Section in = root.table("integrator");
   IntegratorSpec& ig = sc.integrator;
-  ig.kind = in.string("kind", ig.kind, {"ida", "static", "backward_euler", "semi_implicit", "xpbd", "mass_spring"});
+  ig.kind = parse_choice(in, "kind", ig.kind, kKinds);
   ig.rtol = in.number("rtol", ig.rtol, Range::positive());
   ig.atol = in.number("atol", ig.atol, Range::positive());
+  ig.atol_v = in.number("atol_v", ig.atol_v, Range::non_negative());
+  ig.atol_lambda = in.number("atol_lambda", ig.atol_lambda, Range::non_negative());
   ig.dt = in.number("dt", ig.dt, Range::positive());
   ig.newton_tol = in.number("newton_tol", ig.newton_tol, Range::positive());
+  ig.newton_atol = in.number("newton_atol", ig.newton_atol, Range::positive());
   ig.max_order = static_cast<int>(in.integer("max_order", ig.max_order, 1, 5));
   ig.max_step = in.number("max_step", 0.0, Range::non_negative());
   ig.newton_coef = in.number("newton_coef", ig.newton_coef, {0.0, 1.0, true, true});
   ig.max_steps = in.integer("max_steps", ig.max_steps, 1, 1000000000000L);
   ig.jacobian_age = in.integer("jacobian_age", ig.jacobian_age, 0, 1000000000L);
-  ig.ordering = in.string("ordering", ig.ordering, {"metis", "colamd", "amd"});
-  ig.linear_solver = in.string("linear_solver", ig.linear_solver, {"auto", "klu", "reduced", "krylov"});
+  ig.ordering = parse_choice(in, "ordering", ig.ordering,
+                             {{"metis", KluOrdering::metis}, {"colamd", KluOrdering::colamd}, {"amd", KluOrdering::amd}});
+  {
+    // "auto" resolved here, once: KLU for IDA and statics, CHOLMOD on the step matrix for the
+    // fixed-step methods (XPBD and Hong's step solve no linear system).
+    const bool fixed_step = ig.kind == IntegratorKind::backward_euler || ig.kind == IntegratorKind::semi_implicit;
+    const std::string ls = in.string("linear_solver", "auto", {"auto", "klu", "reduced", "krylov"});
+    ig.linear_solver = ls == "klu"       ? LinearSolverKind::klu
+                       : ls == "reduced" ? LinearSolverKind::reduced
+                       : ls == "krylov"  ? LinearSolverKind::krylov
+                       : fixed_step      ? LinearSolverKind::reduced
+                                         : LinearSolverKind::klu;
+  }
   ig.substeps = static_cast<int>(in.integer("substeps", ig.substeps, 1, 100000));
   ig.iterations = static_cast<int>(in.integer("iterations", ig.iterations, 1, 100000));
   ig.rescale_volume = in.boolean("rescale_volume", false);
   ig.weights_center = in.vec3("weights_center", Eigen::Vector3d::Zero());
   ig.weights_radius = in.number("weights_radius", 0.0, Range::non_negative());
-  if (ig.rescale_volume && ig.kind != "backward_euler" && ig.kind != "semi_implicit")
+  if (ig.rescale_volume && ig.kind != IntegratorKind::backward_euler && ig.kind != IntegratorKind::semi_implicit)
     in.fail("rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
-  if (std::isinf(sc.material.lambda) && ig.kind != "xpbd")
+  const bool mass_spring = sc.material.model == MaterialModel::mass_spring;
+  if (ig.kind == IntegratorKind::xpbd && mass_spring)
+    in.fail("kind", "\"xpbd\" needs a tet material (expected material.model other than \"mass_spring\")");
+  if (ig.kind == IntegratorKind::mass_spring && !mass_spring)
+    in.fail("kind", "\"mass_spring\" is Hong et al.'s step for material.model = \"mass_spring\"");
+  if (std::isinf(sc.material.lambda) && ig.kind != IntegratorKind::xpbd)
     root.table("material").fail("nu", "nu = 0.5 (incompressible) needs integrator.kind = \"xpbd\" (expected nu < 0.5)");
 
   const Section fr = root.table("frames");
@@ -262,6 +311,10 @@ Scene parse_scene(SceneFile file) {
   sc.frames.rate = fr.number("rate", sc.frames.rate, Range::positive());
   sc.frames.duration = fr.number("duration", sc.frames.duration, Range::non_negative());
   sc.frames.count = static_cast<int>(fr.integer("count", 0, 1, 1000000));
+  if ((ig.kind == IntegratorKind::statics) != (sc.frames.count > 0))
+    fr.fail(ig.kind == IntegratorKind::statics ? "count" : "rate",
+            ig.kind == IntegratorKind::statics ? "a static run needs frames.count (load increments)"
+                                               : "frames.count is for statics; a dynamic run needs frames.rate and frames.duration");
 
   const Section out = root.table("output");
   const std::string stem = std::filesystem::path(sc.file.name()).stem().string();
@@ -271,6 +324,9 @@ Scene parse_scene(SceneFile file) {
   sc.file.check_unknown_keys();
   return sc;
 }
+
+const char* to_string(MaterialModel m) { return name_of(kModels, m); }
+const char* to_string(IntegratorKind k) { return name_of(kKinds, k); }
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
   return parse_scene(SceneFile::load(path, overrides));

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "isochor/constrained_system.hpp"
+#include "isochor/sparse_factor.hpp"
 
 namespace isochor {
 
@@ -52,9 +53,10 @@ class GglForm {
 // approximation otherwise, which Newton's iteration absorbs.
 class ReducedSolver {
  public:
-  // kind: "cholmod" (direct) or "pcg" (the krylov solver: no factor; pcg_tol its relative
+  // kind: cholmod (direct) or pcg (the krylov solver: no factor; pcg_tol its relative
   // residual).
-  explicit ReducedSolver(const GglForm& form, const std::string& kind = "cholmod", double pcg_tol = 1e-12);
+  explicit ReducedSolver(const GglForm& form, SymmetricSolverKind kind = SymmetricSolverKind::cholmod,
+                         double pcg_tol = 1e-12);
   ~ReducedSolver();
   // Factors S for this Jacobian (LDL^T while S is indefinite; "pcg": CHOLMOD where PCG fails);
   // false when it is singular.

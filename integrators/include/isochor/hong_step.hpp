@@ -7,7 +7,8 @@
 // paper leaves W out there and accepts the error). Without a constraint it is the conventional
 // mass-spring step.
 #pragma once
-#include "isochor/ida_integrator.hpp"
+#include "isochor/constrained_system.hpp"
+#include "isochor/integrator.hpp"
 
 namespace isochor {
 
@@ -17,10 +18,10 @@ struct HongOptions {
   long max_steps = 100000000;
 };
 
-class HongStep {
+class HongStep : public Integrator {
  public:
   HongStep(ConstrainedSystem& system, HongOptions options);
-  IdaStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame);
+  RunStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
 
  private:
   ConstrainedSystem& sys_;

@@ -20,16 +20,20 @@ class SymmetricSolver {
   // Values in the pattern's order. False if the matrix cannot be solved (singular, or indefinite
   // where the method cannot help).
   virtual bool factor(const double* values) = 0;
-  // x = S^-1 b; false if the solve failed (iterative: no convergence).
+  // x = S^-1 b; false if the solve failed (no factor, a non-finite solution from a zero pivot;
+  // iterative: no convergence or S found indefinite).
   virtual bool solve(const double* b, double* x) = 0;
   virtual double factor_nnz() const = 0;   // entries of the factor (0 for an iterative solver)
   virtual long iterations() const { return 0; }  // iterative: iterations over all solves so far
   virtual double analyse_seconds() const { return 0; }  // direct: ordering and symbolic analysis so far
 };
 
-// kind: "cholmod" or "pcg" (relative residual tolerance `tol`: the GGL residual of a reduced solve
-// is ~1e6 times it, so 1e-12 leaves Newton an error of ~1e-6, far below its own contraction).
-std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, const std::string& kind, double tol = 1e-12);
+// cholmod: SymmetricFactor; pcg: BlockJacobiPcg with relative residual tolerance `tol` (the GGL
+// residual of a reduced solve is ~1e6 times it, so 1e-12 leaves Newton an error of ~1e-6, far
+// below its own contraction).
+enum class SymmetricSolverKind { cholmod, pcg };
+std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, SymmetricSolverKind kind,
+                                                       double tol = 1e-12);
 
 class SymmetricFactor : public SymmetricSolver {
  public:

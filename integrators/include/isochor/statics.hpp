@@ -9,23 +9,24 @@
 #include <memory>
 #include <string>
 
-#include "isochor/ida_integrator.hpp"
+#include "isochor/constrained_system.hpp"
+#include "isochor/integrator.hpp"
 
 namespace isochor {
 
 struct StaticOptions {
   double residual_tol = 1e-9;  // KINSOL's scaled residual norm (forces over the system's force scale)
   long max_iterations = 200;   // Newton iterations per frame
-  std::string linear_solver = "klu";  // "klu", "reduced" or "krylov"
+  LinearSolverKind linear_solver = LinearSolverKind::klu;
 };
 
-class StaticSolver {
+class StaticSolver : public Integrator {
  public:
   StaticSolver(ConstrainedSystem& system, StaticOptions options);
-  ~StaticSolver();
+  ~StaticSolver() override;
   // Solves at every frame time; the frame sample's `newton_iterations` is cumulative, and
   // `step_size` holds the final scaled residual norm of that frame's solve.
-  IdaStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame);
+  RunStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
 
   struct Impl;  // public so that the C callbacks can reach it
 

@@ -11,7 +11,8 @@
 #include <functional>
 #include <vector>
 
-#include "isochor/ida_integrator.hpp"
+#include "isochor/constrained_system.hpp"
+#include "isochor/integrator.hpp"
 
 namespace isochor {
 
@@ -46,12 +47,12 @@ struct XpbdOptions {
   long max_steps = 100000000;
 };
 
-class Xpbd {
+class Xpbd : public Integrator {
  public:
   Xpbd(ProjectiveSystem& system, XpbdOptions options);
   // Steps from frame_times.front(); frames between steps are interpolated linearly. The frame
   // callback gets all point positions and velocities (3 per point) and no multipliers.
-  IdaStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame);
+  RunStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
 
  private:
   ProjectiveSystem& sys_;

@@ -13,10 +13,11 @@
 #include "isochor/constraints.hpp"
 #include "isochor/forces.hpp"
 #include "isochor/scene.hpp"
+#include "isochor/scene_system.hpp"
 
 namespace isochor {
 
-class MassSpringSystem : public ConstrainedSystem {
+class MassSpringSystem : public SceneSystem {
  public:
   explicit MassSpringSystem(const Scene& scene);
 
@@ -37,11 +38,12 @@ class MassSpringSystem : public ConstrainedSystem {
   double constraint_scale(int) const override { return rest_volume_; }
 
   // Diagnostics at a state, as MeshSystem's: every node's position (interior ones carried).
-  void set_state(double t, const VectorXd& q, const VectorXd& v);
-  const Points& positions() const { return x_; }
-  std::array<double, 3> energies() const;  // kinetic, springs, external
-  std::vector<double> volumes() const;      // the enclosed volume (no zones)
-  const DofMap& dofs() const { return dofs_; }
+  void set_state(double t, const VectorXd& q, const VectorXd& v) override;
+  const Points& positions() const override { return x_; }
+  std::array<double, 3> energies() const override;  // kinetic, springs, external
+  std::vector<double> volumes() const override;      // the enclosed volume (no zones)
+  const DofMap& dofs() const override { return dofs_; }
+  bool has_zones() const override { return false; }
   // Hong's weight vector (their eq. 15) per free surface node, summing to their number.
   Eigen::VectorXd weights(const Eigen::Vector3d& center, double radius) const;
 

@@ -9,6 +9,7 @@
 #include "isochor/constraints.hpp"
 #include "isochor/forces.hpp"
 #include "isochor/scene.hpp"
+#include "isochor/scene_system.hpp"
 
 namespace isochor {
 
@@ -21,7 +22,7 @@ void scene_initial_state(const Scene& s, const DofMap& dofs, VectorXd& q, Vector
 // What changes with time alone: driven nodes' positions and velocities, contact planes, gravity.
 void scene_at_time(const Scene& s, double t, Points& x, Eigen::VectorXd& xdot, ExternalPotential& external);
 
-class MeshSystem : public ConstrainedSystem {
+class MeshSystem : public SceneSystem {
  public:
   explicit MeshSystem(const Scene& scene);
 
@@ -46,18 +47,18 @@ class MeshSystem : public ConstrainedSystem {
 
   // Positions and velocities of every node (3 N) for a state of the unknowns at time t
   // (driven nodes from their drivers, evaluated once per distinct t).
-  void set_state(double t, const VectorXd& q, const VectorXd& v);
+  void set_state(double t, const VectorXd& q, const VectorXd& v) override;
   void set_positions(double t, const VectorXd& q);
-  const Points& positions() const { return x_; }
+  const Points& positions() const override { return x_; }
   const Eigen::VectorXd& velocities() const { return xdot_; }
   // Kinetic, elastic and external energy at the current state.
-  std::array<double, 3> energies() const;
+  std::array<double, 3> energies() const override;
   // Total volume, then each zone's volume, at the current state.
-  std::vector<double> volumes() const;
+  std::vector<double> volumes() const override;
   // Per-tet pressure at the current state for multipliers lambda.
-  void pressures(const VectorXd& lambda, std::vector<double>& p) const;
-  int inverted_tets() const { return elastic_->inverted_tets(x_); }
-  const DofMap& dofs() const { return dofs_; }
+  bool pressures(const VectorXd& lambda, std::vector<double>& p) const override;
+  int inverted_tets() const override { return elastic_->inverted_tets(x_); }
+  const DofMap& dofs() const override { return dofs_; }
 
  private:
   const Scene& scene_;

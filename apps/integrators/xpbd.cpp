@@ -1,0 +1,48 @@
+// integrator.kind = "xpbd": Macklin and Müller's constraints on every node of the mesh. XPBD
+// moves points, not the scene system's unknowns: each frame is handed on as the free nodes'
+// positions and velocities, so that the scene system measures it (energies of the scene's
+// material, volumes, pressures) exactly as it measures every other method's frames.
+#include "registry.hpp"
+
+#include "isochor/xpbd_system.hpp"
+
+namespace isochor {
+
+XpbdOptions xpbd_options(const IntegratorSpec& s) {
+  XpbdOptions o;
+  o.dt = s.dt;
+  o.substeps = s.substeps;
+  o.iterations = s.iterations;
+  o.max_steps = s.max_steps;
+  return o;
+}
+
+namespace {
+class XpbdOnScene : public Integrator {
+ public:
+  XpbdOnScene(const Scene& scene, const SceneSystem& system, XpbdOptions o)
+      : points_(scene), xpbd_(points_, o), free_(system.dofs().free_nodes) {}
+  RunStats run(const std::vector<double>& times, const FrameCallback& on_frame) override {
+    VectorXd q(3 * free_.size()), v(3 * free_.size());
+    return xpbd_.run(times, [&](int k, double t, const VectorXd& x, const VectorXd& xv, const VectorXd& lambda,
+                                const RunStats::FrameSample& s) {
+      for (std::size_t f = 0; f < free_.size(); ++f) {
+        q.segment<3>(3 * f) = x.segment<3>(3 * free_[f]);
+        v.segment<3>(3 * f) = xv.segment<3>(3 * free_[f]);
+      }
+      on_frame(k, t, q, v, lambda, s);
+    });
+  }
+
+ private:
+  XpbdMeshSystem points_;
+  Xpbd xpbd_;
+  std::vector<int> free_;
+};
+}  // namespace
+
+std::unique_ptr<Integrator> make_xpbd(const Scene& scene, SceneSystem& system) {
+  return std::make_unique<XpbdOnScene>(scene, system, xpbd_options(scene.integrator));
+}
+
+}  // namespace isochor

@@ -1,0 +1,18 @@
+// The consistent initial state of a ConstrainedSystem, shared by every integrator that runs one:
+// q projected onto g = 0 (mass-weighted minimum-norm Newton steps), v onto G v + dg/dt = 0, and
+// the accelerations and multipliers of the index-1 system
+//   M a + G^T lambda = f,   G a = -d/dt (G v + dg/dt) at a = 0
+// (sign convention of constrained_system.hpp).
+#pragma once
+#include "isochor/constrained_system.hpp"
+
+namespace isochor {
+
+void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, VectorXd& v, VectorXd& a,
+                              VectorXd& lambda);
+
+// Throws std::invalid_argument when the system cannot be integrated as given (n not a multiple
+// of dofs_per_group(), a mass that is not positive, a constraint row outside the dofs).
+void check_system(const ConstrainedSystem& sys);
+
+}  // namespace isochor

@@ -1,0 +1,37 @@
+// A scene as a ConstrainedSystem plus what a frame of output needs from it: every node's
+// position for a state of the unknowns, the energies, the volumes and (tet models) pressures.
+// MeshSystem (tet materials) and MassSpringSystem (Hong et al.'s springs) are the two.
+#pragma once
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "isochor/assembly.hpp"
+#include "isochor/constrained_system.hpp"
+#include "isochor/scene.hpp"
+
+namespace isochor {
+
+class SceneSystem : public ConstrainedSystem {
+ public:
+  // Positions and velocities of every node for a state (q, v) of the unknowns at time t.
+  virtual void set_state(double t, const VectorXd& q, const VectorXd& v) = 0;
+  virtual const Points& positions() const = 0;
+  // Kinetic, elastic (or spring) and external energy at the current state.
+  virtual std::array<double, 3> energies() const = 0;
+  // Total volume, then each zone's volume, at the current state.
+  virtual std::vector<double> volumes() const = 0;
+  // Per-tet pressure for multipliers lambda; false if the model has none (no tets).
+  virtual bool pressures(const VectorXd& /*lambda*/, std::vector<double>& /*p*/) const { return false; }
+  // Inverted tets at the current state; -1 if the model has no tets.
+  virtual int inverted_tets() const { return -1; }
+  // The free (unknown) and driven nodes.
+  virtual const DofMap& dofs() const = 0;
+  // The zones whose volumes volumes() reports (none for the mass-spring model).
+  virtual bool has_zones() const { return true; }
+};
+
+// The scene's system: MassSpringSystem for material.model = "mass_spring", else MeshSystem.
+std::unique_ptr<SceneSystem> make_scene_system(const Scene& scene);
+
+}  // namespace isochor
