@@ -221,8 +221,11 @@ void write_study_results(const Study& s) {
       ref_c.push_back(ref_x.back().rowwise().mean());
       ref_cden += (ref_c.back() - ref_c.front()).squaredNorm();
     }
-  } catch (const Error&) {
+  } catch (const Error& e) {
+    // No usable reference (failed, or not run): every case's error is left blank, and said so.
+    std::fprintf(stderr, "isochor study: no reference to measure errors against (%s)\n", e.what());
     ref.reset();
+    ref_x.clear();
   }
   std::ofstream csv(s.output / "results.csv");
   csv << "method,label,sweep,status,reason,frames,frames_expected,cpu_seconds,wall_seconds,steps,error_l2,"

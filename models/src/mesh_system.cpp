@@ -38,22 +38,28 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
   damping_ = scene.damping;
   const auto all_zones = scene_zone_tets(scene);
   zone_volumes_ = VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern());
-  const auto zt = scene.keep_zones ? all_zones : std::vector<std::vector<int>>{};
-  constraints_ = VolumeConstraints::zones(scene.mesh, zt, dofs_, elastic_->pattern());
-  for (int j = 0; j < constraints_.size(); ++j) {
-    if (constraints_.row_dofs(j).empty())
-      throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first + "\" has only driven nodes on its boundary: its volume cannot be kept");
-    rows_.push_back(constraints_.row_dofs(j));
+  if (scene.keep_zones && !all_zones.empty()) {
+    auto zones = std::make_unique<VolumeConstraints>(VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern()));
+    for (int j = 0; j < zones->size(); ++j)
+      if (zones->row_dofs(j).empty())
+        throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first + "\" has only driven nodes on its boundary: its volume cannot be kept");
+    add_constraints(std::move(zones));
   }
-  Eigen::VectorXd z0;
-  constraints_.volumes(scene.mesh.rest_positions(), z0);
-  zone_rest_volume_.assign(z0.data(), z0.data() + z0.size());
   dof_mass_.resize(num_dofs());
   for (int f = 0; f < dofs_.num_free(); ++f) dof_mass_.segment<3>(3 * f).setConstant(node_mass_[dofs_.free_nodes[f]]);
   const double V = scene.mesh.rest_volume();
   force_scale_ = std::max(node_mass_.sum() * std::max(scene.gravity.norm(), 1.0), scene.material.mu * std::cbrt(V * V));
   x_ = scene.mesh.rest_positions();
   xdot_ = Eigen::VectorXd::Zero(3 * scene.mesh.num_nodes());
+}
+
+void MeshSystem::add_constraints(std::unique_ptr<ConstraintSet> set) {
+  for (int j = 0; j < set->size(); ++j) {
+    rows_.push_back(set->row_dofs(j));
+    row_scale_.push_back(set->scale(j));
+  }
+  offset_.push_back(offset_.back() + set->size());
+  sets_.push_back(std::move(set));
 }
 
 void MeshSystem::set_state(double t, const VectorXd& q, const VectorXd& v) {
@@ -141,24 +147,30 @@ void MeshSystem::set_positions(double t, const VectorXd& q) {
 
 void MeshSystem::constraint(double t, const VectorXd& q, VectorXd& g) {
   set_positions(t, q);
-  constraints_.value(x_, g);
+  g.resize(num_constraints());
+  for (std::size_t s = 0; s < sets_.size(); ++s) sets_[s]->value(x_, g.data() + offset_[s]);
 }
 
 void MeshSystem::constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* g_t) {
   set_positions(t, q);  // dg/dt needs only the driven nodes' velocities
-  constraints_.gradient(x_, G);
-  if (g_t) constraints_.time_derivative(x_, xdot_, *g_t);
+  G.resize(num_constraints());
+  if (g_t) g_t->resize(num_constraints());
+  for (std::size_t s = 0; s < sets_.size(); ++s) {
+    sets_[s]->gradient(x_, G.data() + offset_[s]);
+    if (g_t) sets_[s]->time_derivative(x_, xdot_, g_t->data() + offset_[s]);
+  }
 }
 
 void MeshSystem::add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) {
   set_positions(t, q);
-  constraints_.add_hessian(x_, w, scale, values);
+  for (std::size_t s = 0; s < sets_.size(); ++s) sets_[s]->add_hessian(x_, w.data() + offset_[s], scale, values);
 }
 
 void MeshSystem::constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
                                               std::vector<std::vector<double>>& rows) {
   set_state(t, q, v);
-  constraints_.hessian_times(x_, xdot_, rows);
+  rows.resize(num_constraints());
+  for (std::size_t s = 0; s < sets_.size(); ++s) sets_[s]->hessian_times(x_, xdot_, rows.data() + offset_[s]);
 }
 
 std::array<double, 3> MeshSystem::energies() const {
@@ -177,7 +189,8 @@ std::vector<double> MeshSystem::volumes() const {
 
 bool MeshSystem::pressures(const VectorXd& lambda, std::vector<double>& p) const {
   elastic_->pressures(x_, p);
-  if (lambda.size()) constraints_.add_multiplier_pressure(lambda, p);
+  if (lambda.size())
+    for (std::size_t s = 0; s < sets_.size(); ++s) sets_[s]->add_pressure(lambda.data() + offset_[s], p);
   return true;
 }
 

@@ -115,7 +115,7 @@ struct Skeleton::Impl {
   SimTK::MultibodySystem system;
   SimTK::SimbodyMatterSubsystem matter{system};
   std::vector<SimTK::MobilizedBodyIndex> index;
-  SimTK::State state;
+  SimTK::State state;  // realize()'s memo: the state at Skeleton::t_
 };
 
 Skeleton::Skeleton(std::vector<BoneSpec> bones) : bones_(std::move(bones)), pose_(bones_.size()), impl_(std::make_unique<Impl>()) {
@@ -147,7 +147,7 @@ Skeleton::Skeleton(std::vector<BoneSpec> bones) : bones_(std::move(bones)), pose
 
 Skeleton::~Skeleton() = default;
 
-void Skeleton::realize(double t) {
+void Skeleton::realize(double t) const {
   if (t == t_) return;
   using SimTK::State, SimTK::Stage, SimTK::MobilizedBody, SimTK::Transform, SimTK::SpatialVec, SimTK::Mat33;
   const auto start = std::chrono::steady_clock::now();
@@ -174,7 +174,7 @@ void Skeleton::realize(double t) {
   seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-void Skeleton::apply(const Points& rest, double t, Points& x, Eigen::VectorXd* xdot) {
+void Skeleton::apply(const Points& rest, double t, Points& x, Eigen::VectorXd* xdot) const {
   realize(t);
   for (std::size_t i = 0; i < bones_.size(); ++i) {
     const Pose& P = pose_[i];

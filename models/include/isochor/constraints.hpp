@@ -9,10 +9,11 @@
 #include <vector>
 
 #include "isochor/assembly.hpp"
+#include "isochor/constraint_set.hpp"
 
 namespace isochor {
 
-class VolumeConstraints {
+class VolumeConstraints : public ConstraintSet {
  public:
   // Zone constraints: each zone a list of tets (zones may overlap); evaluated on each zone's
   // boundary faces (the same volume, interior contributions cancelling exactly).
@@ -21,25 +22,47 @@ class VolumeConstraints {
   // One constraint on the volume enclosed by the mesh's surface triangles.
   static VolumeConstraints surface(const Mesh& mesh, const DofMap& dofs, const Pattern& pattern);
 
-  int size() const { return static_cast<int>(rest_.size()); }
+  int size() const override { return static_cast<int>(rest_.size()); }
+  double scale(int j) const override { return rest_[j]; }
+  // ConstraintSet, on stacked arrays.
+  void value(const Points& x, double* g) const override;
+  void gradient(const Points& x, std::vector<double>* rows) const override;
+  void time_derivative(const Points& x, const Eigen::VectorXd& xdot, double* gt) const override;
+  void hessian_times(const Points& x, const Eigen::VectorXd& xdot, std::vector<double>* rows) const override;
+  void add_hessian(const Points& x, const double* w, double scale, double* values) const override;
+  void add_pressure(const double* lambda, std::vector<double>& p) const override;
   const std::vector<double>& rest_volumes() const { return rest_; }
   // Current volume of each constraint.
   void volumes(const Points& x, Eigen::VectorXd& vol) const;
   // g = volume - rest volume.
-  void value(const Points& x, Eigen::VectorXd& g) const;
+  void value(const Points& x, Eigen::VectorXd& g) const {
+    g.resize(size());
+    value(x, g.data());
+  }
   // Row j of G: free dof indices (sorted, fixed) and values.
-  const std::vector<Index>& row_dofs(int j) const { return row_dofs_[j]; }
-  void gradient(const Points& x, std::vector<std::vector<double>>& rows) const;
+  const std::vector<Index>& row_dofs(int j) const override { return row_dofs_[j]; }
+  void gradient(const Points& x, std::vector<std::vector<double>>& rows) const {
+    rows.resize(size());
+    gradient(x, rows.data());
+  }
   // dg/dt = sum over Dirichlet nodes d of dg/dx_d . v_d (v: velocities of all nodes, 3 N).
-  void time_derivative(const Points& x, const Eigen::VectorXd& v, Eigen::VectorXd& gt) const;
+  void time_derivative(const Points& x, const Eigen::VectorXd& v, Eigen::VectorXd& gt) const {
+    gt.resize(size());
+    time_derivative(x, v, gt.data());
+  }
   // rows[j] (layout of row_dofs(j)) = (H_j xdot)^T at the free dofs, xdot the velocity of every
   // node (3 N, driven nodes included): d(G v + dg/dt)/dq.
-  void hessian_times(const Points& x, const Eigen::VectorXd& xdot, std::vector<std::vector<double>>& rows) const;
+  void hessian_times(const Points& x, const Eigen::VectorXd& xdot, std::vector<std::vector<double>>& rows) const {
+    rows.resize(size());
+    hessian_times(x, xdot, rows.data());
+  }
   // values[slot] += scale * sum_j lambda_j H_j over the free dofs.
-  void add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const;
+  void add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const {
+    add_hessian(x, lambda.data(), scale, values);
+  }
   // Per-tet pressure from the multipliers: p_e -= lambda_j for every zone j holding tet e (the
   // constraint force -lambda_j dV/dx is that of a hydrostatic stress lambda_j I). Zone constraints only.
-  void add_multiplier_pressure(const Eigen::VectorXd& lambda, std::vector<double>& p) const;
+  void add_multiplier_pressure(const Eigen::VectorXd& lambda, std::vector<double>& p) const { add_pressure(lambda.data(), p); }
   // Full gradient of g_j with respect to every node (3 N), for tests and diagnostics.
   Eigen::VectorXd full_gradient(const Points& x, int j) const;
 
@@ -57,7 +80,8 @@ class VolumeConstraints {
   std::vector<std::vector<int>> boundary_nodes_;  // per constraint: the nodes of its faces
   std::vector<std::vector<int>> zone_tets_;   // zone constraints: the tets of each zone
   DofMap dofs_;
-  std::vector<Vec3> origins(const Points& x) const;  // per constraint, where the origin is now
+  const std::vector<Vec3>& origins(const Points& x) const;  // per constraint, where the origin is now
+  mutable std::vector<Vec3> origins_;
   Vec12 element_x(const Points& x, const Element& e, const std::vector<Vec3>& origins) const;
   void finish(int num_nodes, const DofMap& dofs, const Pattern& pattern);
 };

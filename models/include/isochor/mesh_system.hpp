@@ -1,6 +1,7 @@
 // A mesh scene as a ConstrainedSystem: free nodes are the unknowns, boundary nodes follow their
 // drivers, forces are elasticity (the material, plus the epidermis), gravity, the ground and
-// Rayleigh damping; the constraints are the scene's zone volumes (none for an unconstrained model).
+// Rayleigh damping; the constraints are a list of ConstraintSets stacked in order (today the
+// scene's zone volumes, none for an unconstrained model).
 #pragma once
 #include <memory>
 
@@ -27,7 +28,7 @@ class MeshSystem : public SceneSystem {
   explicit MeshSystem(const Scene& scene);
 
   int num_dofs() const override { return 3 * dofs_.num_free(); }
-  int num_constraints() const override { return constraints_.size(); }
+  int num_constraints() const override { return static_cast<int>(rows_.size()); }
   const VectorXd& mass() const override { return dof_mass_; }
   const SparsePattern& pattern() const override { return elastic_->pattern(); }
   const std::vector<std::vector<Index>>& constraint_rows() const override { return rows_; }
@@ -43,7 +44,7 @@ class MeshSystem : public SceneSystem {
                                     std::vector<std::vector<double>>& rows) override;
   double force_scale() const override { return force_scale_; }
   bool rescale_volume(double t, VectorXd& q) override;
-  double constraint_scale(int j) const override { return zone_rest_volume_[j]; }
+  double constraint_scale(int j) const override { return row_scale_[j]; }
 
   // Positions and velocities of every node (3 N) for a state of the unknowns at time t
   // (driven nodes from their drivers, evaluated once per distinct t).
@@ -67,10 +68,14 @@ class MeshSystem : public SceneSystem {
   std::unique_ptr<ElasticAssembly> elastic_;
   std::unique_ptr<ExternalPotential> external_;
   RayleighDamping damping_;
-  VolumeConstraints constraints_, zone_volumes_;  // the kept zones; every zone (for volumes())
+  // The constraint sets, stacked: set s owns rows offset_[s] .. offset_[s + 1].
+  std::vector<std::unique_ptr<ConstraintSet>> sets_;
+  std::vector<int> offset_{0};
+  VolumeConstraints zone_volumes_;  // every zone, kept or only measured (for volumes())
   std::vector<std::vector<Index>> rows_;
+  std::vector<double> row_scale_;
+  void add_constraints(std::unique_ptr<ConstraintSet> set);
   Eigen::VectorXd node_mass_, dof_mass_;
-  std::vector<double> zone_rest_volume_;
   double force_scale_ = 1.0;
   // State cache: positions and velocities of every node.
   Points x_;

@@ -49,15 +49,18 @@ class Skeleton {
   Skeleton& operator=(const Skeleton&) = delete;
 
   const std::vector<BoneSpec>& bones() const { return bones_; }
-  // Realizes the Simbody state at t (position and velocity stages), cached by t.
-  void realize(double t);
+  // Realizes the Simbody state at t (position and velocity stages). The bones' motion is a
+  // function of t alone (prescribed motion), so the Simbody state and the poses are a memo of the
+  // last t: const, and the same answer whoever asked before (every system that drives nodes by
+  // this skeleton shares it; only the cost differs).
+  void realize(double t) const;
   // Bone b's frame in the world at the realized t: x = R s + p; velocity v + w x (R s).
   const Eigen::Matrix3d& rotation(int b) const { return pose_[b].R; }
   const Eigen::Vector3d& position(int b) const { return pose_[b].p; }
   const Eigen::Vector3d& angular_velocity(int b) const { return pose_[b].w; }
   const Eigen::Vector3d& velocity(int b) const { return pose_[b].v; }
   // Moves the bound nodes (and sets their velocities) to time t.
-  void apply(const Points& rest, double t, Points& x, Eigen::VectorXd* xdot);
+  void apply(const Points& rest, double t, Points& x, Eigen::VectorXd* xdot) const;
   // Every bound node, sorted.
   std::vector<int> bound_nodes() const;
   // Wall seconds spent realizing Simbody states, and how many realizations.
@@ -71,10 +74,11 @@ class Skeleton {
   };
   struct Impl;
   std::vector<BoneSpec> bones_;
-  std::vector<Pose> pose_;
+  // The memo of realize(): Simbody's state (in impl_), the poses at t_, and its cost.
+  mutable std::vector<Pose> pose_;
   std::unique_ptr<Impl> impl_;
-  double t_ = std::numeric_limits<double>::quiet_NaN(), seconds_ = 0;
-  long realizations_ = 0;
+  mutable double t_ = std::numeric_limits<double>::quiet_NaN(), seconds_ = 0;
+  mutable long realizations_ = 0;
 };
 
 // The scene's [skeleton] block: bones, joints, motions and the nodes bound to each bone.

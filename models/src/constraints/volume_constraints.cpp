@@ -6,13 +6,15 @@
 
 namespace isochor {
 
-std::vector<Vec3> VolumeConstraints::origins(const Points& x) const {
+const std::vector<Vec3>& VolumeConstraints::origins(const Points& x) const {
   // The mean current position of each constraint's boundary nodes. A closed surface's enclosed
   // volume does not depend on the origin (its oriented face areas sum to zero), so neither do its
   // gradient and Hessian, and the origin may follow the body: a fixed origin far from it (the
   // ball 0.47 m below its rest centroid at the impact) makes the face terms cancel and cost
   // digits that IDA at rtol 1e-8 needs (measured: Newton failed at the impact).
-  std::vector<Vec3> o(boundary_nodes_.size(), Vec3::Zero());
+  // Kept in a member, so that the callbacks that call this allocate nothing after the first call.
+  std::vector<Vec3>& o = origins_;
+  o.assign(boundary_nodes_.size(), Vec3::Zero());
   for (std::size_t j = 0; j < boundary_nodes_.size(); ++j) {
     for (int v : boundary_nodes_[j]) o[j] += x.col(v);
     if (!boundary_nodes_[j].empty()) o[j] /= static_cast<double>(boundary_nodes_[j].size());
@@ -125,19 +127,20 @@ void VolumeConstraints::finish(int num_nodes, const DofMap& dofs, const Pattern&
 }
 
 void VolumeConstraints::volumes(const Points& x, Eigen::VectorXd& vol) const {
-  const std::vector<Vec3> o = origins(x);
-  vol.setZero(size());
-  for (const Element& e : elements_) vol[e.constraint] += tet_volume(element_x(x, e, o), nullptr, nullptr);
+  vol.resize(size());
+  value(x, vol.data());
+  for (int j = 0; j < size(); ++j) vol[j] += rest_[j];
 }
 
-void VolumeConstraints::value(const Points& x, Eigen::VectorXd& g) const {
-  volumes(x, g);
+void VolumeConstraints::value(const Points& x, double* g) const {
+  const std::vector<Vec3>& o = origins(x);
+  for (int j = 0; j < size(); ++j) g[j] = 0.0;
+  for (const Element& e : elements_) g[e.constraint] += tet_volume(element_x(x, e, o), nullptr, nullptr);
   for (int j = 0; j < size(); ++j) g[j] -= rest_[j];
 }
 
-void VolumeConstraints::gradient(const Points& x, std::vector<std::vector<double>>& rows) const {
-  const std::vector<Vec3> o = origins(x);
-  rows.resize(size());
+void VolumeConstraints::gradient(const Points& x, std::vector<double>* rows) const {
+  const std::vector<Vec3>& o = origins(x);
   for (int j = 0; j < size(); ++j) rows[j].assign(row_dofs_[j].size(), 0.0);
   for (std::size_t i = 0; i < elements_.size(); ++i) {
     const Element& e = elements_[i];
@@ -149,7 +152,7 @@ void VolumeConstraints::gradient(const Points& x, std::vector<std::vector<double
 }
 
 Eigen::VectorXd VolumeConstraints::full_gradient(const Points& x, int j) const {
-  const std::vector<Vec3> o = origins(x);
+  const std::vector<Vec3>& o = origins(x);
   Eigen::VectorXd out = Eigen::VectorXd::Zero(3 * x.cols());
   for (const Element& e : elements_) {
     if (e.constraint != j) continue;
@@ -161,9 +164,9 @@ Eigen::VectorXd VolumeConstraints::full_gradient(const Points& x, int j) const {
   return out;
 }
 
-void VolumeConstraints::time_derivative(const Points& x, const Eigen::VectorXd& v, Eigen::VectorXd& gt) const {
-  const std::vector<Vec3> o = origins(x);
-  gt.setZero(size());
+void VolumeConstraints::time_derivative(const Points& x, const Eigen::VectorXd& v, double* gt) const {
+  const std::vector<Vec3>& o = origins(x);
+  for (int j = 0; j < size(); ++j) gt[j] = 0.0;
   for (const Element& e : elements_) {
     bool driven = false;
     for (int n : e.nodes) driven |= n >= 0 && dofs_.free_index[n] < 0;
@@ -176,10 +179,8 @@ void VolumeConstraints::time_derivative(const Points& x, const Eigen::VectorXd& 
   }
 }
 
-void VolumeConstraints::hessian_times(const Points& x, const Eigen::VectorXd& xdot,
-                                      std::vector<std::vector<double>>& rows) const {
-  const std::vector<Vec3> o = origins(x);
-  rows.resize(size());
+void VolumeConstraints::hessian_times(const Points& x, const Eigen::VectorXd& xdot, std::vector<double>* rows) const {
+  const std::vector<Vec3>& o = origins(x);
   for (int j = 0; j < size(); ++j) rows[j].assign(row_dofs_[j].size(), 0.0);
   for (std::size_t i = 0; i < elements_.size(); ++i) {
     const Element& e = elements_[i];
@@ -193,8 +194,8 @@ void VolumeConstraints::hessian_times(const Points& x, const Eigen::VectorXd& xd
   }
 }
 
-void VolumeConstraints::add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const {
-  const std::vector<Vec3> o = origins(x);
+void VolumeConstraints::add_hessian(const Points& x, const double* lambda, double scale, double* values) const {
+  const std::vector<Vec3>& o = origins(x);
   for_each_coloured(colours_, [&](int i) {
     const Element& e = elements_[i];
     const double w = scale * lambda[e.constraint];
@@ -208,9 +209,9 @@ void VolumeConstraints::add_hessian(const Points& x, const Eigen::VectorXd& lamb
   });
 }
 
-void VolumeConstraints::add_multiplier_pressure(const Eigen::VectorXd& lambda, std::vector<double>& p) const {
+void VolumeConstraints::add_pressure(const double* lambda, std::vector<double>& p) const {
   for (std::size_t j = 0; j < zone_tets_.size(); ++j)
-    for (int e : zone_tets_[j]) p[e] -= lambda[static_cast<Index>(j)];
+    for (int e : zone_tets_[j]) p[e] -= lambda[j];
 }
 
 std::vector<std::vector<int>> ring_zones(const Mesh& mesh, int k, const DofMap& dofs) {
