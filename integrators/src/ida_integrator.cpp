@@ -39,9 +39,8 @@ struct IdaIntegrator::Impl {
     n = sys.num_dofs();
     m = sys.num_constraints();
     if (opt.linear_solver != LinearSolverKind::klu)
-      // CG's residual must sit below what IDA's Newton test can see: 1e-12 serves rtol >= 1e-6;
-      // at rtol 1e-8, atol 1e-11 it did not (a 600-tet ball, undamped: IDA_CONV_FAIL at 92 ms),
-      // 1e-14 did. So 1e-6 rtol, at most 1e-12.
+      // CG's residual below what IDA's Newton test can see: 1e-6 rtol, at most 1e-12
+      // (docs/decisions.md).
       reduced = std::make_unique<ReducedSolver>(
           ggl, opt.linear_solver == LinearSolverKind::krylov ? SymmetricSolverKind::pcg : SymmetricSolverKind::cholmod,
           std::min(1e-12, 1e-6 * opt.rtol));
@@ -242,11 +241,9 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   if (s.opt.initial_step > 0) {
     check(IDASetInitStep(mem, s.opt.initial_step), "IDASetInitStep", t0);
   } else if (a0.size() > 0 && times.back() > t0) {
-    // IDA's own first step, 0.5 / |y'|, is set by the accelerations over the velocity tolerance:
-    // with tight tolerances it is ~1e-10 s, where the GGL matrix (c^2 M against the constraint
-    // rows) is too ill-conditioned for Newton to converge (a fixed-bottom cube failed at t = 0 for
-    // rtol <= 1e-6). A position-based first step instead: the error 1/2 a h^2 of a first step
-    // equals the position tolerance, h0 = sqrt(2 / |a|_wrms).
+    // A position-based first step: the error 1/2 a h^2 of a first step equals the position
+    // tolerance, h0 = sqrt(2 / |a|_wrms) (IDA's own, 0.5 / |y'|, is too small for Newton on the
+    // GGL matrix at tight tolerances: docs/decisions.md).
     double sum = 0;
     for (Index i = 0; i < n; ++i) {
       const double w = a0[i] / (s.opt.rtol * std::abs(q0[i]) + s.opt.atol_q);
@@ -309,8 +306,7 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
       ++k;
       continue;
     }
-    // Steps end on every frame time, so that frames are solution points: an interpolated frame
-    // keeps the zone volumes only to the interpolation error (1e-7 of a zone on the rigged arm).
+    // Steps end on every frame time, so that frames are solution points on which g = 0 holds.
     check(IDASetStopTime(mem, times[k]), "IDASetStopTime", tcur);
     double tret = tcur;
     const int flag = IDASolve(mem, times[k], &tret, yy, yp, IDA_ONE_STEP);

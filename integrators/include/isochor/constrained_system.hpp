@@ -2,6 +2,14 @@
 // (diagonal) mass, forces f(q, v, t) and their Jacobians, and m scalar constraints g(q, t) = 0
 // with their gradients G, time derivatives and contracted Hessians. Nothing here knows meshes,
 // so a pendulum or a multibody test problem runs through the same integrators as a tet mesh.
+//
+// Sign convention of the multipliers, for every integrator: the equations of motion are
+//   M v' = f(q, v, t) - G^T lambda,   g(q, t) = 0,
+// so the constraint force is -G^T lambda, statics solves -f + G^T lambda = 0, and for a zone
+// volume (G = dV/dq) lambda is the zone's pressure (positive when the zone is compressed).
+//
+// Every integrator checks the system first (initial_state.hpp: check_system): n must be a
+// multiple of dofs_per_group(), the masses positive, the constraint rows within the dofs.
 #pragma once
 #include <Eigen/Core>
 #include <vector>
@@ -18,7 +26,8 @@ class ConstrainedSystem {
 
   virtual int num_dofs() const = 0;         // n
   virtual int num_constraints() const = 0;  // m
-  // Dofs that belong together (a node's x, y, z): dof i is in group i / dofs_per_group().
+  // Dofs that belong together (a node's x, y, z): dof i is in group i / dofs_per_group(); a 2-D
+  // system overrides it with 2. Orderings (METIS) work on these groups.
   virtual int dofs_per_group() const { return 3; }
   // Lumped mass of each dof (n), constant and positive.
   virtual const VectorXd& mass() const = 0;

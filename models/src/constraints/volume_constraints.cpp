@@ -9,9 +9,8 @@ namespace isochor {
 const std::vector<Vec3>& VolumeConstraints::origins(const Points& x) const {
   // The mean current position of each constraint's boundary nodes. A closed surface's enclosed
   // volume does not depend on the origin (its oriented face areas sum to zero), so neither do its
-  // gradient and Hessian, and the origin may follow the body: a fixed origin far from it (the
-  // ball 0.47 m below its rest centroid at the impact) makes the face terms cancel and cost
-  // digits that IDA at rtol 1e-8 needs (measured: Newton failed at the impact).
+  // gradient and Hessian, and the origin may follow the body, which keeps the face terms small
+  // (a fixed origin cost digits: docs/decisions.md).
   // Kept in a member, so that the callbacks that call this allocate nothing after the first call.
   std::vector<Vec3>& o = origins_;
   o.assign(boundary_nodes_.size(), Vec3::Zero());
