@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "study.hpp"
@@ -110,7 +111,21 @@ TEST(Study, EveryStudyFileLoads) {
   for (const auto& e : std::filesystem::directory_iterator(std::string(ISOCHOR_SOURCE_DIR) + "/studies")) {
     if (e.path().extension() != ".toml") continue;
     const Study s = load_study(e.path().string());
-    EXPECT_GE(s.cases.size(), 3u) << e.path();
+    ASSERT_GE(s.cases.size(), 3u) << e.path();
+    // The reference first; labels unique (they are file names); every case carries its sweep's
+    // values as overrides, after the base's and the method's.
+    EXPECT_EQ(s.cases.front().method, "reference") << e.path();
+    std::set<std::string> labels;
+    for (const StudyCase& c : s.cases) {
+      EXPECT_TRUE(labels.insert(c.label).second) << e.path() << ": label " << c.label << " twice";
+      for (const auto& [key, value] : c.sweep) {
+        bool found = false;
+        for (const std::string& o : c.overrides)
+          if (o.rfind(key + "=", 0) == 0 && std::abs(std::stod(o.substr(key.size() + 1)) - value) <= 1e-12 * std::abs(value))
+            found = true;
+        EXPECT_TRUE(found) << e.path() << ": case " << c.label << " lacks " << key;
+      }
+    }
     ++n;
   }
   EXPECT_GE(n, 4);
@@ -121,7 +136,11 @@ TEST(Render, DrawsAFrameAndNamesMissingPressure) {
   const std::string bin = ISOCHOR_BINARY, h5 = (dir / "tt.h5").string(), png = (dir / "last.png").string();
   ASSERT_EQ(std::system((bin + " run -q " + ISOCHOR_SOURCE_DIR + "/demos/two_tets.toml -o " + h5 + " > /dev/null 2>&1").c_str()), 0);
   ASSERT_EQ(std::system((bin + " render " + h5 + " --frames -1 --out " + png + " > /dev/null 2>&1").c_str()), 0);
-  EXPECT_GT(std::filesystem::file_size(png), 5000u);
+  // A picture, not a blank canvas: matplotlib reads it back, and its pixels are not all one colour.
+  const std::string check = std::string(ISOCHOR_PYTHON) +
+                            " -c \"import sys, matplotlib.image as m; a = m.imread(sys.argv[1]); "
+                            "sys.exit(0 if a.ndim == 3 and min(a.shape[:2]) >= 200 and a[..., :3].std() > 0.01 else 1)\" " + png;
+  EXPECT_EQ(std::system(check.c_str()), 0) << png;
   const std::string log = (dir / "err.txt").string();
   EXPECT_NE(std::system((bin + " render " + h5 + " --color pressure --out " + (dir / "p").string() + " > " + log + " 2>&1").c_str()), 0);
   std::ifstream in(log);
