@@ -1,6 +1,7 @@
 // Helpers shared by the tests: temporary directories and files.
 #pragma once
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -14,7 +15,8 @@ namespace isochor::test {
 
 inline std::filesystem::path temp_dir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::filesystem::path d = std::filesystem::temp_directory_path() / "isochor_tests" /
+  // Per process: two test runs on one machine (a CI clone beside a work tree) must not share files.
+  std::filesystem::path d = std::filesystem::temp_directory_path() / "isochor_tests" / std::to_string(::getpid()) /
                             (std::string(info->test_suite_name()) + "." + info->name());
   std::filesystem::remove_all(d);
   std::filesystem::create_directories(d);

@@ -142,32 +142,12 @@ Mesh::Mesh(Points positions, std::vector<Tet> tets, const std::string& what)
     total_volume_ += volume_[e];
   }
 
-  // Faces opposite each vertex of a positive tet, ordered so that their normals point outward.
-  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-  struct Face {
-    std::array<int, 3> key;
-    Tri tri;
-  };
-  std::vector<Face> faces;
-  faces.reserve(4 * T);
-  for (const Tet& t : tets_)
-    for (const auto& f : kFace) {
-      Tri tri{t[f[0]], t[f[1]], t[f[2]]};
-      std::array<int, 3> key{tri[0], tri[1], tri[2]};
-      std::sort(key.begin(), key.end());
-      faces.push_back({key, tri});
-    }
-  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
-  for (std::size_t i = 0; i < faces.size();) {
-    std::size_t j = i + 1;
-    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
-    if (j - i == 1) surface_.push_back(faces[i].tri);
-    if (j - i > 2)
-      throw Error(what + ": face (" + std::to_string(faces[i].key[0]) + ", " + std::to_string(faces[i].key[1]) +
-                  ", " + std::to_string(faces[i].key[2]) + ") is shared by " + std::to_string(j - i) +
-                  " tets, expected at most 2");
-    i = j;
-  }
+  std::array<int, 4> overshared{};
+  surface_ = boundary_faces(tets_, nullptr, &overshared);
+  if (overshared[3] > 2)
+    throw Error(what + ": face (" + std::to_string(overshared[0]) + ", " + std::to_string(overshared[1]) + ", " +
+                std::to_string(overshared[2]) + ") is shared by " + std::to_string(overshared[3]) +
+                " tets, expected at most 2");
   for (const Tri& f : surface_)
     for (int v : f) surface_nodes_.push_back(v);
   std::sort(surface_nodes_.begin(), surface_nodes_.end());
@@ -215,6 +195,39 @@ std::vector<int> Mesh::tet_ring(int node, int k) const {
   std::sort(tets.begin(), tets.end());
   tets.erase(std::unique(tets.begin(), tets.end()), tets.end());
   return tets;
+}
+
+std::vector<Tri> boundary_faces(const std::vector<Tet>& tets, const std::vector<int>* which,
+                                std::array<int, 4>* overshared) {
+  // Faces opposite each vertex of a positive tet, ordered so that their normals point outward.
+  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  struct Face {
+    std::array<int, 3> key;  // sorted nodes
+    Tri tri;                 // oriented
+  };
+  std::vector<Face> faces;
+  const std::size_t count = which ? which->size() : tets.size();
+  faces.reserve(4 * count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Tet& t = tets[which ? static_cast<std::size_t>((*which)[i]) : i];
+    for (const auto& f : kFace) {
+      Tri tri{t[f[0]], t[f[1]], t[f[2]]};
+      std::array<int, 3> key{tri[0], tri[1], tri[2]};
+      std::sort(key.begin(), key.end());
+      faces.push_back({key, tri});
+    }
+  }
+  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
+  std::vector<Tri> out;
+  for (std::size_t i = 0; i < faces.size();) {
+    std::size_t j = i + 1;
+    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+    if (j - i == 1) out.push_back(faces[i].tri);
+    if (overshared && static_cast<int>(j - i) > (*overshared)[3])
+      *overshared = {faces[i].key[0], faces[i].key[1], faces[i].key[2], static_cast<int>(j - i)};
+    i = j;
+  }
+  return out;
 }
 
 }  // namespace isochor

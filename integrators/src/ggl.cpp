@@ -27,16 +27,7 @@ GglForm::GglForm(ConstrainedSystem& sys) : sys_(sys), n_(sys.num_dofs()), m_(sys
       e.emplace_back(2 * n + m + j, d);      // G^T mu in F_q
       e.emplace_back(2 * n + j, n + d);      // G^T lambda in F_v
     }
-  std::sort(e.begin(), e.end());
-  e.erase(std::unique(e.begin(), e.end()), e.end());
-  p_.n = N;
-  p_.col_ptr.assign(N + 1, 0);
-  p_.row_ind.resize(e.size());
-  for (std::size_t k = 0; k < e.size(); ++k) {
-    p_.col_ptr[e[k].first + 1]++;
-    p_.row_ind[k] = e[k].second;
-  }
-  for (Index c = 0; c < N; ++c) p_.col_ptr[c + 1] += p_.col_ptr[c];
+  p_ = SparsePattern::from_entries(N, std::move(e));
   qq.resize(K.nnz());
   vq.resize(K.nnz());
   vv.resize(K.nnz());

@@ -26,15 +26,7 @@ KktLayout::KktLayout(const SparsePattern& K, const std::vector<std::vector<Index
       e.emplace_back(n + j, d);
       e.emplace_back(d, n + j);
     }
-  std::sort(e.begin(), e.end());
-  p.n = n + m;
-  p.col_ptr.assign(p.n + 1, 0);
-  p.row_ind.resize(e.size());
-  for (std::size_t k = 0; k < e.size(); ++k) {
-    p.col_ptr[e[k].first + 1]++;
-    p.row_ind[k] = e[k].second;
-  }
-  for (Index c = 0; c < p.n; ++c) p.col_ptr[c + 1] += p.col_ptr[c];
+  p = SparsePattern::from_entries(n + m, std::move(e));
   kk.resize(K.nnz());
   for (Index c = 0; c < n; ++c)
     for (Index k = K.col_ptr[c]; k < K.col_ptr[c + 1]; ++k) kk[k] = p.find(K.row_ind[k], c);

@@ -25,6 +25,12 @@ struct Adjacency {
 double tet_signed_volume(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                          const Eigen::Vector3d& c, const Eigen::Vector3d& d);
 
+// The outward faces (positively oriented tets) that belong to one tet only, of every tet or of
+// the tets listed in `which`: the boundary of that set. `overshared`, when given, receives the face
+// shared by the most tets and how many ((a, b, c, count); count > 2: not a manifold).
+std::vector<Tri> boundary_faces(const std::vector<Tet>& tets, const std::vector<int>* which = nullptr,
+                                std::array<int, 4>* overshared = nullptr);
+
 class Mesh {
  public:
   Mesh() = default;

@@ -2,6 +2,7 @@
 #pragma once
 #include <algorithm>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace isochor {
@@ -12,6 +13,21 @@ struct SparsePattern {
   Index n = 0;  // square n x n
   std::vector<Index> col_ptr, row_ind;
   Index nnz() const { return static_cast<Index>(row_ind.size()); }
+  // The pattern of n x n entries given as (column, row) pairs, in any order, repeats allowed.
+  static SparsePattern from_entries(Index n, std::vector<std::pair<Index, Index>> entries) {
+    std::sort(entries.begin(), entries.end());
+    entries.erase(std::unique(entries.begin(), entries.end()), entries.end());
+    SparsePattern p;
+    p.n = n;
+    p.col_ptr.assign(n + 1, 0);
+    p.row_ind.resize(entries.size());
+    for (std::size_t k = 0; k < entries.size(); ++k) {
+      p.col_ptr[entries[k].first + 1]++;
+      p.row_ind[k] = entries[k].second;
+    }
+    for (Index c = 0; c < n; ++c) p.col_ptr[c + 1] += p.col_ptr[c];
+    return p;
+  }
   // Position of (row, col) in the value array, or -1 when outside the pattern.
   Index find(Index row, Index col) const {
     auto b = row_ind.begin() + col_ptr[col], e = row_ind.begin() + col_ptr[col + 1];

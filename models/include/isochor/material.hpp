@@ -14,6 +14,12 @@
 namespace isochor {
 
 using Mat3 = Eigen::Matrix3d;
+// The cross-product matrix: skew(a) b = a x b.
+inline Mat3 skew(const Eigen::Vector3d& a) {
+  Mat3 s;
+  s << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+  return s;
+}
 using Mat9 = Eigen::Matrix<double, 9, 9>;
 using Vec9 = Eigen::Matrix<double, 9, 1>;
 

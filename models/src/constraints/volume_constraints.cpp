@@ -37,29 +37,10 @@ VolumeConstraints VolumeConstraints::zones(const Mesh& mesh, const std::vector<s
   // zone of the fine ball. The origin follows the zone (origins()): small terms, little cancellation.
   VolumeConstraints c;
   c.zone_tets_ = zone_tets;
-  // Outward faces of a positively oriented tet (0, 1, 2, 3), opposite each of its nodes.
-  static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   for (int j = 0; j < static_cast<int>(zone_tets.size()); ++j) {
     double v0 = 0;
-    std::vector<std::pair<std::array<int, 3>, std::array<int, 3>>> faces;  // sorted nodes, oriented face
-    faces.reserve(4 * zone_tets[j].size());
-    for (int e : zone_tets[j]) {
-      const Tet& t = mesh.tets()[e];
-      v0 += mesh.rest_volumes()[e];
-      for (const auto& f : kFaces) {
-        const std::array<int, 3> o{t[f[0]], t[f[1]], t[f[2]]};
-        std::array<int, 3> key = o;
-        std::sort(key.begin(), key.end());
-        faces.emplace_back(key, o);
-      }
-    }
-    std::sort(faces.begin(), faces.end());
-    for (std::size_t a = 0; a < faces.size();) {
-      std::size_t b = a + 1;
-      while (b < faces.size() && faces[b].first == faces[a].first) ++b;
-      if (b - a == 1) c.elements_.push_back({{-1, faces[a].second[0], faces[a].second[1], faces[a].second[2]}, j});
-      a = b;
-    }
+    for (int e : zone_tets[j]) v0 += mesh.rest_volumes()[e];
+    for (const Tri& f : boundary_faces(mesh.tets(), &zone_tets[j])) c.elements_.push_back({{-1, f[0], f[1], f[2]}, j});
     c.rest_.push_back(v0);
   }
   c.finish(mesh.num_nodes(), dofs, pattern);

@@ -3,16 +3,10 @@
 #include <cmath>
 
 #include "isochor/elements.hpp"
+#include "isochor/material.hpp"
 
 namespace isochor {
 
-namespace {
-Mat3 skew(const Vec3& a) {
-  Mat3 s;
-  s << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
-  return s;
-}
-}  // namespace
 
 double triangle_area(const Vec9n& x, Vec9n* grad, Mat9n* hess) {
   // n = (x1 - x0) x (x2 - x0), A = |n| / 2. dn = -[e2]x de1 + [e1]x de2 with e1 = x1 - x0, e2 = x2 - x0.

@@ -91,11 +91,6 @@ double tet_volume(const Vec12& x, Vec12* grad, Mat12* hess) {
   if (hess) {
     // V = v1 . (v2 x v3) / 6 is trilinear in (v1, v2, v3): d2V/dv_a dv_b = skew matrices; then
     // the chain rule through v_k = x_k - x_0.
-    auto skew = [](const Vec3& a) {
-      Mat3 s;
-      s << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
-      return s;
-    };
     Eigen::Matrix<double, 9, 9> Hv = Eigen::Matrix<double, 9, 9>::Zero();
     // d/dv2 of (v2 x v3) . w  etc.: d2V/dv1 dv2 = -[v3]x / 6 ... from V = v1^T [v2]x v3 / 6.
     Hv.block<3, 3>(0, 3) = -skew(v3) / 6.0;  // d2V / dv1 dv2

@@ -6,11 +6,6 @@
 namespace isochor {
 
 namespace {
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
 Vec9 vec(const Mat3& A) { return Eigen::Map<const Vec9>(A.data()); }
 }  // namespace
 
