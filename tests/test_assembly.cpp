@@ -296,6 +296,6 @@ TEST(VolumeConstraints, MultiplierPressureOnOverlappingZones) {
   const std::vector<std::vector<int>> zones{{0, 1}, {1}};
   VolumeConstraints c = VolumeConstraints::zones(m, zones, dofs, a.pattern());
   std::vector<double> p(2, 0.0);
-  c.add_multiplier_pressure(Eigen::Vector2d(2.0, 5.0), p);
+  c.add_pressure(Eigen::Vector2d(2.0, 5.0).data(), p);
   EXPECT_EQ(p, (std::vector<double>{-2.0, -7.0}));
 }

@@ -14,10 +14,8 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <functional>
 
 namespace isochor {
 

@@ -11,13 +11,4 @@ const char* to_string(LinearSolverKind k) {
   return "?";
 }
 
-const char* to_string(KluOrdering k) {
-  switch (k) {
-    case KluOrdering::metis: return "metis";
-    case KluOrdering::colamd: return "colamd";
-    case KluOrdering::amd: return "amd";
-  }
-  return "?";
-}
-
 }  // namespace isochor

@@ -187,11 +187,10 @@ std::vector<double> MeshSystem::volumes() const {
   return v;
 }
 
-bool MeshSystem::pressures(const VectorXd& lambda, std::vector<double>& p) const {
+void MeshSystem::pressures(const VectorXd& lambda, std::vector<double>& p) const {
   elastic_->pressures(x_, p);
   if (lambda.size())
     for (std::size_t s = 0; s < sets_.size(); ++s) sets_[s]->add_pressure(lambda.data() + offset_[s], p);
-  return true;
 }
 
 }  // namespace isochor

@@ -20,7 +20,6 @@ enum class LinearSolverKind { klu, reduced, krylov };
 enum class KluOrdering { metis, colamd, amd };
 
 const char* to_string(LinearSolverKind k);
-const char* to_string(KluOrdering k);
 
 class Integrator {
  public:

@@ -30,6 +30,8 @@ class VolumeConstraints : public ConstraintSet {
   void time_derivative(const Points& x, const Eigen::VectorXd& xdot, double* gt) const override;
   void hessian_times(const Points& x, const Eigen::VectorXd& xdot, std::vector<double>* rows) const override;
   void add_hessian(const Points& x, const double* w, double scale, double* values) const override;
+  // p_e -= lambda_j for every zone j holding tet e (the constraint force -lambda_j dV/dx is that
+  // of a hydrostatic stress lambda_j I). Zone constraints only.
   void add_pressure(const double* lambda, std::vector<double>& p) const override;
   const std::vector<double>& rest_volumes() const { return rest_; }
   // Current volume of each constraint.
@@ -60,9 +62,6 @@ class VolumeConstraints : public ConstraintSet {
   void add_hessian(const Points& x, const Eigen::VectorXd& lambda, double scale, double* values) const {
     add_hessian(x, lambda.data(), scale, values);
   }
-  // Per-tet pressure from the multipliers: p_e -= lambda_j for every zone j holding tet e (the
-  // constraint force -lambda_j dV/dx is that of a hydrostatic stress lambda_j I). Zone constraints only.
-  void add_multiplier_pressure(const Eigen::VectorXd& lambda, std::vector<double>& p) const { add_pressure(lambda.data(), p); }
   // Full gradient of g_j with respect to every node (3 N), for tests and diagnostics.
   Eigen::VectorXd full_gradient(const Points& x, int j) const;
 

@@ -43,7 +43,7 @@ class MassSpringSystem : public SceneSystem {
   std::array<double, 3> energies() const override;  // kinetic, springs, external
   std::vector<double> volumes() const override;      // the enclosed volume (no zones)
   const DofMap& dofs() const override { return dofs_; }
-  bool has_zones() const override { return false; }
+  bool has_tets() const override { return false; }
   // Hong's weight vector (their eq. 15) per free surface node, summing to their number.
   Eigen::VectorXd weights(const Eigen::Vector3d& center, double radius) const;
 

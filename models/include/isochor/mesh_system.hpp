@@ -57,7 +57,8 @@ class MeshSystem : public SceneSystem {
   // Total volume, then each zone's volume, at the current state.
   std::vector<double> volumes() const override;
   // Per-tet pressure at the current state for multipliers lambda.
-  bool pressures(const VectorXd& lambda, std::vector<double>& p) const override;
+  void pressures(const VectorXd& lambda, std::vector<double>& p) const override;
+  bool has_tets() const override { return true; }
   int inverted_tets() const override { return elastic_->inverted_tets(x_); }
   const DofMap& dofs() const override { return dofs_; }
 

@@ -21,14 +21,14 @@ class SceneSystem : public ConstrainedSystem {
   virtual std::array<double, 3> energies() const = 0;
   // Total volume, then each zone's volume, at the current state.
   virtual std::vector<double> volumes() const = 0;
-  // Per-tet pressure for multipliers lambda; false if the model has none (no tets).
-  virtual bool pressures(const VectorXd& /*lambda*/, std::vector<double>& /*p*/) const { return false; }
-  // Inverted tets at the current state; -1 if the model has no tets.
-  virtual int inverted_tets() const { return -1; }
   // The free (unknown) and driven nodes.
   virtual const DofMap& dofs() const = 0;
-  // The zones whose volumes volumes() reports (none for the mass-spring model).
-  virtual bool has_zones() const { return true; }
+  // Whether the model simulates tets (not the mass-spring surface): then it has the two below.
+  virtual bool has_tets() const = 0;
+  // Per-tet pressure at the current state for multipliers lambda.
+  virtual void pressures(const VectorXd& /*lambda*/, std::vector<double>& /*p*/) const {}
+  // Inverted tets at the current state.
+  virtual int inverted_tets() const { return 0; }
 };
 
 // The scene's system: MassSpringSystem for material.model = "mass_spring", else MeshSystem.
