@@ -43,6 +43,9 @@ TEST(Forces, GravityAndGroundDerivatives) {
   EXPECT_GT(touching, 0);
 }
 
+// The damping force alpha M v + beta K v is computed inside the element pass (MeshSystem; its
+// linearity in v is tested in test_ggl.cpp); here its matrix, filled into the pattern, against
+// the matrix-free product K v of the element Hessians, and its dissipation.
 TEST(Forces, RayleighDampingIsLinearInVelocityAndDissipative) {
   Mesh m = make_box(Eigen::Vector3d::Ones(), {2, 2, 2}, Eigen::Vector3d::Zero(), 6);
   DofMap dofs = DofMap::make(m.num_nodes(), m.node_sets.at("zmin"));
@@ -52,8 +55,10 @@ TEST(Forces, RayleighDampingIsLinearInVelocityAndDissipative) {
   Points x = m.rest_positions();
   Eigen::VectorXd v = Eigen::VectorXd::Random(x.size());
   for (int n : m.node_sets.at("zmin")) v.segment<3>(3 * n).setZero();
+  // -(alpha M v + beta K v), with K v the matrix-free product of the element Hessians.
   Eigen::VectorXd f = Eigen::VectorXd::Zero(x.size());
-  r.add_force(a, mass, x, v, f);
+  for (int i = 0; i < mass.size(); ++i) f.segment<3>(3 * i) -= r.alpha * mass[i] * v.segment<3>(3 * i);
+  a.add_hessian_times(x, v, -r.beta, f);
   EXPECT_LT(f.dot(v), 0.0);  // at rest K is positive semi-definite and M positive
   std::vector<double> values(a.pattern().nnz(), 0.0);
   r.add_matrix(a, mass, x, 1.0, values.data());

@@ -227,6 +227,7 @@ TEST(MeshSystem, OnePassForceAndJacobiansEqualTheSeparateCalls) {
     for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k) Dv[p.row_ind[k]] += D3[k] * v[c];
   ASSERT_GT(Dv.norm(), 0.0);
   EXPECT_LT(((fv - f0) + Dv).norm(), 1e-10 * Dv.norm());
+  EXPECT_LT((fv - f0).dot(v), 0.0);  // the damping dissipates
   f1 = f2;
   double dk = 0, dd = 0, sk = 0;
   for (std::size_t k = 0; k < nnz; ++k) {

@@ -28,7 +28,7 @@ struct ReducedSolver::Impl {
   Eigen::PartialPivLU<Eigen::MatrixXd> small;
   const double* vals = nullptr;
   double cj = 0;
-  VectorXd b1, y, dq, tmp;
+  VectorXd b1, y, dq, tmp, rhs, z;  // work vectors, sized once (no allocation in a solve)
 
   bool ok = true;  // every solve of S in the current setup/solve succeeded
   // PCG (krylov) falls back to CHOLMOD for the rest of a setup where it fails (S indefinite, e.g.
@@ -49,7 +49,7 @@ struct ReducedSolver::Impl {
     Sx.resize(f.system().pattern().nnz());
     Vx.resize(Sx.size()), Qx.resize(Sx.size()), Ax.resize(Sx.size());
     Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);
-    b1.resize(n), y.resize(n), dq.resize(n), tmp.resize(n);
+    b1.resize(n), y.resize(n), dq.resize(n), tmp.resize(n), rhs.resize(2 * m), z.resize(2 * m);
   }
 
   // out = X x over the K pattern, X a symmetric block of the Jacobian copied contiguously (v-v: V, v-q: A,
@@ -149,22 +149,26 @@ void ReducedSolver::solve_once(const double* b, double* x) {
   s.times(s.Vx, r1.data(), s.tmp.data());
   s.b1 = r2 + s.tmp;
   s.solve_S(s.b1.data(), s.y.data());
-  VectorXd dl = VectorXd::Zero(m), dm = VectorXd::Zero(m);
+  // z = (dl, dm).
+  const auto dl = s.z.head(m), dm = s.z.tail(m);
   if (m) {
-    VectorXd rhs(2 * m);
-    rhs.head(m) = s.Gt.transpose() * s.y - r3;
-    rhs.tail(m) = (s.Bt + s.cj * s.Gt).transpose() * s.y - r4 - s.Gt.transpose() * r1;
-    const VectorXd z = s.small.solve(rhs);
-    dl = z.head(m);
-    dm = z.tail(m);
-    s.dq = s.y - s.Z1 * dl - s.Z2 * dm;
+    s.rhs.head(m).noalias() = s.Gt.transpose() * s.y;
+    s.rhs.head(m) -= r3;
+    s.rhs.tail(m).noalias() = s.Bt.transpose() * s.y;
+    s.rhs.tail(m).noalias() += s.cj * (s.Gt.transpose() * s.y);
+    s.rhs.tail(m).noalias() -= s.Gt.transpose() * r1;
+    s.rhs.tail(m) -= r4;
+    s.z = s.small.solve(s.rhs);
+    s.dq = s.y;
+    s.dq.noalias() -= s.Z1 * dl;
+    s.dq.noalias() -= s.Z2 * dm;
   } else {
     s.dq = s.y;
   }
   // Row 1 exactly: dv = (c I + H_mu) dq + G^T dm - r1, with (c I + H_mu) from the q-q block.
   Eigen::Map<VectorXd> dv(x + n, n);
   dv = -r1;
-  if (m) dv += s.Gt * dm;
+  if (m) dv.noalias() += s.Gt * dm;
   s.times(s.Qx, s.dq.data(), dv.data(), true);
   Eigen::Map<VectorXd>(x, n) = s.dq;
   if (m) {

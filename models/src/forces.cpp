@@ -63,12 +63,6 @@ void ExternalPotential::add_hessian(const Points& x, double scale, double* value
     }
 }
 
-void RayleighDamping::add_force(const ElasticAssembly& a, const Eigen::VectorXd& mass, const Points& x,
-                                const Eigen::VectorXd& v, Eigen::VectorXd& f) const {
-  for (int i = 0; i < mass.size(); ++i) f.segment<3>(3 * i) -= alpha * mass[i] * v.segment<3>(3 * i);
-  if (beta != 0.0) a.add_hessian_times(x, v, -beta, f);
-}
-
 void RayleighDamping::add_matrix(const ElasticAssembly& a, const Eigen::VectorXd& mass, const Points& x, double scale,
                                  double* values) const {
   const Pattern& p = a.pattern();

@@ -125,7 +125,8 @@ void MassSpringSystem::set_state(double t, const VectorXd& q, const VectorXd& v)
 
 void MassSpringSystem::force(double t, const VectorXd& q, const VectorXd& v, VectorXd& f) {
   place(t, q, v);
-  Eigen::VectorXd grad = Eigen::VectorXd::Zero(3 * x_.cols());
+  Eigen::VectorXd& grad = grad_;  // a member: no allocation in a residual after the first
+  grad.setZero(3 * x_.cols());
   external_->add_gradient(x_, grad);
   for (const Spring& s : springs_) {
     Vec6 g;

@@ -59,9 +59,8 @@ class ExternalPotential {
 // derivative through K(x) (a third derivative of the energy) is left out of Jacobians.
 struct RayleighDamping {
   double alpha = 0.0, beta = 0.0;
-  // f += damping force (all nodes).
-  void add_force(const ElasticAssembly& a, const Eigen::VectorXd& mass, const Points& x, const Eigen::VectorXd& v,
-                 Eigen::VectorXd& f) const;
+  // The force -(alpha M + beta K) v is computed in MeshSystem's element pass (beta K v beside the
+  // elastic gradient), not here.
   // values += scale * (alpha M + beta K) over the free dofs.
   void add_matrix(const ElasticAssembly& a, const Eigen::VectorXd& mass, const Points& x, double scale,
                   double* values) const;

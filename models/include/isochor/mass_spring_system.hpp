@@ -63,7 +63,7 @@ class MassSpringSystem : public SceneSystem {
   Eigen::VectorXd node_mass_, dof_mass_;
   std::vector<std::vector<std::pair<int, double>>> carry_;  // interior node -> (surface node, weight)
   Points x_;
-  Eigen::VectorXd xdot_;
+  Eigen::VectorXd xdot_, grad_;
   double state_t_ = std::numeric_limits<double>::quiet_NaN();
 };
 
