@@ -4,7 +4,7 @@
 
 #include <chrono>
 
-#include "integrators/registry.hpp"
+#include "isochor/integrator_registry.hpp"
 #include "isochor/error.hpp"
 #include "isochor/output.hpp"
 #include "isochor/progress.hpp"

@@ -1,4 +1,5 @@
 #include "isochor/scene.hpp"
+#include "isochor/integrator_registry.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -94,10 +95,6 @@ E parse_choice(const Section& s, std::string_view key, E fallback, const std::ve
 const std::vector<std::pair<std::string, MaterialModel>> kModels = {
     {"cnh", MaterialModel::cnh}, {"unh", MaterialModel::unh}, {"snh", MaterialModel::snh},
     {"snh_simple", MaterialModel::snh_simple}, {"mass_spring", MaterialModel::mass_spring}};
-const std::vector<std::pair<std::string, IntegratorKind>> kKinds = {
-    {"ida", IntegratorKind::ida}, {"static", IntegratorKind::statics},
-    {"backward_euler", IntegratorKind::backward_euler}, {"semi_implicit", IntegratorKind::semi_implicit},
-    {"xpbd", IntegratorKind::xpbd}, {"mass_spring", IntegratorKind::mass_spring}};
 
 template <class E>
 const char* name_of(const std::vector<std::pair<std::string, E>>& table, E e) {
@@ -264,39 +261,12 @@ Scene parse_scene(SceneFile file) {
 
   const Section in = root.table("integrator");
   IntegratorSpec& ig = sc.integrator;
-  ig.kind = parse_choice(in, "kind", ig.kind, kKinds);
-  ig.rtol = in.number("rtol", ig.rtol, Range::positive());
-  ig.atol = in.number("atol", ig.atol, Range::positive());
-  ig.atol_v = in.number("atol_v", ig.atol_v, Range::non_negative());
-  ig.atol_lambda = in.number("atol_lambda", ig.atol_lambda, Range::non_negative());
-  ig.dt = in.number("dt", ig.dt, Range::positive());
-  ig.newton_tol = in.number("newton_tol", ig.newton_tol, Range::positive());
-  ig.newton_atol = in.number("newton_atol", ig.newton_atol, Range::positive());
-  ig.max_order = static_cast<int>(in.integer("max_order", ig.max_order, 1, 5));
-  ig.max_step = in.number("max_step", 0.0, Range::non_negative());
-  ig.newton_coef = in.number("newton_coef", ig.newton_coef, {0.0, 1.0, true, true});
-  ig.max_steps = in.integer("max_steps", ig.max_steps, 1, 1000000000000L);
-  ig.jacobian_age = in.integer("jacobian_age", ig.jacobian_age, 0, 1000000000L);
-  ig.ordering = parse_choice(in, "ordering", ig.ordering,
-                             {{"metis", KluOrdering::metis}, {"colamd", KluOrdering::colamd}, {"amd", KluOrdering::amd}});
   {
-    // "auto" resolved here, once: KLU for IDA and statics, CHOLMOD on the step matrix for the
-    // fixed-step methods (XPBD and Hong's step solve no linear system).
-    const bool fixed_step = ig.kind == IntegratorKind::backward_euler || ig.kind == IntegratorKind::semi_implicit;
-    const std::string ls = in.string("linear_solver", "auto", {"auto", "klu", "reduced", "krylov"});
-    ig.linear_solver = ls == "klu"       ? LinearSolverKind::klu
-                       : ls == "reduced" ? LinearSolverKind::reduced
-                       : ls == "krylov"  ? LinearSolverKind::krylov
-                       : fixed_step      ? LinearSolverKind::reduced
-                                         : LinearSolverKind::klu;
+    std::vector<std::pair<std::string, IntegratorKind>> kinds;
+    for (const IntegratorEntry& e : integrator_registry()) kinds.emplace_back(e.name, e.kind);
+    ig.kind = parse_choice(in, "kind", ig.kind, kinds);
+    for (const IntegratorEntry& e : integrator_registry()) e.parse(in, ig.kind, ig);
   }
-  ig.substeps = static_cast<int>(in.integer("substeps", ig.substeps, 1, 100000));
-  ig.iterations = static_cast<int>(in.integer("iterations", ig.iterations, 1, 100000));
-  ig.rescale_volume = in.boolean("rescale_volume", false);
-  ig.weights_center = in.vec3("weights_center", Eigen::Vector3d::Zero());
-  ig.weights_radius = in.number("weights_radius", 0.0, Range::non_negative());
-  if (ig.rescale_volume && ig.kind != IntegratorKind::backward_euler && ig.kind != IntegratorKind::semi_implicit)
-    in.fail("rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
   const bool mass_spring = sc.material.model == MaterialModel::mass_spring;
   if (ig.kind == IntegratorKind::xpbd && mass_spring)
     in.fail("kind", "\"xpbd\" needs a tet material (expected material.model other than \"mass_spring\")");
@@ -326,7 +296,6 @@ Scene parse_scene(SceneFile file) {
 }
 
 const char* to_string(MaterialModel m) { return name_of(kModels, m); }
-const char* to_string(IntegratorKind k) { return name_of(kKinds, k); }
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
   return parse_scene(SceneFile::load(path, overrides));

@@ -8,7 +8,12 @@
 
 #include "isochor/drivers.hpp"
 #include "isochor/forces.hpp"
+#include "isochor/backward_euler.hpp"
+#include "isochor/hong_step.hpp"
+#include "isochor/ida_integrator.hpp"
 #include "isochor/integrator.hpp"
+#include "isochor/statics.hpp"
+#include "isochor/xpbd.hpp"
 #include "isochor/mesh.hpp"
 #include "isochor/scene_file.hpp"
 #include "isochor/skeleton.hpp"
@@ -34,25 +39,16 @@ struct MaterialSpec {
 enum class IntegratorKind { ida, statics, backward_euler, semi_implicit, xpbd, mass_spring };
 const char* to_string(IntegratorKind k);
 
-// The [integrator] table; every key in docs/scenes.md. Choices are parsed into enums here, and
-// linear_solver's "auto" is resolved here, once, for the chosen kind.
+// The [integrator] table (every key in docs/scenes.md): the kind, and each integrator's options
+// as its own parser read them (models/src/integrators/, integrator_registry.hpp); the chosen
+// kind's are used.
 struct IntegratorSpec {
   IntegratorKind kind = IntegratorKind::ida;
-  double rtol = 1e-6, atol = 1e-8, dt = 1e-3;
-  double atol_v = 0.0;       // IDA: velocity tolerance (m/s); 0: 100 atol per second
-  double atol_lambda = 0.0;  // IDA: multiplier tolerance (N/m^2 for a volume); 0: 1e-6 of the force scale
-  double newton_tol = 1e-6;  // backward Euler: Newton's error relative to the step's displacement
-  double newton_atol = 1e-12;  // backward Euler: and its floor (m)
-  int max_order = 5;
-  double max_step = 0.0;      // s, 0: none
-  long jacobian_age = 0;       // IDA: reuse the last Jacobian (new c_j) within this many steps; 0: never
-  double newton_coef = 0.33;  // IDA: Newton stops when its estimated error is below this fraction of the tolerance
-  long max_steps = 10000000;
-  KluOrdering ordering = KluOrdering::metis;
-  // auto: klu for IDA and statics, reduced for backward Euler.
-  LinearSolverKind linear_solver = LinearSolverKind::klu;
-  int substeps = 10, iterations = 1;  // XPBD: substeps per step, Gauss-Seidel sweeps per substep
-  bool rescale_volume = false;        // backward Euler: naive global volume rescaling after each step
+  IdaOptions ida;
+  StaticOptions statics;
+  BackwardEulerOptions backward_euler;  // also the semi-implicit step
+  XpbdOptions xpbd;
+  HongOptions hong;
   Eigen::Vector3d weights_center = Eigen::Vector3d::Zero();  // mass_spring: Hong's weight zone
   double weights_radius = 0.0;                               // 0: uniform weights
 };

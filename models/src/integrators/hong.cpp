@@ -1,21 +1,22 @@
 // integrator.kind = "mass_spring": Hong et al.'s step for material.model = "mass_spring".
-#include "registry.hpp"
+#include "entries.hpp"
 
+#include "isochor/hong_step.hpp"
 #include "isochor/mass_spring_system.hpp"
 
 namespace isochor {
 
-HongOptions hong_options(const IntegratorSpec& s) {
-  HongOptions o;
-  o.dt = s.dt;
-  o.max_steps = s.max_steps;
-  return o;
+void parse_hong(const Section& in, IntegratorKind, IntegratorSpec& spec) {
+  spec.hong.dt = parse_dt(in);
+  spec.hong.max_steps = parse_max_steps(in);
+  spec.weights_center = in.vec3("weights_center", Eigen::Vector3d::Zero());
+  spec.weights_radius = in.number("weights_radius", 0.0, Range::non_negative());
 }
 
 std::unique_ptr<Integrator> make_hong(const Scene& scene, SceneSystem& system) {
   // The scene parser allows this kind only with material.model = "mass_spring".
   auto& springs = dynamic_cast<MassSpringSystem&>(system);
-  HongOptions o = hong_options(scene.integrator);
+  HongOptions o = scene.integrator.hong;
   if (scene.integrator.weights_radius > 0) {
     VectorXd q, v;
     springs.initial_state(scene.frames.times().front(), q, v);

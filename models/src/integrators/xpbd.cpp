@@ -2,19 +2,19 @@
 // moves points, not the scene system's unknowns: each frame is handed on as the free nodes'
 // positions and velocities, so that the scene system measures it (energies of the scene's
 // material, volumes, pressures) exactly as it measures every other method's frames.
-#include "registry.hpp"
+#include "entries.hpp"
 
+#include "isochor/xpbd.hpp"
 #include "isochor/xpbd_system.hpp"
 
 namespace isochor {
 
-XpbdOptions xpbd_options(const IntegratorSpec& s) {
-  XpbdOptions o;
-  o.dt = s.dt;
-  o.substeps = s.substeps;
-  o.iterations = s.iterations;
-  o.max_steps = s.max_steps;
-  return o;
+void parse_xpbd(const Section& in, IntegratorKind, IntegratorSpec& spec) {
+  XpbdOptions& o = spec.xpbd;
+  o.dt = parse_dt(in);
+  o.substeps = static_cast<int>(in.integer("substeps", 10, 1, 100000));
+  o.iterations = static_cast<int>(in.integer("iterations", 1, 1, 100000));
+  o.max_steps = parse_max_steps(in);
 }
 
 namespace {
@@ -42,7 +42,7 @@ class XpbdOnScene : public Integrator {
 }  // namespace
 
 std::unique_ptr<Integrator> make_xpbd(const Scene& scene, SceneSystem& system) {
-  return std::make_unique<XpbdOnScene>(scene, system, xpbd_options(scene.integrator));
+  return std::make_unique<XpbdOnScene>(scene, system, scene.integrator.xpbd);
 }
 
 }  // namespace isochor

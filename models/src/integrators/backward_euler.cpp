@@ -1,0 +1,25 @@
+// integrator.kind = "backward_euler" or "semi_implicit": fixed steps, Newton on the KKT system.
+#include "entries.hpp"
+
+#include "isochor/backward_euler.hpp"
+
+namespace isochor {
+
+void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
+  BackwardEulerOptions& o = spec.backward_euler;
+  o.dt = parse_dt(in);
+  o.newton_tol = in.number("newton_tol", 1e-6, Range::positive());
+  o.newton_atol = in.number("newton_atol", 1e-12, Range::positive());
+  o.semi_implicit = kind == IntegratorKind::semi_implicit;
+  o.max_steps = parse_max_steps(in);
+  o.rescale_volume = in.boolean("rescale_volume", false);
+  if (o.rescale_volume && kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
+    in.fail("rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
+  o.linear_solver = parse_linear_solver(in, LinearSolverKind::reduced);
+}
+
+std::unique_ptr<Integrator> make_backward_euler(const Scene& scene, SceneSystem& system) {
+  return std::make_unique<BackwardEuler>(system, scene.integrator.backward_euler);
+}
+
+}  // namespace isochor
