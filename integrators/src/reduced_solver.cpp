@@ -24,11 +24,13 @@ struct ReducedSolver::Impl {
   std::unique_ptr<SymmetricSolver> S;
   std::vector<double> Sx;  // values of S in the system's pattern
   std::vector<double> Vx, Qx, Ax;  // the v-v (V), q-q (c I + H_mu) and v-q (A) blocks, contiguous in that pattern
-  Eigen::MatrixXd Gt, W, Z1, Z2, Z3, Bt;  // n x m: G^T, A G^T, S^-1 G^T, S^-1 V G^T, S^-1 A G^T, B^T
+  Eigen::MatrixXd Gt, W, Z1, Z2, Z3, Bt, BcG;  // n x m: G^T, A G^T, S^-1 G^T, S^-1 V G^T, S^-1 A G^T, B^T, B^T + c G^T
   Eigen::PartialPivLU<Eigen::MatrixXd> small;
   const double* vals = nullptr;
   double cj = 0;
-  VectorXd b1, y, dq, tmp, rhs, z;  // work vectors, sized once (no allocation in a solve)
+  // Work vectors, sized once: a solve allocates nothing. tn1, tn2, tm1, tm2 hold products, each
+  // evaluated on its own and then combined (the order of the arithmetic of the expressions they replace).
+  VectorXd b1, y, dq, tmp, rhs, z, tn1, tn2, tm1, tm2;
 
   bool ok = true;  // every solve of S in the current setup/solve succeeded
   // PCG (krylov) falls back to CHOLMOD for the rest of a setup where it fails (S indefinite, e.g.
@@ -50,6 +52,8 @@ struct ReducedSolver::Impl {
     Vx.resize(Sx.size()), Qx.resize(Sx.size()), Ax.resize(Sx.size());
     Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);
     b1.resize(n), y.resize(n), dq.resize(n), tmp.resize(n), rhs.resize(2 * m), z.resize(2 * m);
+    tn1.resize(n), tn2.resize(n), tm1.resize(m), tm2.resize(m);
+    BcG.setZero(n, m);
   }
 
   // out = X x over the K pattern, X a symmetric block of the Jacobian copied contiguously (v-v: V, v-q: A,
@@ -120,7 +124,8 @@ bool ReducedSolver::setup(double cj, const double* vals) {
   Eigen::MatrixXd C(2 * m, 2 * m);
   C.topLeftCorner(m, m) = s.Gt.transpose() * s.Z1;
   C.topRightCorner(m, m) = (GtG - s.Gt.transpose() * s.Z3) / cj;
-  C.bottomLeftCorner(m, m) = (s.Bt + cj * s.Gt).transpose() * s.Z1;
+  s.BcG = s.Bt + cj * s.Gt;
+  C.bottomLeftCorner(m, m) = s.BcG.transpose() * s.Z1;
   C.bottomRightCorner(m, m) = (s.Bt.transpose() * s.Gt - s.Bt.transpose() * s.Z3) / cj - s.Gt.transpose() * s.Z3;
   s.small.compute(C);
   return s.ok;
@@ -152,23 +157,25 @@ void ReducedSolver::solve_once(const double* b, double* x) {
   // z = (dl, dm).
   const auto dl = s.z.head(m), dm = s.z.tail(m);
   if (m) {
-    s.rhs.head(m).noalias() = s.Gt.transpose() * s.y;
-    s.rhs.head(m) -= r3;
-    s.rhs.tail(m).noalias() = s.Bt.transpose() * s.y;
-    s.rhs.tail(m).noalias() += s.cj * (s.Gt.transpose() * s.y);
-    s.rhs.tail(m).noalias() -= s.Gt.transpose() * r1;
-    s.rhs.tail(m) -= r4;
+    s.tm1.noalias() = s.Gt.transpose() * s.y;
+    s.rhs.head(m) = s.tm1 - r3;
+    s.tm1.noalias() = s.BcG.transpose() * s.y;
+    s.tm2.noalias() = s.Gt.transpose() * r1;
+    s.rhs.tail(m) = s.tm1 - r4 - s.tm2;
     s.z = s.small.solve(s.rhs);
-    s.dq = s.y;
-    s.dq.noalias() -= s.Z1 * dl;
-    s.dq.noalias() -= s.Z2 * dm;
+    s.tn1.noalias() = s.Z1 * dl;
+    s.tn2.noalias() = s.Z2 * dm;
+    s.dq = s.y - s.tn1 - s.tn2;
   } else {
     s.dq = s.y;
   }
   // Row 1 exactly: dv = (c I + H_mu) dq + G^T dm - r1, with (c I + H_mu) from the q-q block.
   Eigen::Map<VectorXd> dv(x + n, n);
   dv = -r1;
-  if (m) dv.noalias() += s.Gt * dm;
+  if (m) {
+    s.tn1.noalias() = s.Gt * dm;
+    dv += s.tn1;
+  }
   s.times(s.Qx, s.dq.data(), dv.data(), true);
   Eigen::Map<VectorXd>(x, n) = s.dq;
   if (m) {

@@ -81,6 +81,7 @@ class VolumeConstraints : public ConstraintSet {
   DofMap dofs_;
   const std::vector<Vec3>& origins(const Points& x) const;  // per constraint, where the origin is now
   mutable std::vector<Vec3> origins_;
+  void sum_volumes(const Points& x, double* vol) const;  // each constraint's volume
   Vec12 element_x(const Points& x, const Element& e, const std::vector<Vec3>& origins) const;
   void finish(int num_nodes, const DofMap& dofs, const Pattern& pattern);
 };

@@ -108,14 +108,17 @@ void VolumeConstraints::finish(int num_nodes, const DofMap& dofs, const Pattern&
 
 void VolumeConstraints::volumes(const Points& x, Eigen::VectorXd& vol) const {
   vol.resize(size());
-  value(x, vol.data());
-  for (int j = 0; j < size(); ++j) vol[j] += rest_[j];
+  sum_volumes(x, vol.data());
+}
+
+void VolumeConstraints::sum_volumes(const Points& x, double* vol) const {
+  const std::vector<Vec3>& o = origins(x);
+  for (int j = 0; j < size(); ++j) vol[j] = 0.0;
+  for (const Element& e : elements_) vol[e.constraint] += tet_volume(element_x(x, e, o), nullptr, nullptr);
 }
 
 void VolumeConstraints::value(const Points& x, double* g) const {
-  const std::vector<Vec3>& o = origins(x);
-  for (int j = 0; j < size(); ++j) g[j] = 0.0;
-  for (const Element& e : elements_) g[e.constraint] += tet_volume(element_x(x, e, o), nullptr, nullptr);
+  sum_volumes(x, g);
   for (int j = 0; j < size(); ++j) g[j] -= rest_[j];
 }
 
