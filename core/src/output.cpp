@@ -2,6 +2,9 @@
 
 #include <hdf5.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -165,40 +168,68 @@ struct OutputWriter::Impl {
          H5Dclose);
   }
 
-  void write_xdmf() {
+  // The XDMF sidecar: a header, one <Grid> per frame, a fixed tail. The first write replaces the
+  // file atomically (header and tail); each frame then overwrites the tail with its own <Grid>
+  // followed by the tail again, in one pwrite at `xdmf_tail`: the cost of a frame does not grow
+  // with the frames before it, and the file is complete after every frame (a killed run's
+  // sidecar lists every frame written, and a single write leaves no gap to be killed in).
+  static constexpr const char* kXdmfTail = "  </Grid>\n </Domain>\n</Xdmf>\n";
+  int xdmf_fd = -1;
+  off_t xdmf_tail = 0;
+
+  std::string xdmf_frame(int k) const {
     std::ostringstream x;
-    x << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-      << "  <Grid Name=\"isochor\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-    for (int k = 0; k < frames; ++k) {
-      const std::string f = frame_name(k);
-      x.precision(17);
-      x << "   <Grid Name=\"frame_" << f << "\" GridType=\"Uniform\">\n"
-        << "    <Time Value=\"" << times[k] << "\"/>\n"
-        << "    <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" << tets << "\">\n"
-        << "     <DataItem Dimensions=\"" << tets << " 4\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
-        << h5_name << ":/mesh/tets</DataItem>\n    </Topology>\n"
-        << "    <Geometry GeometryType=\"XYZ\">\n"
-        << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
-        << h5_name << ":/frames/xdmf/position_" << f << "</DataItem>\n    </Geometry>\n"
-        << "    <Attribute Name=\"position\" AttributeType=\"Vector\" Center=\"Node\">\n"
-        << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
-        << h5_name << ":/frames/xdmf/position_" << f << "</DataItem>\n    </Attribute>\n";
-      if (pressure)
-        x << "    <Attribute Name=\"pressure\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
-          << "     <DataItem Dimensions=\"" << tets << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name
-          << ":/frames/xdmf/pressure_" << f << "</DataItem>\n    </Attribute>\n";
-      x << "   </Grid>\n";
-    }
-    x << "  </Grid>\n </Domain>\n</Xdmf>\n";
-    // Replace atomically so that a reader never sees half a file.
+    x.precision(17);
+    const std::string f = frame_name(k);
+    x << "   <Grid Name=\"frame_" << f << "\" GridType=\"Uniform\">\n"
+      << "    <Time Value=\"" << times[k] << "\"/>\n"
+      << "    <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" << tets << "\">\n"
+      << "     <DataItem Dimensions=\"" << tets << " 4\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
+      << h5_name << ":/mesh/tets</DataItem>\n    </Topology>\n"
+      << "    <Geometry GeometryType=\"XYZ\">\n"
+      << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
+      << h5_name << ":/frames/xdmf/position_" << f << "</DataItem>\n    </Geometry>\n"
+      << "    <Attribute Name=\"position\" AttributeType=\"Vector\" Center=\"Node\">\n"
+      << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
+      << h5_name << ":/frames/xdmf/position_" << f << "</DataItem>\n    </Attribute>\n";
+    if (pressure)
+      x << "    <Attribute Name=\"pressure\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+        << "     <DataItem Dimensions=\"" << tets << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name
+        << ":/frames/xdmf/pressure_" << f << "</DataItem>\n    </Attribute>\n";
+    x << "   </Grid>\n";
+    return x.str();
+  }
+
+  // The header and the tail, written to a temporary file and renamed over the sidecar.
+  void start_xdmf() {
+    const std::string header = "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+                               "  <Grid Name=\"isochor\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     const std::string xp = xdmf_file(), tmp = xp + ".tmp";
     {
       std::ofstream out(tmp);
-      out << x.str();
+      out << header << kXdmfTail;
       if (!out) throw Error(xp + ": cannot be written");
     }
     std::filesystem::rename(tmp, xp);
+    xdmf_fd = ::open(xp.c_str(), O_WRONLY);
+    if (xdmf_fd < 0) throw Error(xp + ": cannot be opened for writing");
+    xdmf_tail = static_cast<off_t>(header.size());
   }
+
+  // Frame k's <Grid>, where the tail was, and the tail after it.
+  void append_xdmf(int k) {
+    if (xdmf_fd < 0) start_xdmf();
+    const std::string block = xdmf_frame(k) + kXdmfTail;
+    if (::pwrite(xdmf_fd, block.data(), block.size(), xdmf_tail) != static_cast<ssize_t>(block.size()))
+      throw Error(xdmf_file() + ": cannot be written (frame " + std::to_string(k) + ")");
+    xdmf_tail += static_cast<off_t>(block.size() - std::char_traits<char>::length(kXdmfTail));
+  }
+
+  void close_xdmf() {
+    if (xdmf_fd >= 0) ::close(xdmf_fd);
+    xdmf_fd = -1;
+  }
+  ~Impl() { close_xdmf(); }
 
   std::string xdmf_file() const { return std::filesystem::path(path).replace_extension(".xdmf").string(); }
 };
@@ -301,7 +332,7 @@ void OutputWriter::write_frame(const Frame& f) {
   m.times.push_back(f.time);
   m.frames++;
   H5Fflush(m.file, H5F_SCOPE_GLOBAL);
-  m.write_xdmf();
+  m.append_xdmf(m.frames - 1);
 }
 
 void OutputWriter::set_stat(const std::string& name, double value) { number_attribute(impl_->stats_group, name, value); }
@@ -312,7 +343,8 @@ void OutputWriter::set_stat(const std::string& name, const std::string& value) {
 void OutputWriter::close() {
   Impl& m = *impl_;
   if (!m.file.valid()) return;
-  if (m.frames == 0) m.write_xdmf();
+  if (m.xdmf_fd < 0) m.start_xdmf();  // no frames: the sidecar still names the run's (empty) series
+  m.close_xdmf();
   m.time.reset();
   m.positions.reset();
   m.volume.reset();
