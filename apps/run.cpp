@@ -31,6 +31,7 @@ void write_totals(OutputWriter& w, const RunStats& s) {
   w.set_stat("solve_seconds", s.solve_seconds);
   w.set_stat("factor_nnz", s.factor_nnz);
   w.set_stat("symbolic_seconds", s.symbolic_seconds);
+  w.set_stat("projection_seconds", s.projection_seconds);
   w.set_stat("linear_iterations", static_cast<double>(s.linear_iterations));
   // Peak resident memory of the whole process (getrusage), for the linear-solver benchmarks.
   rusage ru{};

@@ -169,7 +169,7 @@ static void ball_keeps_its_volume(const std::vector<std::string>& overrides, int
   std::printf("coarse ball, cnh: worst volume error %.3e over %d frames, lowest point z = %.4f m\n", worst,
               f.num_frames(), lowest_z);
   EXPECT_LT(lowest_z, 0.002);  // it did reach the ground (contact layer 2 mm)
-  EXPECT_LT(worst, 1e-8);
+  EXPECT_LT(worst, 1e-10);  // every frame projected onto the zone's volume (issue 15)
 }
 TEST(BallDropLong, CnhKeepsTheVolumeAtEveryFrame) { ball_keeps_its_volume({"frames.duration=0.1"}, 4000, 101); }
 TEST(BallDrop, CoarseCnhKeepsTheVolumeAtEveryFrame) {

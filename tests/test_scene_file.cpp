@@ -95,6 +95,48 @@ duration = 0.5
             bad + ":5: zones.zone[0].select.node: unknown key (expected one of: kind)");
 }
 
+// Where IDA must end a step (docs/scenes.md, Breakpoints): a ramp's ends, linear knots, the ends of
+// cubic keys, a moving plane's start and end, the end of the gravity ramp; none for a sinusoid.
+TEST(Scene, BreakpointsWhereThePrescribedMotionIsNotSmooth) {
+  fs::path d = test::temp_dir();
+  std::string p = test::write_file(d / "b.toml", R"(
+[mesh]
+shape = "box"
+cells = 2
+[[boundary]]
+select = { kind = "box", min = [-1, -1, -1], max = [1, 1, -0.4] }
+kind = "ramp"
+displacement = [0, 0, 0.1]
+t0 = 0.1
+t1 = 0.25
+[[boundary]]
+select = { kind = "box", min = [-1, -1, 0.4], max = [1, 1, 1] }
+kind = "keyframes"
+times = [0.0, 0.3, 0.45, 0.7]
+values = [0, 0, 0,  0, 0, 0.1,  0, 0, 0,  0, 0, 0.05]
+[[boundary]]
+select = { kind = "box", min = [-1, 0.4, -0.3], max = [1, 1, 0.3] }
+kind = "keyframes"
+interpolation = "cubic"
+times = [0.05, 0.2, 0.6]
+values = [0, 0, 0,  0, 0.1, 0,  0, 0, 0]
+[[boundary]]
+select = { kind = "box", min = [-1, -1, -0.3], max = [1, -0.4, 0.3] }
+kind = "sinusoid"
+amplitude = [0.01, 0, 0]
+[forces]
+gravity_ramp = 0.15
+[[contact.plane]]
+point = [0, 0, -2]
+normal = [0, 0, 1]
+displacement = [0, 0, 0.5]
+t0 = 0.25
+t1 = 0.8
+)");
+  const std::vector<double> expected{0.0, 0.05, 0.1, 0.15, 0.25, 0.3, 0.45, 0.6, 0.7, 0.8};
+  EXPECT_EQ(load_scene(p).breakpoints(), expected);
+}
+
 // Every key a parser asks for, over all demo scenes, is documented in docs/scenes.md.
 TEST(Scene, EveryKeyReadByTheDemosIsDocumented) {
   std::ifstream doc(std::string(ISOCHOR_SOURCE_DIR) + "/docs/scenes.md");

@@ -13,6 +13,7 @@
 #include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -286,26 +287,44 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
                               s.stats.newton_failures, s.stats.jacobian_evals, order, h});
   };
 
+  // Steps end only where the scene is not smooth (its breakpoints), at the last frame and, with
+  // stop_at_frames, at every frame; frames in between come from IDA's interpolant.
+  std::vector<double> stops{times.back()};
+  for (double tb : s.sys.breakpoints())
+    if (tb > t0 && tb < times.back()) stops.push_back(tb);
+  if (s.opt.stop_at_frames) stops.insert(stops.end(), times.begin(), times.end());
+  std::sort(stops.begin(), stops.end());
+  stops.erase(std::unique(stops.begin(), stops.end()), stops.end());
+  auto next_stop = stops.begin();
+
   yout = check_ptr(N_VClone(yy), "N_VClone");
+  VectorXd qf(n), vf(n), lf(m);
   double tcur = t0;
   std::size_t k = 0;
   while (k < times.size()) {
     if (times[k] <= tcur) {
       const double tf = times[k];
-      if (tf == tcur) {  // a step ended on the frame (the stop time below): no interpolation
+      if (tf == tcur) {  // a step ended on the frame: no interpolation
         N_VScale(1.0, yy, yout);
       } else if (IDAGetDky(mem, tf, 0, yout) < 0) {
         throw IntegrationError(tf, "IDAGetDky could not interpolate the frame");
       }
       const double* yo = N_VGetArrayPointer(yout);
+      qf = Eigen::Map<const VectorXd>(yo, n);
+      vf = Eigen::Map<const VectorXd>(yo + n, n);
+      lf = Eigen::Map<const VectorXd>(yo + 2 * n, m);
+      // The interpolant holds the constraints to the integration error only, a step's end to the
+      // Newton tolerance: either way the frame is projected back onto g = 0 and G v + dg/dt = 0.
+      const auto tp = Clock::now();
+      project_state(s.sys, tf, qf, vf);
+      s.stats.projection_seconds += seconds_since(tp);
       collect(tf);
-      on_frame(static_cast<int>(k), tf, Eigen::Map<const VectorXd>(yo, n), Eigen::Map<const VectorXd>(yo + n, n),
-               Eigen::Map<const VectorXd>(yo + 2 * n, m), s.stats.frames.back());
+      on_frame(static_cast<int>(k), tf, qf, vf, lf, s.stats.frames.back());
       ++k;
       continue;
     }
-    // Steps end on every frame time, so that frames are solution points on which g = 0 holds.
-    check(IDASetStopTime(mem, times[k]), "IDASetStopTime", tcur);
+    while (next_stop != stops.end() && *next_stop <= tcur) ++next_stop;
+    check(IDASetStopTime(mem, *next_stop), "IDASetStopTime", tcur);
     double tret = tcur;
     const int flag = IDASolve(mem, times[k], &tret, yy, yp, IDA_ONE_STEP);
     if (flag < 0) {

@@ -2,7 +2,9 @@
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -23,41 +25,66 @@ void check_system(const ConstrainedSystem& sys) {
       if (d < 0 || d >= n) throw std::invalid_argument("a constraint row names dof " + std::to_string(d) + " outside 0.." + std::to_string(n - 1));
 }
 
+namespace {
+// Rows of G in a sparse m x n matrix.
+Eigen::SparseMatrix<double> sparse_rows(const ConstrainedSystem& sys, const std::vector<std::vector<double>>& G) {
+  std::vector<Eigen::Triplet<double>> tr;
+  for (std::size_t j = 0; j < G.size(); ++j)
+    for (std::size_t k = 0; k < G[j].size(); ++k) tr.emplace_back(static_cast<Index>(j), sys.constraint_rows()[j][k], G[j][k]);
+  Eigen::SparseMatrix<double> S(sys.num_constraints(), sys.num_dofs());
+  S.setFromTriplets(tr.begin(), tr.end());
+  return S;
+}
+}  // namespace
+
+double constraint_error(const ConstrainedSystem& sys, const VectorXd& g) {
+  double worst = 0;
+  for (Index j = 0; j < g.size(); ++j) worst = std::max(worst, std::abs(g[j]) / sys.constraint_scale(static_cast<int>(j)));
+  return worst;
+}
+
+void project_state(ConstrainedSystem& sys, double t, VectorXd& q, VectorXd& v) {
+  const Index m = sys.num_constraints();
+  if (m == 0) return;
+  const VectorXd Minv = sys.mass().cwiseInverse();
+  std::vector<std::vector<double>> G(m);
+  for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
+  VectorXd g(m), gt(m);
+  // 1. Positions: the nearest point of g = 0 in the mass norm, by Newton steps along M^-1 G^T
+  //    (each step solves G M^-1 G^T nu = g). It stops at 1e-14 of each row's scale, or where
+  //    rounding stops the error from halving.
+  double last = std::numeric_limits<double>::infinity();
+  for (int it = 0; it < 50; ++it) {
+    sys.constraint(t, q, g);
+    const double err = constraint_error(sys, g);
+    if (err < 1e-14 || !(err < 0.5 * last)) break;
+    last = err;
+    sys.constraint_jacobian(t, q, G, nullptr);
+    const Eigen::SparseMatrix<double> S = sparse_rows(sys, G);
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Eigen::SparseMatrix<double>(S * Minv.asDiagonal() * S.transpose()));
+    q -= Minv.asDiagonal() * (S.transpose() * ldlt.solve(g));
+  }
+  // 2. Velocities: the nearest v (mass norm) with G v + dg/dt = 0, one linear solve.
+  sys.constraint_jacobian(t, q, G, &gt);
+  const Eigen::SparseMatrix<double> S = sparse_rows(sys, G);
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Eigen::SparseMatrix<double>(S * Minv.asDiagonal() * S.transpose()));
+  v -= Minv.asDiagonal() * (S.transpose() * ldlt.solve(VectorXd(S * v + gt)));
+}
+
 void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, VectorXd& v, VectorXd& a, VectorXd& lambda) {
   const Index n = sys.num_dofs(), m = sys.num_constraints();
   sys.initial_state(t0, q, v);
-  const VectorXd& M = sys.mass();
-  const VectorXd Minv = M.cwiseInverse();
-  std::vector<std::vector<double>> G(m);
-  for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
-  auto sparse_G = [&]() {
-    std::vector<Eigen::Triplet<double>> tr;
-    for (Index j = 0; j < m; ++j)
-      for (std::size_t k = 0; k < G[j].size(); ++k) tr.emplace_back(j, sys.constraint_rows()[j][k], G[j][k]);
-    Eigen::SparseMatrix<double> S(m, n);
-    S.setFromTriplets(tr.begin(), tr.end());
-    return S;
-  };
-  VectorXd g(m), gt(m);
+  const VectorXd Minv = sys.mass().cwiseInverse();
+  VectorXd f(n);
   if (m > 0) {
-    // 1. Positions onto g = 0: minimum-norm (mass-weighted) Newton steps.
-    for (int it = 0; it < 50; ++it) {
-      sys.constraint(t0, q, g);
-      sys.constraint_jacobian(t0, q, G, nullptr);
-      if (g.norm() < 1e-14 * (1.0 + q.norm())) break;
-      const Eigen::SparseMatrix<double> S = sparse_G();
-      const Eigen::SparseMatrix<double> A = S * Minv.asDiagonal() * S.transpose();
-      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
-      q -= Minv.asDiagonal() * (S.transpose() * ldlt.solve(g));
-    }
-    // 2. Velocities: [M G^T; G 0][v; nu] = [M v0; -g_t].
-    sys.constraint_jacobian(t0, q, G, &gt);
-    const Eigen::SparseMatrix<double> S = sparse_G();
+    project_state(sys, t0, q, v);
+    std::vector<std::vector<double>> G(m);
+    for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
+    sys.constraint_jacobian(t0, q, G, nullptr);
+    const Eigen::SparseMatrix<double> S = sparse_rows(sys, G);
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Eigen::SparseMatrix<double>(S * Minv.asDiagonal() * S.transpose()));
-    v -= Minv.asDiagonal() * (S.transpose() * ldlt.solve(VectorXd(S * v + gt)));
     // 3. Accelerations: M a + G^T lambda = f, G a = -w, where w = d/dt (G v + g_t) at a = 0,
     //    taken by a central difference along x(t +- h) = x +- h v (drivers exact).
-    VectorXd f(n);
     sys.force(t0, q, v, f);
     const double h = 1e-6 * std::max(1.0, std::abs(t0));
     auto velocity_constraint = [&](double t, const VectorXd& qq) {
@@ -73,7 +100,6 @@ void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, Ve
     lambda = ldlt.solve(VectorXd(S * Minv.cwiseProduct(f) + w));
     a = Minv.cwiseProduct(f - S.transpose() * lambda);
   } else {
-    VectorXd f(n);
     sys.force(t0, q, v, f);
     a = Minv.cwiseProduct(f);
     lambda.resize(0);

@@ -68,6 +68,17 @@ Eigen::Vector3d Driver::velocity(double t) const {
   return (d00 * values[i] + d01 * values[i + 1]) / h + d10 * tangent(times, values, i) + d11 * tangent(times, values, i + 1);
 }
 
+void Driver::breakpoints(std::vector<double>& out) const {
+  switch (kind) {
+    case Kind::ramp: out.insert(out.end(), {t0, t1}); break;
+    case Kind::keyframes_linear: out.insert(out.end(), times.begin(), times.end()); break;
+    case Kind::keyframes_cubic:
+      if (!times.empty()) out.insert(out.end(), {times.front(), times.back()});
+      break;
+    default: break;
+  }
+}
+
 void Driver::apply(const Points& rest, double t, Points& x, Eigen::VectorXd* v) const {
   if (rotation) {
     const double theta = displacement(t).x(), omega = v ? velocity(t).x() : 0.0;

@@ -49,6 +49,19 @@ void Scene::drive(double t, Points& x, Eigen::VectorXd* xdot) const {
   if (skeleton) skeleton->apply(mesh.rest_positions(), t, x, xdot);
 }
 
+std::vector<double> Scene::breakpoints() const {
+  std::vector<double> t;
+  for (const Driver& d : boundary) d.breakpoints(t);
+  if (skeleton)
+    for (const BoneSpec& b : skeleton->bones()) b.motion.breakpoints(t);
+  for (const GroundSpec& p : contact_planes())
+    if (p.enabled && p.displacement.squaredNorm() > 0) t.insert(t.end(), {p.t0, p.t1});
+  if (gravity_ramp > 0) t.push_back(gravity_ramp);
+  std::sort(t.begin(), t.end());
+  t.erase(std::unique(t.begin(), t.end()), t.end());
+  return t;
+}
+
 std::vector<GroundSpec> Scene::contact_planes() const {
   std::vector<GroundSpec> p{ground};
   p.insert(p.end(), planes.begin(), planes.end());

@@ -65,6 +65,9 @@ class ConstrainedSystem {
   // total volume is its rest volume again, by scaling about the centre of mass. Returns false if
   // the model has no such operation.
   virtual bool rescale_volume(double /*t*/, VectorXd& /*q*/) { return false; }
+  // Sorted times where f or g is not smooth in t (a driver's kink): steps of adaptive
+  // integrators end there rather than step across.
+  virtual std::vector<double> breakpoints() const { return {}; }
   // Typical size of a force, in force units, for the tolerances of the multipliers.
   virtual double force_scale() const { return 1.0; }
   // Typical size of constraint j's value (a zone's rest volume), so that solvers measure g_j

@@ -11,6 +11,14 @@ namespace isochor {
 void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, VectorXd& v, VectorXd& a,
                               VectorXd& lambda);
 
+// Projects a state onto the constraints at time t, as the initial state is: q onto g(q, t) = 0
+// (each row to 1e-14 of its constraint_scale(), or to where rounding stops it) and then v onto
+// G v + dg/dt = 0, both the nearest points in the mass norm. Used on IDA's interpolated frames.
+void project_state(ConstrainedSystem& sys, double t, VectorXd& q, VectorXd& v);
+
+// max_j |g_j| / constraint_scale(j).
+double constraint_error(const ConstrainedSystem& sys, const VectorXd& g);
+
 // Throws std::invalid_argument when the system cannot be integrated as given (n not a multiple
 // of dofs_per_group(), a mass that is not positive, a constraint row outside the dofs).
 void check_system(const ConstrainedSystem& sys);

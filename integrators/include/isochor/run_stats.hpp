@@ -19,6 +19,7 @@ struct RunStats {
   long linear_iterations = 0;   // krylov: PCG iterations over the run
   long linear_fallbacks = 0;    // krylov: setups solved by CHOLMOD after PCG failed
   double symbolic_seconds = 0;  // of factor_seconds: ordering and symbolic analysis
+  double projection_seconds = 0;  // IDA: projecting interpolated frames onto the constraints
   struct FrameSample {
     long steps, newton_iterations, error_test_failures, newton_failures, jacobian_evals;
     int order;

@@ -28,6 +28,9 @@ struct Driver {
   // Displacement and its time derivative at t.
   Eigen::Vector3d displacement(double t) const;
   Eigen::Vector3d velocity(double t) const;
+  // Times where the motion is not smooth (its velocity jumps or, for cubic keyframes, starts or
+  // stops): a ramp's ends, every knot of linear keyframes, the first and last of cubic ones.
+  void breakpoints(std::vector<double>& out) const;
   // Writes positions and velocities (3 N vector) of the driven nodes at time t.
   void apply(const Points& rest, double t, Points& x, Eigen::VectorXd* v) const;
 };

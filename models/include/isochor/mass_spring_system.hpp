@@ -34,6 +34,7 @@ class MassSpringSystem : public SceneSystem {
   void add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) override;
   void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
                                     std::vector<std::vector<double>>& rows) override;
+  std::vector<double> breakpoints() const override { return scene_.breakpoints(); }
   double force_scale() const override { return force_scale_; }
   double constraint_scale(int) const override { return rest_volume_; }
 

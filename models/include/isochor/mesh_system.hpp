@@ -42,6 +42,7 @@ class MeshSystem : public SceneSystem {
   void add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) override;
   void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
                                     std::vector<std::vector<double>>& rows) override;
+  std::vector<double> breakpoints() const override { return scene_.breakpoints(); }
   double force_scale() const override { return force_scale_; }
   bool rescale_volume(double t, VectorXd& q) override;
   double constraint_scale(int j) const override { return row_scale_[j]; }

@@ -91,6 +91,9 @@ struct Scene {
   // first, enabled or not, then [[contact.plane]]).
   double gravity_scale(double t) const;
   std::vector<GroundSpec> contact_planes() const;
+  // Sorted distinct times where what the scene prescribes is not smooth in time: drivers' and
+  // bones' breakpoints (drivers.hpp), a moving plane's start and end, the end of the gravity ramp.
+  std::vector<double> breakpoints() const;
 };
 
 // Parses a scene file with overrides; every key is checked and unknown keys are errors.

@@ -19,6 +19,7 @@ void parse_ida(const Section& in, IntegratorKind, IntegratorSpec& spec) {
   o.ordering = ordering == "colamd" ? KluOrdering::colamd : ordering == "amd" ? KluOrdering::amd : KluOrdering::metis;
   o.linear_solver = parse_linear_solver(in, LinearSolverKind::klu);
   o.jacobian_age = in.integer("jacobian_age", 0, 0, 1000000000L);
+  o.stop_at_frames = in.boolean("stop_at_frames", false);
 }
 
 std::unique_ptr<Integrator> make_ida(const Scene& scene, SceneSystem& system) {
