@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The default demo: the coarse ball of the CNH paper hitting the ground, on IDA with the krylov
-# solver (under three minutes on two cores), then its report: cost per frame and volume error, and
+# solver (about 30 s: the ball is damped, docs/demos.md), then its report: cost per frame and volume error, and
 # the picture of the README drawn anew into out/ball_drop.png (nothing that git tracks is written).
 set -euo pipefail
 build=${1:-build}

@@ -47,6 +47,7 @@ frequency = 3.0
 ground = true
 stiffness = 1e8
 thickness = 0.004
+damping = 0.05
 [damping]
 alpha = 0.5
 beta = 0.01

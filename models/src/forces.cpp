@@ -11,6 +11,10 @@ Vec3 GroundSpec::point_at(double t) const {
   return point + displacement * std::clamp((t - t0) / (t1 - t0), 0.0, 1.0);
 }
 
+Vec3 GroundSpec::velocity_at(double t) const {
+  return t > t0 && t < t1 ? Vec3(displacement / (t1 - t0)) : Vec3::Zero();
+}
+
 ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::vector<GroundSpec> planes, const DofMap& dofs,
                                      const Pattern& pattern, Eigen::VectorXd area)
     : mass_(std::move(mass)), gravity_(gravity), dofs_(dofs), area_(std::move(area)) {
@@ -21,6 +25,8 @@ ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::ve
         throw std::invalid_argument("ExternalPotential: a per-area contact plane needs every node's surface area");
       planes_.push_back(p);
       points_.push_back(p.point);
+      velocities_.push_back(Vec3::Zero());
+      damped_ = damped_ || p.damping > 0;
     }
   diag_slots_.resize(9 * static_cast<std::size_t>(dofs.num_free()));
   for (int f = 0; f < dofs.num_free(); ++f)
@@ -29,7 +35,40 @@ ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::ve
 }
 
 void ExternalPotential::set_time(double t) {
-  for (std::size_t k = 0; k < planes_.size(); ++k) points_[k] = planes_[k].point_at(t);
+  for (std::size_t k = 0; k < planes_.size(); ++k) {
+    points_[k] = planes_[k].point_at(t);
+    velocities_[k] = planes_[k].velocity_at(t);
+  }
+}
+
+void ExternalPotential::add_damping(const Points& x, const Eigen::VectorXd& xdot, Eigen::VectorXd& grad) const {
+  if (!damped_) return;
+  for (std::size_t k = 0; k < planes_.size(); ++k) {
+    const GroundSpec& P = planes_[k];
+    if (P.damping <= 0) continue;
+    for (int i = 0; i < x.cols(); ++i)
+      grad.segment<3>(3 * i) -= ground_damping_force(stiffness(k, i), P.damping, P.thickness, points_[k], P.normal, x.col(i),
+                                                     xdot.segment<3>(3 * i) - velocities_[k], nullptr, nullptr);
+  }
+}
+
+void ExternalPotential::add_damping_jacobians(const Points& x, const Eigen::VectorXd& xdot, double* neg_dfdx,
+                                              double* neg_dfdv) const {
+  if (!damped_ || (!neg_dfdx && !neg_dfdv)) return;
+  for (std::size_t k = 0; k < planes_.size(); ++k) {
+    const GroundSpec& P = planes_[k];
+    if (P.damping <= 0) continue;
+    for (int f = 0; f < dofs_.num_free(); ++f) {
+      const int i = dofs_.free_nodes[f];
+      Mat3 Dx, Dv;
+      ground_damping_force(stiffness(k, i), P.damping, P.thickness, points_[k], P.normal, x.col(i),
+                           xdot.segment<3>(3 * i) - velocities_[k], &Dx, &Dv);
+      for (int c = 0; c < 9; ++c) {
+        if (neg_dfdx) neg_dfdx[diag_slots_[9 * f + c]] += Dx(c / 3, c % 3);
+        if (neg_dfdv) neg_dfdv[diag_slots_[9 * f + c]] += Dv(c / 3, c % 3);
+      }
+    }
+  }
 }
 
 double ExternalPotential::energy(const Points& x) const {

@@ -128,6 +128,7 @@ void MassSpringSystem::force(double t, const VectorXd& q, const VectorXd& v, Vec
   Eigen::VectorXd& grad = grad_;  // a member: no allocation in a residual after the first
   grad.setZero(3 * x_.cols());
   external_->add_gradient(x_, grad);
+  external_->add_damping(x_, xdot_, grad);
   for (const Spring& s : springs_) {
     Vec6 g;
     spring_energy(k_, s.rest_length, gather2(x_, s.a, s.b), &g, nullptr);
@@ -143,6 +144,7 @@ void MassSpringSystem::add_force_jacobians(double t, const VectorXd& q, const Ve
                                            double* neg_dfdv) {
   place(t, q, v);
   if (neg_dfdq) external_->add_hessian(x_, 1.0, neg_dfdq);
+  external_->add_damping_jacobians(x_, xdot_, neg_dfdq, neg_dfdv);
   for (std::size_t i = 0; i < springs_.size(); ++i) {
     const Spring& s = springs_[i];
     Mat6 K = Mat6::Zero(), Dx = Mat6::Zero(), Dv = Mat6::Zero();

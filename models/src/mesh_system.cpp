@@ -104,6 +104,7 @@ void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd
   } else if (damped) {
     elastic_->add_hessian(x_, damping_.beta, damped);
   }
+  external_->add_damping_jacobians(x_, xdot_, neg_dfdq, neg_dfdv);
   if (neg_dfdv && damping_.alpha != 0) RayleighDamping{damping_.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
 }
 
@@ -128,6 +129,8 @@ void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd
   elastic_->evaluate(x_, p);
   external_->add_gradient(x_, grad_);
   if (neg_dfdq) external_->add_hessian(x_, 1.0, neg_dfdq);
+  external_->add_damping(x_, xdot_, grad_);
+  external_->add_damping_jacobians(x_, xdot_, neg_dfdq, neg_dfdv);
   if (damping_.beta != 0) grad_ += kv_;
   f.resize(num_dofs());
   for (int k = 0; k < dofs_.num_free(); ++k) {

@@ -250,6 +250,7 @@ Scene parse_scene(SceneFile file) {
   sc.ground.stiffness = contact.number("stiffness", sc.ground.stiffness, Range::positive());
   sc.ground.thickness = contact.number("thickness", sc.ground.thickness, Range::positive());
   sc.ground.per_area = contact.string("law", "node", {"node", "area"}) == "area";
+  sc.ground.damping = contact.number("damping", 0.0, Range::non_negative());
   for (const Section& p : contact.tables("plane")) {
     GroundSpec g;
     g.enabled = true;
@@ -261,6 +262,7 @@ Scene parse_scene(SceneFile file) {
     g.stiffness = p.number("stiffness", sc.ground.stiffness, Range::positive());
     g.thickness = p.number("thickness", sc.ground.thickness, Range::positive());
     g.per_area = p.string("law", sc.ground.per_area ? "area" : "node", {"node", "area"}) == "area";
+    g.damping = p.number("damping", sc.ground.damping, Range::non_negative());
     g.displacement = p.vec3("displacement", Eigen::Vector3d::Zero());
     g.t0 = p.number("t0", 0.0, Range::non_negative());
     g.t1 = p.number("t1", 1.0, Range::positive());

@@ -16,6 +16,10 @@ namespace isochor {
 XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(scene)) {
   if (scene.damping.alpha != 0 || scene.damping.beta != 0)
     throw Error(scene.file.name() + ": [damping] is not available with integrator.kind = \"xpbd\" (expected no Rayleigh damping)");
+  for (const GroundSpec& g : scene.contact_planes())
+    if (g.enabled && g.damping != 0)
+      throw Error(scene.file.name() + ": contact damping is not available with integrator.kind = \"xpbd\" (its contact is a "
+                                      "projection onto the plane; expected contact.damping = 0)");
   const Mesh& mesh = scene.mesh;
   const double mu = scene.material.mu, lambda = scene.material.lambda;
   const double lambda_p = std::isinf(lambda) ? lambda : lambda + mu;

@@ -51,5 +51,12 @@ Vec6 spring_damping_force(double c, const Vec6& x, const Vec6& v, Mat6* df_dx, M
 // energy k/3 (delta - s)^3 when s < delta (contact thickness delta), else 0. C^2 in position.
 double ground_energy(double k, double delta, const Vec3& point, const Vec3& normal, const Vec3& x, Vec3* grad,
                      Mat3* hess);
+// The ground's normal damping (Hunt & Crossley's form): with penetration p = delta - s > 0 and
+// the node's normal velocity relative to the plane sdot = n . (v - v_plane), the force
+// f = -k alpha p^2 sdot n, the elastic force k p^2 times alpha sdot. C^1 in position, linear in
+// velocity; a point mass hitting at speed v0 leaves at e = sqrt(1 - 4/3 alpha v0) to first order
+// in alpha v0 (docs/scenes.md). Returns f; -df/dx and -df/dv into the 3x3 blocks if asked.
+Vec3 ground_damping_force(double k, double alpha, double delta, const Vec3& point, const Vec3& normal, const Vec3& x,
+                          const Vec3& v_rel, Mat3* neg_dfdx, Mat3* neg_dfdv);
 
 }  // namespace isochor

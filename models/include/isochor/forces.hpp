@@ -16,10 +16,13 @@ struct GroundSpec {
   // same times the node's rest surface area A_i (a third of its surface triangles'), k in N/m^4:
   // a pressure k p^2 at penetration p, the same ground for a coarse and a fine mesh.
   bool per_area = false;
+  // alpha (s/m): normal damping k alpha p^2 sdot (elements.hpp: ground_damping_force); 0: none.
+  double damping = 0.0;
   // A moving plane: its point travels by `displacement` between t0 and t1 (linearly).
   Vec3 displacement = Vec3::Zero();
   double t0 = 0.0, t1 = 1.0;
   Vec3 point_at(double t) const;
+  Vec3 velocity_at(double t) const;
 };
 
 // Gravity and the ground as one external potential: sum_i -m_i g . x_i + ground energy.
@@ -39,6 +42,11 @@ class ExternalPotential {
   void set_gravity_scale(double s) { gravity_scale_ = s; }
   // Moves the contact planes to where they are at time t.
   void set_time(double t);
+  // The contact planes' normal damping: grad += -f (every node, 3 N), for velocities xdot (3 N).
+  void add_damping(const Points& x, const Eigen::VectorXd& xdot, Eigen::VectorXd& grad) const;
+  // -df/dx and -df/dv of the damping over the free dofs (either may be null).
+  void add_damping_jacobians(const Points& x, const Eigen::VectorXd& xdot, double* neg_dfdx, double* neg_dfdv) const;
+  bool damped() const { return damped_; }
 
  private:
   Vec3 g() const { return gravity_scale_ * gravity_; }
@@ -46,7 +54,8 @@ class ExternalPotential {
   Vec3 gravity_;
   double gravity_scale_ = 1.0;
   std::vector<GroundSpec> planes_;
-  std::vector<Vec3> points_;  // where each plane is now
+  std::vector<Vec3> points_, velocities_;  // where each plane is now, and its velocity
+  bool damped_ = false;
   DofMap dofs_;
   std::vector<Index> diag_slots_;  // 9 per free node
   Eigen::VectorXd area_;

@@ -108,4 +108,19 @@ double ground_energy(double k, double delta, const Vec3& point, const Vec3& norm
   return k / 3.0 * p * p * p;
 }
 
+Vec3 ground_damping_force(double k, double alpha, double delta, const Vec3& point, const Vec3& normal, const Vec3& x,
+                          const Vec3& v_rel, Mat3* neg_dfdx, Mat3* neg_dfdv) {
+  const double p = delta - (x - point).dot(normal);
+  if (p <= 0) {
+    if (neg_dfdx) neg_dfdx->setZero();
+    if (neg_dfdv) neg_dfdv->setZero();
+    return Vec3::Zero();
+  }
+  const double sdot = normal.dot(v_rel), c = k * alpha;
+  // dp/dx = -n^T: d(p^2)/dx = -2 p n^T.
+  if (neg_dfdx) *neg_dfdx = -2.0 * c * p * sdot * normal * normal.transpose();
+  if (neg_dfdv) *neg_dfdv = c * p * p * normal * normal.transpose();
+  return -c * p * p * sdot * normal;
+}
+
 }  // namespace isochor
