@@ -1,11 +1,11 @@
 #include "run.hpp"
 
-#include <sys/resource.h>
 
 #include <chrono>
 
 #include "isochor/integrator_registry.hpp"
 #include "isochor/error.hpp"
+#include "isochor/memory.hpp"
 #include "isochor/output.hpp"
 #include "isochor/progress.hpp"
 #include "isochor/scene_system.hpp"
@@ -34,9 +34,7 @@ void write_totals(OutputWriter& w, const RunStats& s) {
   w.set_stat("projection_seconds", s.projection_seconds);
   w.set_stat("linear_iterations", static_cast<double>(s.linear_iterations));
   // Peak resident memory of the whole process (getrusage), for the linear-solver benchmarks.
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  w.set_stat("peak_memory_mb", static_cast<double>(ru.ru_maxrss) / 1024.0);
+  w.set_stat("peak_memory_mb", peak_memory_mb());
 }
 
 // Each frame of the integrator, measured by the scene system and written with its statistics.
@@ -66,7 +64,8 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
                     {"rejected_steps_newton", static_cast<double>(s.newton_failures)},
                     {"order", static_cast<double>(s.order)},
                     {sc.integrator.kind == IntegratorKind::statics ? "residual_norm" : "step_size", s.step_size},
-                    {"wall_seconds", wall}});
+                    {"wall_seconds", wall},
+                    {"resident_mb", resident_memory_mb()}});
     w.write_frame(f);
     summary.frames = k + 1;
     if (progress) bar.update(k, t);

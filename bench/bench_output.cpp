@@ -2,25 +2,16 @@
 // writes them. Prints the frames per second of each tenth of the run and the resident memory at
 // 10% and at the end: a frame must cost the same whether it is the 10th or the 100,000th.
 //   build/isochor_bench_output [frames] [path]
-#include <sys/resource.h>
-
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <string>
 
+#include "isochor/memory.hpp"
 #include "isochor/meshing.hpp"
 #include "isochor/output.hpp"
 
-namespace {
-double rss_mb() {  // current resident set (Linux /proc)
-  std::ifstream in("/proc/self/statm");
-  long pages = 0, resident = 0;
-  in >> pages >> resident;
-  return static_cast<double>(resident) * 4096.0 / (1024.0 * 1024.0);
-}
-}  // namespace
 
 int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::atoi(argv[1]) : 100000;
@@ -45,9 +36,9 @@ int main(int argc, char** argv) {
       std::printf("%8d %12.0f\n", k + 1, tenth / std::chrono::duration<double>(t1 - t0).count());
       std::fflush(stdout);
       t0 = t1;
-      if (k + 1 == tenth) rss10 = rss_mb();
+      if (k + 1 == tenth) rss10 = isochor::resident_memory_mb();
     }
   }
   w.close();
-  std::printf("resident memory: %.1f MB at 10%%, %.1f MB at the end\n", rss10, rss_mb());
+  std::printf("resident memory: %.1f MB at 10%%, %.1f MB at the end\n", rss10, isochor::resident_memory_mb());
 }

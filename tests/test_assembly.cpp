@@ -1,5 +1,7 @@
 // Assembly over a mesh, volume constraints and drivers against finite differences.
 #include <gtest/gtest.h>
+
+#include <set>
 #include <omp.h>
 
 #include <Eigen/Dense>
@@ -93,14 +95,28 @@ TEST(Assembly, ColoursShareNoNodeAndThreadsAgree) {
   Mesh m = make_sphere(0.1, 0.0, 3000, Eigen::Vector3d::Zero());
   std::vector<std::vector<int>> tets;
   for (const Tet& t : m.tets()) tets.emplace_back(t.begin(), t.end());
-  for (const auto& colour : colour_elements(m.num_nodes(), tets)) {
+  Points centres(3, m.num_tets());
+  for (int e = 0; e < m.num_tets(); ++e) centres.col(e) = gather(m.rest_positions(), m.tets()[e]).reshaped(3, 4).rowwise().mean();
+  const ElementSchedule s = colour_elements(m.num_nodes(), tets, &centres);
+  std::vector<int> visits(tets.size(), 0);
+  int serial = 0;  // elements in colours of one chunk (no work for a second thread)
+  for (const auto& colour : s.colours) {
+    if (colour.size() == 1) serial += s.chunk_start[colour[0] + 1] - s.chunk_start[colour[0]];
     std::vector<char> seen(m.num_nodes(), 0);
-    for (int e : colour)
-      for (int v : tets[e]) {
-        EXPECT_FALSE(seen[v]);
-        seen[v] = 1;
+    for (int c : colour) {
+      std::set<int> mine;  // a chunk's own elements may share nodes; two chunks of a colour not
+      for (int k = s.chunk_start[c]; k < s.chunk_start[c + 1]; ++k) {
+        visits[s.order[k]]++;
+        for (int v : tets[s.order[k]]) {
+          if (!mine.count(v)) EXPECT_FALSE(seen[v]);
+          mine.insert(v);
+        }
       }
+      for (int v : mine) seen[v] = 1;
+    }
   }
+  for (int n : visits) EXPECT_EQ(n, 1);  // every element once
+  EXPECT_LT(serial, 0.1 * m.num_tets());
   DofMap dofs = DofMap::make(m.num_nodes(), {});
   ElasticAssembly a(m, make_snh(1.0, 10.0), dofs);
   Points x = m.rest_positions() * 1.1;

@@ -143,7 +143,6 @@ struct OutputWriter::Impl {
   std::unique_ptr<Series> time, positions, volume, energy, pressure_series;
   std::map<std::string, std::unique_ptr<Series>> stats;
   H frames_group, xdmf_group, stats_group;
-  std::vector<double> times;
 
   void add_frame_view(const std::string& source, int k, hsize_t width, const std::string& prefix) {
     // /frames/xdmf/<prefix>_<k>: a (rows, width) virtual dataset over frame k of `source`, so
@@ -177,12 +176,12 @@ struct OutputWriter::Impl {
   int xdmf_fd = -1;
   off_t xdmf_tail = 0;
 
-  std::string xdmf_frame(int k) const {
+  std::string xdmf_frame(int k, double time) const {
     std::ostringstream x;
     x.precision(17);
     const std::string f = frame_name(k);
     x << "   <Grid Name=\"frame_" << f << "\" GridType=\"Uniform\">\n"
-      << "    <Time Value=\"" << times[k] << "\"/>\n"
+      << "    <Time Value=\"" << time << "\"/>\n"
       << "    <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" << tets << "\">\n"
       << "     <DataItem Dimensions=\"" << tets << " 4\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
       << h5_name << ":/mesh/tets</DataItem>\n    </Topology>\n"
@@ -217,9 +216,9 @@ struct OutputWriter::Impl {
   }
 
   // Frame k's <Grid>, where the tail was, and the tail after it.
-  void append_xdmf(int k) {
+  void append_xdmf(int k, double time) {
     if (xdmf_fd < 0) start_xdmf();
-    const std::string block = xdmf_frame(k) + kXdmfTail;
+    const std::string block = xdmf_frame(k, time) + kXdmfTail;
     if (::pwrite(xdmf_fd, block.data(), block.size(), xdmf_tail) != static_cast<ssize_t>(block.size()))
       throw Error(xdmf_file() + ": cannot be written (frame " + std::to_string(k) + ")");
     xdmf_tail += static_cast<off_t>(block.size() - std::char_traits<char>::length(kXdmfTail));
@@ -329,10 +328,9 @@ void OutputWriter::write_frame(const Frame& f) {
     }
     it->second->append(k, &value);
   }
-  m.times.push_back(f.time);
   m.frames++;
   H5Fflush(m.file, H5F_SCOPE_GLOBAL);
-  m.append_xdmf(m.frames - 1);
+  m.append_xdmf(m.frames - 1, f.time);
 }
 
 void OutputWriter::set_stat(const std::string& name, double value) { number_attribute(impl_->stats_group, name, value); }

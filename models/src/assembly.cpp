@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "isochor/error.hpp"
 
@@ -68,21 +69,60 @@ std::vector<Index> slot_map(const Pattern& p, const DofMap& dofs, const int* nod
   return s;
 }
 
-std::vector<std::vector<int>> colour_elements(int num_nodes, const std::vector<std::vector<int>>& elements) {
-  std::vector<std::vector<int>> node_colours(num_nodes);
-  std::vector<std::vector<int>> colours;
-  std::vector<char> used;
-  for (int e = 0; e < static_cast<int>(elements.size()); ++e) {
-    used.assign(colours.size() + 1, 0);
-    for (int v : elements[e])
-      for (int c : node_colours[v]) used[c] = 1;
-    int c = 0;
-    while (used[c]) ++c;
-    if (c == static_cast<int>(colours.size())) colours.emplace_back();
-    colours[c].push_back(e);
-    for (int v : elements[e]) node_colours[v].push_back(c);
+namespace {
+// Interleaves the low 21 bits of x, y, z (Morton code).
+std::uint64_t morton(std::uint64_t x, std::uint64_t y, std::uint64_t z) {
+  auto spread = [](std::uint64_t v) {
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffULL;
+    v = (v | v << 16) & 0x1f0000ff0000ffULL;
+    v = (v | v << 8) & 0x100f00f00f00f00fULL;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+    v = (v | v << 2) & 0x1249249249249249ULL;
+    return v;
+  };
+  return spread(x) | spread(y) << 1 | spread(z) << 2;
+}
+}  // namespace
+
+ElementSchedule colour_elements(int num_nodes, const std::vector<std::vector<int>>& elements, const Points* centroids,
+                                int chunk) {
+  ElementSchedule s;
+  const int E = static_cast<int>(elements.size());
+  s.order.resize(E);
+  for (int e = 0; e < E; ++e) s.order[e] = e;
+  if (centroids && E > 0) {
+    const Vec3 lo = centroids->rowwise().minCoeff(), hi = centroids->rowwise().maxCoeff();
+    const Vec3 scale = ((hi - lo).array().max(1e-300).inverse() * double((1 << 21) - 1)).matrix();
+    std::vector<std::uint64_t> key(E);
+    for (int e = 0; e < E; ++e) {
+      const Vec3 u = (centroids->col(e) - lo).cwiseProduct(scale);
+      key[e] = morton(static_cast<std::uint64_t>(u.x()), static_cast<std::uint64_t>(u.y()), static_cast<std::uint64_t>(u.z()));
+    }
+    std::stable_sort(s.order.begin(), s.order.end(), [&](int a, int b) { return key[a] < key[b]; });
   }
-  return colours;
+  // Without a spatial order, chunks of one element (the plain element colouring); small meshes:
+  // chunks small enough that each colour still has work for every thread.
+  chunk = centroids ? std::max(1, std::min(chunk, E / 64)) : 1;
+  for (int k = 0; k < E; k += chunk) s.chunk_start.push_back(k);
+  s.chunk_start.push_back(E);
+  const int C = static_cast<int>(s.chunk_start.size()) - 1;
+  std::vector<std::vector<int>> node_colours(num_nodes);
+  std::vector<char> used;
+  for (int c = 0; c < C; ++c) {
+    used.assign(s.colours.size() + 1, 0);
+    for (int k = s.chunk_start[c]; k < s.chunk_start[c + 1]; ++k)
+      for (int v : elements[s.order[k]])
+        for (int col : node_colours[v]) used[col] = 1;
+    int col = 0;
+    while (used[col]) ++col;
+    if (col == static_cast<int>(s.colours.size())) s.colours.emplace_back();
+    s.colours[col].push_back(c);
+    for (int k = s.chunk_start[c]; k < s.chunk_start[c + 1]; ++k)
+      for (int v : elements[s.order[k]])
+        if (node_colours[v].empty() || node_colours[v].back() != col) node_colours[v].push_back(col);
+  }
+  return s;
 }
 
 Eigen::VectorXd lumped_mass(const Mesh& mesh, double density) {
@@ -114,12 +154,12 @@ ElasticAssembly::ElasticAssembly(const Mesh& mesh, std::shared_ptr<const Materia
                                  EpidermisSpec epidermis)
     : mesh_(mesh), material_(std::move(material)), dofs_(dofs), epi_(epidermis) {
   const auto& X = mesh.rest_positions();
-  std::vector<std::vector<int>> tets(mesh.num_tets()), tris;
-  shapes_.reserve(mesh.num_tets());
-  for (int e = 0; e < mesh.num_tets(); ++e) {
-    const Tet& t = mesh.tets()[e];
-    tets[e].assign(t.begin(), t.end());
-    shapes_.push_back(TetShape::make(X.col(t[0]), X.col(t[1]), X.col(t[2]), X.col(t[3])));
+  const int T = mesh.num_tets();
+  std::vector<std::vector<int>> tets(T), tris;
+  Points centres(3, T);
+  for (int e = 0; e < T; ++e) {
+    tets[e].assign(mesh.tets()[e].begin(), mesh.tets()[e].end());
+    centres.col(e) = gather(X, mesh.tets()[e]).reshaped(3, 4).rowwise().mean();
   }
   if (epi_.lambda_e > 0)
     for (const Tri& f : mesh.surface()) {
@@ -127,12 +167,20 @@ ElasticAssembly::ElasticAssembly(const Mesh& mesh, std::shared_ptr<const Materia
       tri_area_.push_back(triangle_area(gather_tri(X, f), nullptr, nullptr));
     }
   pattern_ = pattern_from_elements(dofs_, tets);  // surface triangles couple only tet neighbours
-  tet_colours_ = colour_elements(mesh.num_nodes(), tets);
+  tet_colours_ = colour_elements(mesh.num_nodes(), tets, &centres);
   tri_colours_ = colour_elements(mesh.num_nodes(), tris);
-  tet_slots_.resize(144 * static_cast<std::size_t>(mesh.num_tets()));
-  for (int e = 0; e < mesh.num_tets(); ++e) {
-    auto s = slot_map(pattern_, dofs_, tets[e].data(), 4);
-    std::copy(s.begin(), s.end(), tet_slots_.begin() + 144 * static_cast<std::size_t>(e));
+  // Each tet's data stored at its position in the pass's order, so that a pass reads it in
+  // sequence.
+  tets_.resize(T);
+  shapes_.resize(T);
+  tet_slots_.resize(144 * static_cast<std::size_t>(T));
+  for (int k = 0; k < T; ++k) {
+    const int e = tet_colours_.order[k];
+    const Tet& t = mesh.tets()[e];
+    tets_[k] = t;
+    shapes_[k] = TetShape::make(X.col(t[0]), X.col(t[1]), X.col(t[2]), X.col(t[3]));
+    auto sl = slot_map(pattern_, dofs_, tets[e].data(), 4);
+    std::copy(sl.begin(), sl.end(), tet_slots_.begin() + 144 * static_cast<std::size_t>(k));
   }
   tri_slots_.resize(81 * tris.size());
   for (std::size_t f = 0; f < tris.size(); ++f) {
@@ -145,7 +193,7 @@ double ElasticAssembly::energy(const Points& x) const {
   double E = 0.0;
   const int T = mesh_.num_tets();
 #pragma omp parallel for reduction(+ : E) schedule(static)
-  for (int e = 0; e < T; ++e) E += tet_energy(*material_, shapes_[e], gather(x, mesh_.tets()[e]), nullptr, nullptr);
+  for (int k = 0; k < T; ++k) E += tet_energy(*material_, shapes_[k], gather(x, tets_[k]), nullptr, nullptr);
   const int S = static_cast<int>(tri_area_.size());
   for (int f = 0; f < S; ++f)
     E += epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, mesh_.surface()[f]), nullptr, nullptr);
@@ -190,7 +238,7 @@ double element_pass(const ElementPass& p, const Nodes& nodes, const Index* slots
 
 double ElasticAssembly::evaluate(const Points& x, const ElementPass& p) const {
   const double tets = for_each_coloured(tet_colours_, [&](int e) {
-    const Tet& t = mesh_.tets()[e];
+    const Tet& t = tets_[e];
     return element_pass<4>(p, t, tet_slots_.data() + 144 * static_cast<std::size_t>(e), [&](Vec12* g, Mat12* H, const Vec12* d, Vec12* Hd) {
       return tet_energy(*material_, shapes_[e], gather(x, t), g, H, d, Hd);
     });
@@ -238,7 +286,7 @@ void ElasticAssembly::pressures(const Points& x, std::vector<double>& p) const {
   p.resize(mesh_.num_tets());
   const int T = mesh_.num_tets();
 #pragma omp parallel for schedule(static)
-  for (int e = 0; e < T; ++e) p[e] = material_->pressure(shapes_[e].F(gather(x, mesh_.tets()[e])));
+  for (int k = 0; k < T; ++k) p[tet_colours_.order[k]] = material_->pressure(shapes_[k].F(gather(x, tets_[k])));
 }
 
 int ElasticAssembly::inverted_tets(const Points& x) const {

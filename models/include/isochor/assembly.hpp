@@ -34,18 +34,36 @@ Pattern pattern_from_elements(const DofMap& dofs, const std::vector<std::vector<
 // Slot maps: for an element of k nodes, (3k)^2 entries, -1 where a row or column is a Dirichlet dof.
 std::vector<Index> slot_map(const Pattern& p, const DofMap& dofs, const int* nodes, int k);
 
-// Greedy colouring of elements such that no two elements of one colour share a node.
-std::vector<std::vector<int>> colour_elements(int num_nodes, const std::vector<std::vector<int>>& elements);
+// The order of an element pass: the elements cut into chunks of elements near each other, and the
+// chunks coloured greedily so that no two chunks
+// of one colour share a node. A pass runs colour after colour, the chunks of a colour in parallel,
+// each chunk's elements in order: races are impossible, each chunk's scatter stays in cache, and
+// every node receives its contributions in the same order whatever the number of threads.
+struct ElementSchedule {
+  std::vector<int> order;                 // the elements, chunk after chunk
+  std::vector<int> chunk_start;           // chunk c: order[chunk_start[c]] .. order[chunk_start[c + 1] - 1]
+  std::vector<std::vector<int>> colours;  // the chunks of each colour
+};
+// centroids (3 x E, optional): elements are first sorted along a space-filling (Morton) curve
+// through their centroids, so that a chunk is a compact piece of the mesh; without them, the
+// elements' own order, one element per chunk.
+ElementSchedule colour_elements(int num_nodes, const std::vector<std::vector<int>>& elements,
+                                const Points* centroids = nullptr, int chunk = 64);
 
-// Calls f(element) for every element, colour after colour, in parallel within a colour (so f may
-// scatter into nodes without races), and returns the sum of what f returns.
+// Calls f(k) for every position k of the schedule's order (element s.order[k]), in parallel across
+// the chunks of a colour (so f may scatter into nodes without races), and returns the sum of what
+// f returns. Per-element data stored by position is read in sequence.
 template <class F>
-double for_each_coloured(const std::vector<std::vector<int>>& colours, F&& f) {
+double for_each_coloured(const ElementSchedule& s, F&& f) {
   double sum = 0.0;
-  for (const auto& colour : colours) {
+  for (const auto& colour : s.colours) {
     const int n = static_cast<int>(colour.size());
 #pragma omp parallel for reduction(+ : sum) schedule(static)
-    for (int i = 0; i < n; ++i) sum += f(colour[i]);
+    for (int i = 0; i < n; ++i) {
+      double part = 0.0;
+      for (int k = s.chunk_start[colour[i]]; k < s.chunk_start[colour[i] + 1]; ++k) part += f(k);
+      sum += part;
+    }
   }
   return sum;
 }
@@ -99,10 +117,12 @@ class ElasticAssembly {
   std::shared_ptr<const Material> material_;
   DofMap dofs_;
   EpidermisSpec epi_;
+  // Per tet, at its position in the pass's order (tet_colours_.order maps back to the mesh).
+  std::vector<Tet> tets_;
   std::vector<TetShape> shapes_;
   std::vector<double> tri_area_;
   Pattern pattern_;
-  std::vector<std::vector<int>> tet_colours_, tri_colours_;
+  ElementSchedule tet_colours_, tri_colours_;
   std::vector<Index> tet_slots_, tri_slots_;  // 144 per tet, 81 per triangle
 };
 

@@ -71,7 +71,7 @@ class VolumeConstraints : public ConstraintSet {
     int constraint;
   };
   std::vector<Element> elements_;
-  std::vector<std::vector<int>> colours_;
+  ElementSchedule colours_;
   std::vector<Index> slots_;              // 144 per element
   std::vector<std::vector<Index>> row_dofs_;
   std::vector<std::vector<int>> row_slot_;  // per element: 12 entries, position in its row or -1

@@ -65,17 +65,44 @@ double tet_energy(const Material& m, const TetShape& s, const Vec12& x, Vec12* g
     *hess_dir = s.rest_volume * s.scatter(dP);
     return s.rest_volume * psi;
   }
-  Mat9 dPdF;
-  const double psi = m.evaluate(s.F(x), grad ? &P : nullptr, hess ? &dPdF : nullptr);
-  if (grad) *grad = s.rest_volume * s.scatter(P);
-  if (hess) *hess = s.rest_volume * s.pull_back(dPdF);
-  if (hess_dir) {
-    const Mat3 dF = s.F(*dir);
-    Mat3 dP;
-    Eigen::Map<Vec9>(dP.data()) = dPdF * Eigen::Map<const Vec9>(dF.data());
-    *hess_dir = s.rest_volume * s.scatter(dP);
+  if (!hess) {
+    const double psi = m.evaluate(s.F(x), grad ? &P : nullptr, nullptr);
+    if (grad) *grad = s.rest_volume * s.scatter(P);
+    return s.rest_volume * psi;
   }
-  return s.rest_volume * psi;
+  // The Hessian term by term (material.hpp: dP/dF = 2 W_I 1 + 4 W_II f f^T + 2 W_IJ (f c^T +
+  // c f^T) + W_JJ c c^T + W_J d2J/dF2), each pulled back through dF/dx without the 9x9 matrix:
+  //   2 W_I 1        ->  2 W_I (b_a . b_c) I3 in block (a, c)
+  //   u v^T          ->  scatter(u) scatter(v)^T (12 x 12 outer products)
+  //   W_J d2J/dF2    ->  W_J sum_{j,l} b_a[j] b_c[l] eps_ikm eps_jln F_mn = -W_J skew(F (b_a x b_c)),
+  //                      zero for a = c.
+  const Mat3 F = s.F(x);
+  const InvariantDerivatives w = m.invariants(F.squaredNorm(), F.determinant());
+  Mat3 C;  // cof F = dJ/dF
+  C.col(0) = F.col(1).cross(F.col(2));
+  C.col(1) = F.col(2).cross(F.col(0));
+  C.col(2) = F.col(0).cross(F.col(1));
+  const double V = s.rest_volume;
+  const Vec12 gf = s.scatter(F), gc = s.scatter(C);
+  if (grad) *grad = V * (2.0 * w.W_I * gf + w.W_J * gc);
+  Vec3 b[4];
+  shape_gradients(s.Dm_inv, b);
+  Mat12& H = *hess;
+  H.noalias() = (V * 4.0 * w.W_II) * gf * gf.transpose();
+  H.noalias() += (V * 2.0 * w.W_IJ) * (gf * gc.transpose() + gc * gf.transpose());
+  H.noalias() += (V * w.W_JJ) * gc * gc.transpose();
+  const double di = V * 2.0 * w.W_I, dj = V * w.W_J;
+  for (int a = 0; a < 4; ++a) {
+    for (int i = 0; i < 3; ++i) H(3 * a + i, 3 * a + i) += di * b[a].squaredNorm();
+    for (int c = a + 1; c < 4; ++c) {
+      const double bb = di * b[a].dot(b[c]);
+      const Mat3 K = dj * skew(F * b[a].cross(b[c]));
+      H.block<3, 3>(3 * a, 3 * c) += bb * Mat3::Identity() - K;
+      H.block<3, 3>(3 * c, 3 * a) += bb * Mat3::Identity() + K;
+    }
+  }
+  if (hess_dir) *hess_dir = H * *dir;
+  return V * w.W;
 }
 
 double tet_volume(const Vec12& x, Vec12* grad, Mat12* hess) {
