@@ -35,6 +35,7 @@ ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::ve
 }
 
 void ExternalPotential::set_time(double t) {
+  time_ = t;
   for (std::size_t k = 0; k < planes_.size(); ++k) {
     points_[k] = planes_[k].point_at(t);
     velocities_[k] = planes_[k].velocity_at(t);
@@ -79,6 +80,13 @@ double ExternalPotential::energy(const Points& x) const {
 double ExternalPotential::add_gradient(const Points& x, Eigen::VectorXd& grad) const {
   double E = 0.0;
   const Vec3 gravity = g();
+  for (const NodeLoad& l : loads_) {
+    const double s = l.factor(time_);
+    for (std::size_t k = 0; k < l.nodes.size(); ++k) {
+      E -= s * l.force[k].dot(x.col(l.nodes[k]));
+      grad.segment<3>(3 * l.nodes[k]) -= s * l.force[k];
+    }
+  }
   for (int i = 0; i < x.cols(); ++i) {
     E -= mass_[i] * gravity.dot(x.col(i));
     grad.segment<3>(3 * i) -= mass_[i] * gravity;

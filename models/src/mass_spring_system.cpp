@@ -28,6 +28,10 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
   if (!scene.zones.empty())
     throw Error(scene.file.name() + ": [zones] are not available with material.model = \"mass_spring\" (it keeps the "
                                     "volume enclosed by its surface; expected no zones)");
+  for (const Driver& d : scene.boundary)
+    if (!d.held.empty())
+      throw Error(scene.file.name() + ": a [[boundary]] that holds some components is not available with material.model = "
+                                      "\"mass_spring\" (expected drivers of all three components)");
   std::vector<char> moving(N, 0);
   for (int v : mesh.surface_nodes()) moving[v] = 1;
   // Driven surface nodes follow their drivers; driven interior nodes are carried like the rest
@@ -65,6 +69,7 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
   for (int f = 0; f < dofs_.num_free(); ++f) dof_mass_.segment<3>(3 * f).setConstant(node_mass_[dofs_.free_nodes[f]]);
   external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.contact_planes(), dofs_, pattern_,
                                                   surface_areas(scene.mesh));
+  external_->set_loads(scene.loads);
   volume_ = VolumeConstraints::surface(mesh, dofs_, pattern_);
   rest_volume_ = volume_.rest_volumes()[0];
   if (constrained_) rows_.push_back(volume_.row_dofs(0));

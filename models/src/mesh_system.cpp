@@ -4,6 +4,9 @@
 #include <cmath>
 
 #include "isochor/error.hpp"
+#include "isochor/supports.hpp"
+
+#include <Eigen/SVD>
 
 namespace isochor {
 
@@ -35,6 +38,7 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
   node_mass_ = lumped_mass(scene.mesh, scene.material.density);
   external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.contact_planes(), dofs_, elastic_->pattern(),
                                                   surface_areas(scene.mesh));
+  external_->set_loads(scene.loads);
   damping_ = scene.damping;
   const auto all_zones = scene_zone_tets(scene);
   zone_volumes_ = VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern());
@@ -45,12 +49,38 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
         throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first + "\" has only driven nodes on its boundary: its volume cannot be kept");
     add_constraints(std::move(zones));
   }
+  add_supports(scene);
   dof_mass_.resize(num_dofs());
   for (int f = 0; f < dofs_.num_free(); ++f) dof_mass_.segment<3>(3 * f).setConstant(node_mass_[dofs_.free_nodes[f]]);
   const double V = scene.mesh.rest_volume();
   force_scale_ = std::max(node_mass_.sum() * std::max(scene.gravity.norm(), 1.0), scene.material.mu * std::cbrt(V * V));
   x_ = scene.mesh.rest_positions();
   xdot_ = Eigen::VectorXd::Zero(3 * scene.mesh.num_nodes());
+}
+
+void MeshSystem::add_supports(const Scene& scene) {
+  std::vector<ComponentSupports::Row> rows;
+  std::vector<std::vector<Vec3>> dirs(scene.mesh.num_nodes());
+  std::vector<int> first_driver(scene.mesh.num_nodes(), -1);
+  for (std::size_t k = 0; k < scene.boundary.size(); ++k) {
+    const Driver& d = scene.boundary[k];
+    for (int v : d.nodes)
+      for (const Vec3& dir : d.held) {
+        if (first_driver[v] < 0) first_driver[v] = static_cast<int>(k);
+        dirs[v].push_back(dir);
+        // A node's held directions must be independent, or its rows would be singular.
+        Eigen::Matrix<double, 3, Eigen::Dynamic> D(3, dirs[v].size());
+        for (std::size_t i = 0; i < dirs[v].size(); ++i) D.col(static_cast<Index>(i)) = dirs[v][i];
+        const Eigen::JacobiSVD<Eigen::MatrixXd> svd(D);
+        if (dirs[v].size() > 3 || svd.singularValues().minCoeff() < 1e-6)
+          throw Error(scene.file.name() + ": boundary[" + std::to_string(k) + "]: node " + std::to_string(v) +
+                      " is held along a direction that boundary[" + std::to_string(first_driver[v]) +
+                      "] already holds (expected independent components on each node)");
+        rows.push_back({v, dir, &d});
+      }
+  }
+  if (rows.empty()) return;
+  add_constraints(std::make_unique<ComponentSupports>(scene.mesh, std::move(rows), dofs_, std::cbrt(scene.mesh.rest_volume())));
 }
 
 void MeshSystem::add_constraints(std::unique_ptr<ConstraintSet> set) {
@@ -144,6 +174,7 @@ void MeshSystem::set_positions(double t, const VectorXd& q) {
   for (int f = 0; f < dofs_.num_free(); ++f) x_.col(dofs_.free_nodes[f]) = q.segment<3>(3 * f);
   if (t != state_t_) {
     scene_at_time(scene_, t, x_, xdot_, *external_);
+    for (auto& set : sets_) set->set_time(t);
     state_t_ = t;
   }
 }

@@ -1,10 +1,13 @@
 #include "isochor/scene.hpp"
 #include "isochor/integrator_registry.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <set>
 
 #include "isochor/constraints.hpp"
@@ -36,7 +39,8 @@ double Scene::gravity_scale(double t) const {
 
 std::vector<int> Scene::driven_nodes() const {
   std::vector<int> driven;
-  for (const Driver& d : boundary) driven.insert(driven.end(), d.nodes.begin(), d.nodes.end());
+  for (const Driver& d : boundary)
+    if (d.held.empty()) driven.insert(driven.end(), d.nodes.begin(), d.nodes.end());
   if (skeleton) {
     const std::vector<int> bound = skeleton->bound_nodes();
     driven.insert(driven.end(), bound.begin(), bound.end());
@@ -45,7 +49,8 @@ std::vector<int> Scene::driven_nodes() const {
 }
 
 void Scene::drive(double t, Points& x, Eigen::VectorXd* xdot) const {
-  for (const Driver& d : boundary) d.apply(mesh.rest_positions(), t, x, xdot);
+  for (const Driver& d : boundary)
+    if (d.held.empty()) d.apply(mesh.rest_positions(), t, x, xdot);
   if (skeleton) skeleton->apply(mesh.rest_positions(), t, x, xdot);
 }
 
@@ -57,6 +62,8 @@ std::vector<double> Scene::breakpoints() const {
   for (const GroundSpec& p : contact_planes())
     if (p.enabled && p.displacement.squaredNorm() > 0) t.insert(t.end(), {p.t0, p.t1});
   if (gravity_ramp > 0) t.push_back(gravity_ramp);
+  for (const NodeLoad& l : loads)
+    if (l.ramp > 0) t.push_back(l.ramp);
   std::sort(t.begin(), t.end());
   t.erase(std::unique(t.begin(), t.end()), t.end());
   return t;
@@ -175,7 +182,62 @@ Driver parse_boundary(const Section& b, const Mesh& mesh) {
     d = parse_keyframes(b, "values", 3, 1.0, "3 numbers (a displacement)");
     d.nodes = nodes;
   }
+  // Which components the driver holds: all (default), some axes, or the normal of a plane.
+  if (b.has("components") && b.has("normal")) b.fail("normal", "give either components or normal, not both");
+  if (b.has("components")) {
+    const std::vector<std::string> c = b.strings("components");
+    if (c.empty()) b.fail("components", "expected at least one of \"x\", \"y\", \"z\"");
+    std::set<std::string> seen;
+    for (const std::string& name : c) {
+      if (name != "x" && name != "y" && name != "z") b.fail("components", "unknown component \"" + name + "\" (expected \"x\", \"y\" or \"z\")");
+      if (!seen.insert(name).second) b.fail("components", "component \"" + name + "\" given twice");
+    }
+    if (seen.size() < 3)
+      for (const std::string& name : c) d.held.push_back(Eigen::Vector3d::Unit(name[0] - 'x'));
+  } else if (b.has("normal")) {
+    const Eigen::Vector3d n = b.vec3("normal", {});
+    if (n.norm() == 0) b.fail("normal", "expected a non-zero vector");
+    d.held.push_back(n.normalized());
+  }
+  if (!d.held.empty() && d.rotation) b.fail(b.has("normal") ? "normal" : "components", "a rotation drives all three components (expected no components or normal with kind = \"rotation\")");
   return d;
+}
+
+// [[load]]: a point load on a node set (the force split among the nodes, or on each) or a
+// traction on the surface triangles whose corners are all selected (rest area, a third to each
+// corner: the consistent load of linear triangles).
+NodeLoad parse_load(const Section& l, const Mesh& mesh) {
+  NodeLoad load;
+  const Section sel = l.table("select");
+  if (!sel.exists()) l.fail("select", "missing, expected the nodes to load, e.g. { kind = \"set\", name = \"xmax\" }");
+  const std::vector<int> nodes = select_nodes(mesh, Selection::parse(sel));
+  const std::string kind = l.string("kind", "point", {"point", "traction"});
+  load.ramp = l.number("ramp", 0.0, Range::non_negative());
+  if (kind == "point") {
+    if (!l.has("force")) l.fail("force", "missing, a point load needs its force [x, y, z] (N)");
+    const Vec3 f = l.vec3("force", {});
+    const bool split = l.boolean("split", true);
+    load.nodes = nodes;
+    load.force.assign(nodes.size(), split ? Vec3(f / static_cast<double>(nodes.size())) : f);
+    return load;
+  }
+  if (!l.has("traction")) l.fail("traction", "missing, a traction needs its force per area [x, y, z] (N/m^2)");
+  const Vec3 tr = l.vec3("traction", {});
+  std::vector<char> in(mesh.num_nodes(), 0);
+  for (int v : nodes) in[v] = 1;
+  std::map<int, Vec3> per_node;
+  const Points& X = mesh.rest_positions();
+  for (const Tri& t : mesh.surface()) {
+    if (!in[t[0]] || !in[t[1]] || !in[t[2]]) continue;
+    const double area = 0.5 * (X.col(t[1]) - X.col(t[0])).cross(X.col(t[2]) - X.col(t[0])).norm();
+    for (int v : t) per_node.try_emplace(v, Vec3::Zero()).first->second += tr * area / 3.0;
+  }
+  if (per_node.empty()) l.fail("select", "selects no surface triangle (expected the corners of at least one boundary face)");
+  for (const auto& [v, f] : per_node) {
+    load.nodes.push_back(v);
+    load.force.push_back(f);
+  }
+  return load;
 }
 
 std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section& s, const Mesh& mesh, bool global) {
@@ -217,7 +279,7 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, Eigen::Vector3d::Zero(), {}, true, {}, {}, {}, {}};
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, true, {}, {}, {}, {}};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
@@ -230,9 +292,11 @@ Scene parse_scene(SceneFile file) {
     sc.boundary.push_back(parse_boundary(b, sc.mesh));
     const int k = static_cast<int>(sc.boundary.size()) - 1;
     for (int v : sc.boundary.back().nodes) {
-      if (driven_by[v] >= 0)
+      // Supports that hold some components may share a node (a corner on two symmetry planes);
+      // a driver of all three components owns its nodes.
+      if (driven_by[v] >= 0 && (sc.boundary.back().held.empty() || sc.boundary[driven_by[v]].held.empty()))
         b.fail("select", "node " + std::to_string(v) + " is already driven by boundary[" + std::to_string(driven_by[v]) +
-                             "] (expected each node in at most one [[boundary]])");
+                             "] (expected each node in at most one [[boundary]], unless both hold only some components)");
       driven_by[v] = k;
     }
   }
@@ -269,6 +333,7 @@ Scene parse_scene(SceneFile file) {
     if (g.t1 <= g.t0) p.fail("t1", "expected t1 > t0");
     sc.planes.push_back(g);
   }
+  for (const Section& l : root.tables("load")) sc.loads.push_back(parse_load(l, sc.mesh));
   const Section damping = root.table("damping");
   sc.damping.alpha = damping.number("alpha", 0.0, Range::non_negative());
   sc.damping.beta = damping.number("beta", 0.0, Range::non_negative());

@@ -16,6 +16,11 @@ namespace isochor {
 XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(scene)) {
   if (scene.damping.alpha != 0 || scene.damping.beta != 0)
     throw Error(scene.file.name() + ": [damping] is not available with integrator.kind = \"xpbd\" (expected no Rayleigh damping)");
+  if (!scene.loads.empty())
+    throw Error(scene.file.name() + ": [[load]] is not available with integrator.kind = \"xpbd\" (expected gravity as its only load)");
+  for (const Driver& d : scene.boundary)
+    if (!d.held.empty())
+      throw Error(scene.file.name() + ": a [[boundary]] that holds some components is not available with integrator.kind = \"xpbd\" (expected drivers of all three components)");
   for (const GroundSpec& g : scene.contact_planes())
     if (g.enabled && g.damping != 0)
       throw Error(scene.file.name() + ": contact damping is not available with integrator.kind = \"xpbd\" (its contact is a "

@@ -21,6 +21,8 @@ class ConstraintSet {
   virtual const std::vector<Index>& row_dofs(int j) const = 0;
   // Typical size of g_j (a zone's rest volume), so that solvers measure it relative to that.
   virtual double scale(int j) const = 0;
+  // Called when the time changes, before any of the below (for rows prescribed in time).
+  virtual void set_time(double /*t*/) {}
   // g[0 .. size()) = g_j(x).
   virtual void value(const Points& x, double* g) const = 0;
   // rows[j] (layout of row_dofs(j)) = dg_j/dq.

@@ -24,6 +24,10 @@ struct Driver {
   // axis through `center`: x = c + R(theta(t)) (X - c), v = theta'(t) axis x (x - c).
   bool rotation = false;
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ(), center = Eigen::Vector3d::Zero();
+  // The unit directions the driver holds (boundary.components or boundary.normal); empty: all
+  // three (the nodes follow the driver and are not unknowns). Held directions make the nodes
+  // unknowns with one constraint row each (supports.hpp), u(t) acting along them.
+  std::vector<Eigen::Vector3d> held;
 
   // Displacement and its time derivative at t.
   Eigen::Vector3d displacement(double t) const;

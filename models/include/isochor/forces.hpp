@@ -1,6 +1,7 @@
 // Forces other than elasticity: gravity and ground contact (as a potential), Rayleigh damping,
 // and the spring network of the mass-spring model.
 #pragma once
+#include <algorithm>
 #include <vector>
 
 #include "isochor/assembly.hpp"
@@ -25,7 +26,17 @@ struct GroundSpec {
   Vec3 velocity_at(double t) const;
 };
 
-// Gravity and the ground as one external potential: sum_i -m_i g . x_i + ground energy.
+// A dead load on nodes ([[load]]): a fixed force on each node (N), from a point load or a
+// traction on a surface, multiplied by min(1, t / ramp) (ramp = 0: full at once).
+struct NodeLoad {
+  std::vector<int> nodes;
+  std::vector<Vec3> force;  // per node
+  double ramp = 0.0;        // s (statics: pseudo-time)
+  double factor(double t) const { return ramp > 0 ? std::clamp(t / ramp, 0.0, 1.0) : 1.0; }
+};
+
+// Gravity, dead loads and the ground as one external potential:
+// sum_i -m_i g . x_i - sum_loads f_i . x_i + ground energy.
 class ExternalPotential {
  public:
   // planes: the ground and any other contact planes (only enabled ones act).
@@ -40,8 +51,9 @@ class ExternalPotential {
   const Eigen::VectorXd& mass() const { return mass_; }
   // Gravity is multiplied by this factor (loads applied in increments); 1 by default.
   void set_gravity_scale(double s) { gravity_scale_ = s; }
-  // Moves the contact planes to where they are at time t.
+  // Moves the contact planes to where they are at time t, and scales the loads.
   void set_time(double t);
+  void set_loads(std::vector<NodeLoad> loads) { loads_ = std::move(loads); }
   // The contact planes' normal damping: grad += -f (every node, 3 N), for velocities xdot (3 N).
   void add_damping(const Points& x, const Eigen::VectorXd& xdot, Eigen::VectorXd& grad) const;
   // -df/dx and -df/dv of the damping over the free dofs (either may be null).
@@ -55,6 +67,8 @@ class ExternalPotential {
   double gravity_scale_ = 1.0;
   std::vector<GroundSpec> planes_;
   std::vector<Vec3> points_, velocities_;  // where each plane is now, and its velocity
+  std::vector<NodeLoad> loads_;
+  double time_ = 0.0;
   bool damped_ = false;
   DofMap dofs_;
   std::vector<Index> diag_slots_;  // 9 per free node

@@ -75,6 +75,7 @@ struct Scene {
   double gravity_ramp = 0.0;  // s (pseudo-time in statics): gravity grows linearly to full at this time; 0: full at once
   GroundSpec ground;
   std::vector<GroundSpec> planes;  // [[contact.plane]]: more contact planes, possibly moving
+  std::vector<NodeLoad> loads;     // [[load]]: point loads and tractions (dead loads)
   RayleighDamping damping;
   Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();
   std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tet indices

@@ -1,0 +1,287 @@
+// Supports that hold some components ([[boundary]] components / normal) and dead loads
+// ([[load]]): against free fall, a skewed symmetry plane, and the homogeneous uniaxial tension of
+// an incompressible neo-Hookean bar (nominal stress P = mu (lambda - lambda^-2), lateral stretch
+// lambda^-1/2), by displacement and by traction.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "isochor/integrator_registry.hpp"
+#include "isochor/scene.hpp"
+#include "isochor/scene_system.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+
+namespace {
+
+Scene scene(const std::string& text, const std::vector<std::string>& overrides = {}) {
+  return parse_scene(SceneFile::parse(text, "supports.toml", overrides));
+}
+// text with its first `from` replaced by `to`.
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+// Runs a scene and calls f(t, system, q, lambda) at every frame, the system set to the frame's
+// state.
+template <class F>
+void run_frames(const Scene& sc, F&& f) {
+  auto sys = make_scene_system(sc);
+  auto integrator = make_integrator(sc, *sys);
+  integrator->run(sc.frames.times(), [&](int, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
+                                          const RunStats::FrameSample&) {
+    sys->set_state(t, q, v);
+    f(t, *sys, q, lambda);
+  });
+}
+
+// The support's reaction along +x on a face held in x: its rows' multipliers (the constraint force
+// on a node is -lambda d, constrained_system.hpp), rows [first, first + count).
+double reaction(const VectorXd& lambda, int first, int count) { return -lambda.segment(first, count).sum(); }
+
+const char* kFalling = R"(
+[mesh]
+shape = "box"
+cells = 2
+size = [0.1, 0.1, 0.1]
+[material]
+model = "cnh"
+E = 20000.0
+nu = 0.45
+[zones]
+global = true
+[forces]
+gravity = [-3.0, -4.0, -9.81]
+[[boundary]]
+select = { kind = "set", name = "xmin" }
+components = ["x"]
+[damping]
+beta = 0.01
+[frames]
+rate = 50.0
+duration = 0.2
+[integrator]
+rtol = 1e-8
+atol = 1e-10
+)";
+
+}  // namespace
+
+// A face held in x only: its nodes keep x exactly and fall freely in y and z (uniform gravity
+// strains nothing in y and z), while the body sags in x against the support.
+TEST(Supports, NodesHeldInXFallFreelyInYAndZ) {
+  const Scene sc = scene(kFalling);
+  const std::vector<int>& face = sc.mesh.node_sets.at("xmin");
+  const Points X = sc.mesh.rest_positions();
+  double worst_x = 0, worst_yz = 0, sag = 0;
+  run_frames(sc, [&](double t, SceneSystem& sys, const VectorXd& q, const VectorXd&) {
+    const Points& x = sys.positions();
+    for (int n : face) worst_x = std::max(worst_x, std::abs(x(0, n) - X(0, n)));
+    for (int n = 0; n < x.cols(); ++n) sag = std::max(sag, std::abs(x(0, n) - X(0, n)));
+    // The supports hold x only: the centre of mass falls freely in y and z (every node is free).
+    const VectorXd& m = sys.mass();
+    Eigen::Vector3d c = Eigen::Vector3d::Zero(), c0 = Eigen::Vector3d::Zero();
+    for (int f = 0; f < sys.dofs().num_free(); ++f) {
+      c += m[3 * f] * q.segment<3>(3 * f);
+      c0 += m[3 * f] * X.col(sys.dofs().free_nodes[f]);
+    }
+    c /= m.sum() / 3, c0 /= m.sum() / 3;
+    worst_yz = std::max(worst_yz, (c.tail<2>() - c0.tail<2>() - 0.5 * t * t * Eigen::Vector2d(-4.0, -9.81)).norm());
+  });
+  std::printf("held x: %.2e m off; centre of mass %.2e m from free fall in y, z; the body sags %.2e m in x\n", worst_x,
+              worst_yz, sag);
+  EXPECT_LT(worst_x, 1e-12);
+  EXPECT_LT(worst_yz, 1e-7);  // free fall over 0.2 s (0.2 m) to the integration tolerance
+  EXPECT_GT(sag, 1e-4);       // the support carries the x part of gravity
+}
+
+// A symmetry plane at 45 degrees (normal (1, 1, 0)/sqrt 2): the normal motion of its nodes is
+// held to rounding at every frame, the tangential motion is free.
+TEST(Supports, SkewedSymmetryPlaneHoldsOnlyTheNormalMotion) {
+  const Scene sc = scene(replaced(kFalling, "components = [\"x\"]", "normal = [1.0, 1.0, 0.0]"));
+  const Eigen::Vector3d n = Eigen::Vector3d(1, 1, 0).normalized();
+  const std::vector<int>& face = sc.mesh.node_sets.at("xmin");
+  const Points X = sc.mesh.rest_positions();
+  double normal = 0, tangential = 0;
+  run_frames(sc, [&](double, SceneSystem& sys, const VectorXd&, const VectorXd&) {
+    for (int k : face) {
+      const Eigen::Vector3d u = sys.positions().col(k) - X.col(k);
+      normal = std::max(normal, std::abs(n.dot(u)));
+      tangential = std::max(tangential, (u - n.dot(u) * n).norm());
+    }
+  });
+  std::printf("skewed plane: normal motion %.2e m, tangential %.2e m\n", normal, tangential);
+  EXPECT_LT(normal, 1e-12);
+  EXPECT_GT(tangential, 0.1);
+}
+
+namespace {
+// A bar 1 x 0.5 x 0.5 m on three roller planes (x = 0, y = 0, z = 0), CNH with one global zone,
+// statics: any stretch is homogeneous and isochoric, so the exact solution of incompressible
+// neo-Hooke holds on any mesh.
+const char* kBar = R"(
+[mesh]
+shape = "box"
+cells = [3, 2, 2]
+size = [1.0, 0.5, 0.5]
+center = [0.5, 0.25, 0.25]
+[material]
+model = "cnh"
+mu = 1000.0
+lambda = 5000.0
+[zones]
+global = true
+[forces]
+gravity = [0.0, 0.0, 0.0]
+[[boundary]]
+select = { kind = "set", name = "xmin" }
+components = ["x"]
+[[boundary]]
+select = { kind = "set", name = "ymin" }
+components = ["y"]
+[[boundary]]
+select = { kind = "set", name = "zmin" }
+components = ["z"]
+[integrator]
+kind = "static"
+[frames]
+count = 11
+)";
+constexpr double kMu = 1000.0, kArea = 0.25;
+}  // namespace
+
+// The end face driven along x (components = ["x"], a ramp to the final stretch): at every
+// increment, the stretch, the lateral stretch lambda^-1/2 and the nominal stress from the
+// support's reaction (the force the end face's nodes need, summed) against mu (lambda - lambda^-2).
+TEST(Supports, UniaxialTensionOfAnIncompressibleBarByDisplacement) {
+  for (double final_stretch : {0.5, 3.0}) {
+    const Scene sc = scene(std::string(kBar) + R"(
+[[boundary]]
+select = { kind = "set", name = "xmax" }
+components = ["x"]
+kind = "ramp"
+t0 = 0.0
+t1 = 1.0
+displacement = [)" + std::to_string(final_stretch - 1.0) + ", 0.0, 0.0]\n");
+    const std::vector<int>& end = sc.mesh.node_sets.at("xmax");
+    const std::vector<int>& side = sc.mesh.node_sets.at("ymax");
+    double worst_stress = 0, worst_lateral = 0;
+    int frames = 0;
+    run_frames(sc, [&](double t, SceneSystem& sys, const VectorXd&, const VectorXd& multipliers) {
+      const double lambda = 1.0 + (final_stretch - 1.0) * t;
+      // Rows: the global zone, then each support's in file order; the end face's are the last.
+      const int count = static_cast<int>(end.size());
+      const double pull = reaction(multipliers, static_cast<int>(multipliers.size()) - count, count);
+      const double P = kMu * (lambda - 1.0 / (lambda * lambda));
+      worst_stress = std::max(worst_stress, std::abs(pull / kArea - P) / kMu);
+      for (int n : side)
+        worst_lateral = std::max(worst_lateral, std::abs(sys.positions()(1, n) - 0.5 / std::sqrt(lambda)));
+      frames++;
+    });
+    std::printf("stretch to %.1f: nominal stress within %.2e of mu (l - l^-2) (relative), lateral within %.2e m\n",
+                final_stretch, worst_stress, worst_lateral);
+    EXPECT_EQ(frames, 11);
+    EXPECT_LT(worst_stress, 1e-8);
+    EXPECT_LT(worst_lateral, 1e-8);
+  }
+}
+
+// The same bar pulled by a traction P on its end face ([[load]], dead load on the rest area): it
+// stretches to the lambda of P = mu (lambda - lambda^-2) (lambda = 2 for P = 1.75 mu), and the
+// roller at x = 0 pushes back with the whole applied force.
+TEST(Supports, UniaxialTensionOfAnIncompressibleBarByTraction) {
+  const double P = 1.75 * kMu;
+  const Scene sc = scene(std::string(kBar) + R"(
+[[load]]
+select = { kind = "set", name = "xmax" }
+kind = "traction"
+traction = [1750.0, 0.0, 0.0]
+ramp = 1.0
+)");
+  const std::vector<int>& end = sc.mesh.node_sets.at("xmax");
+  const std::vector<int>& start = sc.mesh.node_sets.at("xmin");
+  double stretch = 0, push = 0;
+  run_frames(sc, [&](double t, SceneSystem& sys, const VectorXd&, const VectorXd& multipliers) {
+    if (t < 1.0) return;
+    stretch = 0;
+    for (int n : end) stretch += sys.positions()(0, n) / static_cast<double>(end.size());
+    push = reaction(multipliers, 1, static_cast<int>(start.size()));  // the x = 0 roller's rows follow the zone's
+  });
+  std::printf("traction %.0f Pa: stretch %.10f (exact 2), the roller at x = 0 pushes %.9f N (applied %.1f N)\n", P,
+              stretch, push, P * kArea);
+  EXPECT_NEAR(stretch, 2.0, 1e-8);
+  // The roller holds the bar against the pull: -P A along x.
+  EXPECT_NEAR(push, -P * kArea, 1e-8 * P * kArea);
+}
+
+TEST(Supports, BadComponentsAndOverlapsAreErrors) {
+  EXPECT_NE(test::error_of([&] { scene(replaced(kFalling, "[\"x\"]", "[\"w\"]")); })
+                .find("boundary[0].components: unknown component \"w\" (expected \"x\", \"y\" or \"z\")"),
+            std::string::npos);
+  EXPECT_NE(test::error_of([&] { scene(replaced(kFalling, "components = [\"x\"]", "components = [\"x\"]\nnormal = [0.0, 0.0, 1.0]")); })
+                .find("either components or normal"),
+            std::string::npos);
+  // Two supports may share a node only along independent directions.
+  const std::string twice = std::string(kFalling) + "[[boundary]]\nselect = { kind = \"set\", name = \"ymin\" }\nnormal = [1.0, 0.0, 0.0]\n";
+  EXPECT_NE(test::error_of([&] { make_scene_system(scene(twice)); }).find("already holds"), std::string::npos);
+}
+
+// The support rows and a dead load against finite differences: g and dg/dq, dg/dt along the
+// driver, zero curvature (H xdot = 0); the load's energy -f . x and its gradient.
+TEST(Supports, RowsAndLoadsMatchFiniteDifferences) {
+  const std::string skewed = std::string(kBar) + R"(
+[[boundary]]
+select = { kind = "set", name = "xmax" }
+normal = [1.0, 0.3, -0.2]
+kind = "sinusoid"
+amplitude = [0.01, 0.02, 0.0]
+frequency = 2.0
+)";
+  const Scene sc = scene(skewed + R"(
+[[load]]
+select = { kind = "set", name = "ymax" }
+force = [3.0, -2.0, 1.0]
+ramp = 0.5
+)");
+  auto sys = make_scene_system(sc);
+  const int m = sys->num_constraints(), n = sys->num_dofs();
+  VectorXd q, v;
+  sys->initial_state(0.0, q, v);
+  for (int i = 0; i < n; ++i) q[i] += 1e-3 * std::sin(7.0 * i);
+  const double t = 0.3, h = 1e-6;
+  std::vector<std::vector<double>> G(m), Gv(m);
+  VectorXd g, gt, gp, gm;
+  sys->constraint(t, q, g);
+  sys->constraint_jacobian(t, q, G, &gt);
+  sys->constraint_velocity_jacobian(t, q, v, Gv);
+  const auto& rows = sys->constraint_rows();
+  for (int j = 1; j < m; ++j) {  // row 0: the zone (tested elsewhere); the rest: supports
+    for (std::size_t k = 0; k < rows[j].size(); ++k) {
+      VectorXd qp = q, qm = q;
+      qp[rows[j][k]] += h, qm[rows[j][k]] -= h;
+      sys->constraint(t, qp, gp);
+      sys->constraint(t, qm, gm);
+      EXPECT_NEAR(G[j][k], (gp[j] - gm[j]) / (2 * h), 1e-9);
+      EXPECT_EQ(Gv[j][k], 0.0);
+    }
+    sys->constraint(t + h, q, gp);
+    sys->constraint(t - h, q, gm);
+    EXPECT_NEAR(gt[j], (gp[j] - gm[j]) / (2 * h), 1e-8);
+  }
+  EXPECT_GT(std::abs(gt[m - 1]), 1e-3);  // the sinusoid moves the last rows
+  // The load through the force: f = -grad E, E = -s(t) f . x, s = t / ramp before the ramp's end.
+  VectorXd f0, f1;
+  sys->force(t, q, VectorXd::Zero(n), f0);
+  const Scene bare = scene(skewed);
+  auto sys0 = make_scene_system(bare);
+  sys0->force(t, q, VectorXd::Zero(n), f1);
+  const std::vector<int>& loaded = sc.mesh.node_sets.at("ymax");
+  Eigen::Vector3d total = Eigen::Vector3d::Zero();
+  for (int f = 0; f < sys->dofs().num_free(); ++f) total += (f0 - f1).segment<3>(3 * f);
+  EXPECT_LT((total - 0.6 * Eigen::Vector3d(3.0, -2.0, 1.0)).norm(), 1e-12);  // split over the nodes, 60% of the ramp
+  for (int node : loaded)
+    EXPECT_LT(((f0 - f1).segment<3>(3 * sys->dofs().free_index[node]) - 0.6 * Eigen::Vector3d(3.0, -2.0, 1.0) / loaded.size()).norm(), 1e-12);
+}
