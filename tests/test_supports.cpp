@@ -285,3 +285,97 @@ ramp = 0.5
   for (int node : loaded)
     EXPECT_LT(((f0 - f1).segment<3>(3 * sys->dofs().free_index[node]) - 0.6 * Eigen::Vector3d(3.0, -2.0, 1.0) / loaded.size()).norm(), 1e-12);
 }
+
+// The pressure load's Jacobian (a follower load, not symmetric on an open face) against finite
+// differences of the force, the elastic part included.
+TEST(Supports, PressureLoadJacobianMatchesFiniteDifferences) {
+  const Scene sc = scene(std::string(kBar) + R"(
+[[load]]
+select = { kind = "set", name = "xmax" }
+kind = "pressure"
+pressure = 700.0
+)");
+  auto sys = make_scene_system(sc);
+  const int n = sys->num_dofs();
+  VectorXd q, v;
+  sys->initial_state(0.0, q, v);
+  for (int i = 0; i < n; ++i) q[i] += 0.02 * std::sin(3.0 * i + 1.0);
+  const SparsePattern& p = sys->pattern();
+  std::vector<double> K(p.nnz(), 0.0);
+  sys->add_force_jacobians(0.0, q, v, K.data(), nullptr);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n), Jfd(n, n);
+  for (Index c = 0; c < p.n; ++c)
+    for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k) J(p.row_ind[k], c) = K[k];
+  VectorXd fp, fm;
+  for (int i = 0; i < n; ++i) {
+    VectorXd qp = q, qm = q;
+    qp[i] += 1e-6, qm[i] -= 1e-6;
+    sys->force(0.0, qp, v, fp);
+    sys->force(0.0, qm, v, fm);
+    Jfd.col(i) = -(fp - fm) / 2e-6;
+  }
+  EXPECT_LT((J - Jfd).norm(), 1e-6 * Jfd.norm());
+  EXPECT_GT((J - J.transpose()).norm(), 1e-3 * J.norm());  // the load stiffness is not symmetric
+}
+
+// A pressure on the whole surface of an incompressible body: nothing moves, and the zone's
+// multiplier carries it (every tet's pressure equals the load's).
+TEST(Supports, HydrostaticPressureIsCarriedByTheZone) {
+  // The bar on its three rollers (which take no load here), pressed all over.
+  const Scene sc = scene(std::string(kBar) + R"(
+[[load]]
+select = { kind = "all" }
+kind = "pressure"
+pressure = 2500.0
+)", {"frames.count=2"});
+  double moved = 0, worst = 0;
+  auto sys = make_scene_system(sc);
+  auto integrator = make_integrator(sc, *sys);
+  integrator->run(sc.frames.times(), [&](int, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
+                                          const RunStats::FrameSample&) {
+    sys->set_state(t, q, v);
+    moved = std::max(moved, (sys->positions() - sc.mesh.rest_positions()).cwiseAbs().maxCoeff());
+    std::vector<double> p;
+    sys->pressures(lambda, p);
+    for (double pe : p) worst = std::max(worst, std::abs(pe - 2500.0));
+  });
+  std::printf("hydrostatic: moved %.2e m, tet pressures within %.2e Pa of the load\n", moved, worst);
+  EXPECT_LT(moved, 1e-12);
+  EXPECT_LT(worst, 1e-8);
+}
+
+// A pressure follows the deformed surface: on the bar's end face (rollers on three sides) it
+// pushes with p times the deformed area A / lambda, so the nominal stress is -p / lambda and
+// mu (lambda - lambda^-2) = -p / lambda; a dead traction of the same size gives
+// mu (lambda - lambda^-2) = -p, a different stretch.
+TEST(Supports, FollowerPressureCompressesTheBarByItsDeformedArea) {
+  const double p = 500.0;
+  auto solve = [](const std::function<double(double)>& g) {  // the root in (0.3, 1) by bisection
+    double lo = 0.3, hi = 1.0;
+    for (int it = 0; it < 200; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (g(mid) < 0 ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+  };
+  const double follower = solve([&](double l) { return kMu * (l - 1 / (l * l)) + p / l; });
+  const double dead = solve([&](double l) { return kMu * (l - 1 / (l * l)) + p; });
+  const Scene sc = scene(std::string(kBar) + R"(
+[[load]]
+select = { kind = "set", name = "xmax" }
+kind = "pressure"
+pressure = 500.0
+ramp = 1.0
+)");
+  const std::vector<int>& end = sc.mesh.node_sets.at("xmax");
+  double stretch = 0;
+  run_frames(sc, [&](double t, SceneSystem& sys, const VectorXd&, const VectorXd&) {
+    if (t < 1.0) return;
+    stretch = 0;
+    for (int n : end) stretch += sys.positions()(0, n) / static_cast<double>(end.size());
+  });
+  std::printf("pressure %.0f Pa: stretch %.10f, follower formula %.10f, a dead load would give %.6f\n", p, stretch,
+              follower, dead);
+  EXPECT_NEAR(stretch, follower, 1e-8);
+  EXPECT_GT(std::abs(follower - dead), 1e-2);
+}

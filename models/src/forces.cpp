@@ -1,4 +1,7 @@
 #include "isochor/forces.hpp"
+#include "isochor/material.hpp"
+
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <map>
@@ -108,6 +111,49 @@ void ExternalPotential::add_hessian(const Points& x, double scale, double* value
                     nullptr, &H);
       for (int c = 0; c < 9; ++c) values[diag_slots_[9 * f + c]] += scale * H(c / 3, c % 3);
     }
+}
+
+PressureLoads::PressureLoads(std::vector<PressureLoad> loads, const DofMap& dofs, const Pattern& pattern)
+    : loads_(std::move(loads)) {
+  for (const PressureLoad& l : loads_) {
+    std::vector<Index> s;
+    for (const Tri& t : l.faces) {
+      const auto m = slot_map(pattern, dofs, t.data(), 3);
+      s.insert(s.end(), m.begin(), m.end());
+    }
+    slots_.push_back(std::move(s));
+  }
+}
+
+void PressureLoads::add_gradient(const Points& x, Eigen::VectorXd& grad) const {
+  for (const PressureLoad& l : loads_) {
+    const double p = l.pressure * l.factor(time_);
+    for (const Tri& t : l.faces) {
+      const Vec3 a = 0.5 * (x.col(t[1]) - x.col(t[0])).cross(x.col(t[2]) - x.col(t[0]));
+      for (int v : t) grad.segment<3>(3 * v) += p / 3.0 * a;
+    }
+  }
+}
+
+void PressureLoads::add_jacobian(const Points& x, double* values) const {
+  for (std::size_t k = 0; k < loads_.size(); ++k) {
+    const PressureLoad& l = loads_[k];
+    const double p = l.pressure * l.factor(time_);
+    for (std::size_t f = 0; f < l.faces.size(); ++f) {
+      const Tri& t = l.faces[f];
+      const Index* s = slots_[k].data() + 81 * f;
+      for (int j = 0; j < 3; ++j) {
+        // d a / d x_j = skew(x_(j+2) - x_(j+1)) / 2; -df_i/dx_j = p / 3 d a / d x_j for every corner i.
+        const Mat3 D = p / 6.0 * skew(x.col(t[(j + 2) % 3]) - x.col(t[(j + 1) % 3]));
+        for (int i = 0; i < 3; ++i)
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) {
+              const Index slot = s[(3 * i + r) * 9 + 3 * j + c];
+              if (slot >= 0) values[slot] += D(r, c);
+            }
+      }
+    }
+  }
 }
 
 void RayleighDamping::add_matrix(const ElasticAssembly& a, const Eigen::VectorXd& mass, const Points& x, double scale,

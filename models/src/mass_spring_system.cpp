@@ -28,6 +28,9 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
   if (!scene.zones.empty())
     throw Error(scene.file.name() + ": [zones] are not available with material.model = \"mass_spring\" (it keeps the "
                                     "volume enclosed by its surface; expected no zones)");
+  if (!scene.pressure_loads.empty())
+    throw Error(scene.file.name() + ": a pressure [[load]] is not available with material.model = \"mass_spring\" (expected "
+                                    "point loads or tractions)");
   for (const Driver& d : scene.boundary)
     if (!d.held.empty())
       throw Error(scene.file.name() + ": a [[boundary]] that holds some components is not available with material.model = "

@@ -39,6 +39,7 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
   external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.contact_planes(), dofs_, elastic_->pattern(),
                                                   surface_areas(scene.mesh));
   external_->set_loads(scene.loads);
+  pressure_loads_ = std::make_unique<PressureLoads>(scene.pressure_loads, dofs_, elastic_->pattern());
   damping_ = scene.damping;
   const auto all_zones = scene_zone_tets(scene);
   zone_volumes_ = VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern());
@@ -131,6 +132,7 @@ void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd
   if (neg_dfdq) {
     elastic_->add_hessian(x_, 1.0, neg_dfdq, damping_.beta, damped);
     external_->add_hessian(x_, 1.0, neg_dfdq);
+    pressure_loads_->add_jacobian(x_, neg_dfdq);
   } else if (damped) {
     elastic_->add_hessian(x_, damping_.beta, damped);
   }
@@ -161,6 +163,8 @@ void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd
   if (neg_dfdq) external_->add_hessian(x_, 1.0, neg_dfdq);
   external_->add_damping(x_, xdot_, grad_);
   external_->add_damping_jacobians(x_, xdot_, neg_dfdq, neg_dfdv);
+  pressure_loads_->add_gradient(x_, grad_);
+  if (neg_dfdq) pressure_loads_->add_jacobian(x_, neg_dfdq);
   if (damping_.beta != 0) grad_ += kv_;
   f.resize(num_dofs());
   for (int k = 0; k < dofs_.num_free(); ++k) {
@@ -174,6 +178,7 @@ void MeshSystem::set_positions(double t, const VectorXd& q) {
   for (int f = 0; f < dofs_.num_free(); ++f) x_.col(dofs_.free_nodes[f]) = q.segment<3>(3 * f);
   if (t != state_t_) {
     scene_at_time(scene_, t, x_, xdot_, *external_);
+    pressure_loads_->set_time(t);
     for (auto& set : sets_) set->set_time(t);
     state_t_ = t;
   }

@@ -64,6 +64,8 @@ std::vector<double> Scene::breakpoints() const {
   if (gravity_ramp > 0) t.push_back(gravity_ramp);
   for (const NodeLoad& l : loads)
     if (l.ramp > 0) t.push_back(l.ramp);
+  for (const PressureLoad& l : pressure_loads)
+    if (l.ramp > 0) t.push_back(l.ramp);
   std::sort(t.begin(), t.end());
   t.erase(std::unique(t.begin(), t.end()), t.end());
   return t;
@@ -203,41 +205,49 @@ Driver parse_boundary(const Section& b, const Mesh& mesh) {
   return d;
 }
 
-// [[load]]: a point load on a node set (the force split among the nodes, or on each) or a
+// [[load]]: a point load on a node set (the force split among the nodes, or on each), a
 // traction on the surface triangles whose corners are all selected (rest area, a third to each
-// corner: the consistent load of linear triangles).
-NodeLoad parse_load(const Section& l, const Mesh& mesh) {
-  NodeLoad load;
+// corner: the consistent load of linear triangles), or a pressure on those triangles (a follower
+// load, forces.hpp).
+void parse_load(const Section& l, const Mesh& mesh, Scene& sc) {
   const Section sel = l.table("select");
   if (!sel.exists()) l.fail("select", "missing, expected the nodes to load, e.g. { kind = \"set\", name = \"xmax\" }");
   const std::vector<int> nodes = select_nodes(mesh, Selection::parse(sel));
-  const std::string kind = l.string("kind", "point", {"point", "traction"});
-  load.ramp = l.number("ramp", 0.0, Range::non_negative());
+  const std::string kind = l.string("kind", "point", {"point", "traction", "pressure"});
+  const double ramp = l.number("ramp", 0.0, Range::non_negative());
   if (kind == "point") {
     if (!l.has("force")) l.fail("force", "missing, a point load needs its force [x, y, z] (N)");
     const Vec3 f = l.vec3("force", {});
     const bool split = l.boolean("split", true);
-    load.nodes = nodes;
-    load.force.assign(nodes.size(), split ? Vec3(f / static_cast<double>(nodes.size())) : f);
-    return load;
+    sc.loads.push_back({nodes, std::vector<Vec3>(nodes.size(), split ? Vec3(f / static_cast<double>(nodes.size())) : f), ramp});
+    return;
+  }
+  std::vector<char> in(mesh.num_nodes(), 0);
+  for (int v : nodes) in[v] = 1;
+  std::vector<Tri> faces;
+  for (const Tri& t : mesh.surface())
+    if (in[t[0]] && in[t[1]] && in[t[2]]) faces.push_back(t);
+  if (faces.empty()) l.fail("select", "selects no surface triangle (expected the corners of at least one boundary face)");
+  if (kind == "pressure") {
+    if (!l.has("pressure")) l.fail("pressure", "missing, a pressure load needs its pressure (Pa)");
+    sc.pressure_loads.push_back({faces, l.number("pressure", 0.0), ramp});
+    return;
   }
   if (!l.has("traction")) l.fail("traction", "missing, a traction needs its force per area [x, y, z] (N/m^2)");
   const Vec3 tr = l.vec3("traction", {});
-  std::vector<char> in(mesh.num_nodes(), 0);
-  for (int v : nodes) in[v] = 1;
   std::map<int, Vec3> per_node;
   const Points& X = mesh.rest_positions();
-  for (const Tri& t : mesh.surface()) {
-    if (!in[t[0]] || !in[t[1]] || !in[t[2]]) continue;
+  for (const Tri& t : faces) {
     const double area = 0.5 * (X.col(t[1]) - X.col(t[0])).cross(X.col(t[2]) - X.col(t[0])).norm();
     for (int v : t) per_node.try_emplace(v, Vec3::Zero()).first->second += tr * area / 3.0;
   }
-  if (per_node.empty()) l.fail("select", "selects no surface triangle (expected the corners of at least one boundary face)");
+  NodeLoad load;
+  load.ramp = ramp;
   for (const auto& [v, f] : per_node) {
     load.nodes.push_back(v);
     load.force.push_back(f);
   }
-  return load;
+  sc.loads.push_back(std::move(load));
 }
 
 std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section& s, const Mesh& mesh, bool global) {
@@ -279,7 +289,7 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, true, {}, {}, {}, {}};
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, true, {}, {}, {}, {}};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
@@ -333,7 +343,7 @@ Scene parse_scene(SceneFile file) {
     if (g.t1 <= g.t0) p.fail("t1", "expected t1 > t0");
     sc.planes.push_back(g);
   }
-  for (const Section& l : root.tables("load")) sc.loads.push_back(parse_load(l, sc.mesh));
+  for (const Section& l : root.tables("load")) parse_load(l, sc.mesh, sc);
   const Section damping = root.table("damping");
   sc.damping.alpha = damping.number("alpha", 0.0, Range::non_negative());
   sc.damping.beta = damping.number("beta", 0.0, Range::non_negative());

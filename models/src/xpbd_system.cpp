@@ -16,7 +16,7 @@ namespace isochor {
 XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(scene)) {
   if (scene.damping.alpha != 0 || scene.damping.beta != 0)
     throw Error(scene.file.name() + ": [damping] is not available with integrator.kind = \"xpbd\" (expected no Rayleigh damping)");
-  if (!scene.loads.empty())
+  if (!scene.loads.empty() || !scene.pressure_loads.empty())
     throw Error(scene.file.name() + ": [[load]] is not available with integrator.kind = \"xpbd\" (expected gravity as its only load)");
   for (const Driver& d : scene.boundary)
     if (!d.held.empty())

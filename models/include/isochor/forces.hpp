@@ -35,6 +35,36 @@ struct NodeLoad {
   double factor(double t) const { return ramp > 0 ? std::clamp(t / ramp, 0.0, 1.0) : 1.0; }
 };
 
+// A pressure on surface triangles ([[load]] kind = "pressure"): a follower load, normal to the
+// deformed surface. On a triangle (x0, x1, x2) with area vector a = (x1 - x0) x (x2 - x0) / 2
+// (outward for the mesh's counter-clockwise surface triangles), each corner gets f = -p s(t) a / 3:
+// p > 0 pushes into the body. Its Jacobian d f_i / d x_j = -p s / 6 skew(x_(j+2) - x_(j+1))
+// (indices mod 3) is not symmetric on an open surface: exact with KLU (the default of IDA and
+// statics), approximated by its symmetric use in the reduced and krylov solvers. Not an energy in
+// general, so it is left out of the external energy written per frame.
+struct PressureLoad {
+  std::vector<Tri> faces;
+  double pressure = 0.0;  // Pa
+  double ramp = 0.0;      // s, as NodeLoad
+  double factor(double t) const { return ramp > 0 ? std::clamp(t / ramp, 0.0, 1.0) : 1.0; }
+};
+
+class PressureLoads {
+ public:
+  PressureLoads(std::vector<PressureLoad> loads, const DofMap& dofs, const Pattern& pattern);
+  bool empty() const { return loads_.empty(); }
+  void set_time(double t) { time_ = t; }
+  // grad += -f over every node (3 N).
+  void add_gradient(const Points& x, Eigen::VectorXd& grad) const;
+  // values += -df/dx over the free dofs (pattern slots).
+  void add_jacobian(const Points& x, double* values) const;
+
+ private:
+  std::vector<PressureLoad> loads_;
+  std::vector<std::vector<Index>> slots_;  // per load, 81 per face
+  double time_ = 0.0;
+};
+
 // Gravity, dead loads and the ground as one external potential:
 // sum_i -m_i g . x_i - sum_loads f_i . x_i + ground energy.
 class ExternalPotential {

@@ -69,6 +69,7 @@ class MeshSystem : public SceneSystem {
   std::shared_ptr<const Material> material_;
   std::unique_ptr<ElasticAssembly> elastic_;
   std::unique_ptr<ExternalPotential> external_;
+  std::unique_ptr<PressureLoads> pressure_loads_;
   RayleighDamping damping_;
   // The constraint sets, stacked: set s owns rows offset_[s] .. offset_[s + 1].
   std::vector<std::unique_ptr<ConstraintSet>> sets_;

@@ -76,6 +76,7 @@ struct Scene {
   GroundSpec ground;
   std::vector<GroundSpec> planes;  // [[contact.plane]]: more contact planes, possibly moving
   std::vector<NodeLoad> loads;     // [[load]]: point loads and tractions (dead loads)
+  std::vector<PressureLoad> pressure_loads;  // [[load]] kind = "pressure" (follower loads)
   RayleighDamping damping;
   Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();
   std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tet indices
