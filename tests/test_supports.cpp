@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "isochor/integrator_registry.hpp"
+#include "isochor/meshing.hpp"
 #include "isochor/scene.hpp"
 #include "isochor/scene_system.hpp"
 #include "test_util.hpp"
@@ -415,4 +416,96 @@ TEST(Supports, CantileverLocksAtNu0499ButNotWithRingZones) {
     EXPECT_GT(r, last);  // refined, the unlocked beam softens toward beam theory
     last = r;
   }
+}
+
+namespace {
+// The inner radius of demos/inflation.toml's hollow sphere (A = 0.05, B = 0.1 m, mu = 10 kPa,
+// 1-ring zones) under an internal pressure p, by statics: rigid motions held by supports that the
+// radial solution does not load (the poles in x and y, the seam meridian y = 0 in y, one seam node
+// along its meridian's tangent).
+double inflated_radius(long tets, double p) {
+  const Mesh m = make_sphere(0.1, 0.0, tets, Eigen::Vector3d::Zero(), 0.05);
+  const Points& X = m.rest_positions();
+  std::string poles, seam;
+  int k = -1;
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    if (std::abs(X(0, i)) < 1e-12 && std::abs(X(1, i)) < 1e-12 && std::abs(std::abs(X(2, i)) - 0.1) < 1e-12)
+      poles += (poles.empty() ? "" : ", ") + std::to_string(i);
+    if (std::abs(X(1, i)) < 1e-12 && X(0, i) > 1e-3) {
+      seam += (seam.empty() ? "" : ", ") + std::to_string(i);
+      if (k < 0 || std::abs(X(2, i)) < std::abs(X(2, k))) k = i;
+    }
+  }
+  const Eigen::Vector3d t = Eigen::Vector3d(-X(2, k), 0.0, X(0, k)).normalized();
+  char text[4096];
+  std::snprintf(text, sizeof text, R"(
+[mesh]
+shape = "sphere"
+radius = 0.1
+inner_radius = 0.05
+target_tets = %ld
+[material]
+model = "cnh"
+mu = 1.0e4
+lambda = 0.0
+[zones]
+global = false
+rings = 1
+[forces]
+gravity = [0.0, 0.0, 0.0]
+[[boundary]]
+select = { kind = "indices", indices = [%s] }
+components = ["x", "y"]
+[[boundary]]
+select = { kind = "indices", indices = [%s] }
+components = ["y"]
+[[boundary]]
+select = { kind = "indices", indices = [%d] }
+normal = [%.17g, 0.0, %.17g]
+[[load]]
+select = { kind = "set", name = "inner" }
+kind = "pressure"
+pressure = %.17g
+ramp = 1.0
+[integrator]
+kind = "static"
+[frames]
+count = 6
+)", tets, poles.c_str(), seam.c_str(), k, t.x(), t.z(), p);
+  const Scene sc = scene(text);
+  double a = 0;
+  run_frames(sc, [&](double, SceneSystem& sys, const VectorXd&, const VectorXd&) {
+    a = 0;
+    const std::vector<int>& inner = sc.mesh.node_sets.at("inner");
+    for (int n : inner) a += sys.positions().col(n).norm() / static_cast<double>(inner.size());
+  });
+  return a;
+}
+
+// The pressure that inflates incompressible neo-Hooke's thick-walled sphere (A, B) to inner radius
+// a: equilibrium d sigma_rr / dr = 2 (sigma_tt - sigma_rr) / r with sigma_tt - sigma_rr =
+// mu (l^2 - l^-4), l = r / R, and r^3 - R^3 = a^3 - A^3, integrated in l.
+double thick_sphere_pressure(double a, double A, double B, double mu) {
+  const double la = a / A, b = std::cbrt(B * B * B + a * a * a - A * A * A), lb = b / B;
+  return mu * ((2 / lb + 0.5 / std::pow(lb, 4)) - (2 / la + 0.5 / std::pow(la, 4)));
+}
+}  // namespace
+
+// The hollow sphere under internal pressure against the closed form: the pressure that the
+// computed inner radius calls for approaches the applied one at second order in the mesh size
+// (linear tets: the displacement error O(h^2)); h shrinks by (tets ratio)^(1/3).
+TEST(SupportsLong, ThickWalledSphereConvergesToTheClosedForm) {
+  const double p = 2000.0;
+  std::vector<double> error;
+  const std::vector<long> sizes = {3000, 12000};
+  for (long tets : sizes) {
+    const double a = inflated_radius(tets, p);
+    error.push_back(std::abs(thick_sphere_pressure(a, 0.05, 0.1, 1e4) / p - 1));
+    std::printf("%ld tets: inner radius %.6f m, the closed form's pressure for it %.1f Pa (applied %.0f)\n", tets, a,
+                thick_sphere_pressure(a, 0.05, 0.1, 1e4), p);
+  }
+  const double h_ratio = std::cbrt(static_cast<double>(sizes[1]) / sizes[0]);
+  std::printf("error %.3f -> %.3f: ratio %.2f (first order %.2f, second %.2f)\n", error[0], error[1], error[0] / error[1],
+              h_ratio, h_ratio * h_ratio);
+  EXPECT_GT(error[0] / error[1], 0.5 * (h_ratio + h_ratio * h_ratio));  // nearer second order than first
 }

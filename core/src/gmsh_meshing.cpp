@@ -148,9 +148,15 @@ void check_readable(const std::string& path, const std::string& expected) {
 
 }  // namespace
 
-Mesh make_sphere(double radius, double edge_length, long target_tets, const Eigen::Vector3d& c) {
+Mesh make_sphere(double radius, double edge_length, long target_tets, const Eigen::Vector3d& c, double inner_radius) {
   GmshSession session("sphere");
-  gmsh::model::occ::addSphere(c.x(), c.y(), c.z(), radius);
+  const int outer = gmsh::model::occ::addSphere(c.x(), c.y(), c.z(), radius);
+  if (inner_radius > 0) {
+    const int inner = gmsh::model::occ::addSphere(c.x(), c.y(), c.z(), inner_radius);
+    std::vector<std::pair<int, int>> out;
+    std::vector<std::vector<std::pair<int, int>>> map;
+    gmsh::model::occ::cut({{3, outer}}, {{3, inner}}, out, map);
+  }
   gmsh::model::occ::synchronize();
   auto mesh_with = [&](double h) {
     gmsh::model::mesh::clear();
@@ -166,7 +172,7 @@ Mesh make_sphere(double radius, double edge_length, long target_tets, const Eige
     mesh_with(edge_length);
   } else {
     // A Delaunay mesh has about 6 sqrt(2) V / h^3 tets; correct the estimate twice by the count.
-    const double V = 4.0 / 3.0 * M_PI * radius * radius * radius;
+    const double V = 4.0 / 3.0 * M_PI * (radius * radius * radius - inner_radius * inner_radius * inner_radius);
     // The count is not monotonic in h (Delaunay noise of several %): bracket the target and
     // interpolate in log-log within the bracket; keep the closest, stop within 2%.
     const double target = static_cast<double>(target_tets);
@@ -191,7 +197,17 @@ Mesh make_sphere(double radius, double edge_length, long target_tets, const Eige
     }
     if (best_h != h) mesh_with(best_h);
   }
-  return finish(extract_tets("sphere"), "sphere", {}, {});
+  Extracted e = extract_tets("sphere");
+  std::map<std::string, std::vector<int>> sets;
+  if (inner_radius > 0) {
+    const double tol = 1e-6 * radius;  // the walls' nodes lie on the spheres (Gmsh's OCC surfaces)
+    for (int i = 0; i < e.x.cols(); ++i) {
+      const double r = (e.x.col(i) - c).norm();
+      if (std::abs(r - inner_radius) < tol) sets["inner"].push_back(i);
+      if (std::abs(r - radius) < tol) sets["outer"].push_back(i);
+    }
+  }
+  return finish(std::move(e), "sphere", {}, std::move(sets));
 }
 
 Mesh make_cylinder(double radius, double height, int resolution, const Eigen::Vector3d& c) {

@@ -48,7 +48,9 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     const double h = s.number("edge_length", 0.0, Range::non_negative());
     const long target = s.integer("target_tets", 5000, 10, 100000000);
     if (h > 0 && s.has("target_tets")) s.fail("edge_length", "give either edge_length or target_tets, not both");
-    return make_sphere(r, h, target, center);
+    const double inner = s.number("inner_radius", 0.0, Range::non_negative());
+    if (inner >= r) s.fail("inner_radius", "expected less than radius (" + std::to_string(r) + " m)");
+    return make_sphere(r, h, target, center, inner);
   }
   Mesh m = make_two_tets(s.number("edge", 1.0, Range::positive()));
   if (center != Eigen::Vector3d::Zero()) s.fail("center", "does not apply to two_tets");

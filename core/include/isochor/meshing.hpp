@@ -21,8 +21,11 @@ Mesh make_two_tets(double edge);
 // Cylinder along z, meshed by Gmsh with an edge length of 2 pi r / resolution.
 // Node sets: bottom, top (the nodes on the end discs).
 Mesh make_cylinder(double radius, double height, int resolution, const Eigen::Vector3d& center);
-// Sphere meshed by Gmsh, by edge length or (edge_length <= 0) by a target tet count.
-Mesh make_sphere(double radius, double edge_length, long target_tets, const Eigen::Vector3d& center);
+// Sphere meshed by Gmsh, by edge length or (edge_length <= 0) by a target tet count; with
+// inner_radius > 0 a hollow sphere (a thick-walled shell), its wall's nodes in the node sets
+// "inner" and "outer".
+Mesh make_sphere(double radius, double edge_length, long target_tets, const Eigen::Vector3d& center,
+                 double inner_radius = 0.0);
 
 // Capsule (a cylinder with hemispherical ends) around the segment a-b, meshed by Gmsh with the
 // given edge length: a limb around its bones.
