@@ -509,3 +509,30 @@ TEST(SupportsLong, ThickWalledSphereConvergesToTheClosedForm) {
               h_ratio, h_ratio * h_ratio);
   EXPECT_GT(error[0] / error[1], 0.5 * (h_ratio + h_ratio * h_ratio));  // nearer second order than first
 }
+
+// A load's history by keyframes: piecewise linear through (times, factors), held outside, its keys
+// IDA's breakpoints; the force follows it.
+TEST(Supports, KeyframedLoadFollowsItsFactors) {
+  const Scene sc = scene(std::string(kBar) + R"(
+[[load]]
+select = { kind = "set", name = "xmax" }
+force = [4.0, 0.0, 0.0]
+times = [0.1, 0.3, 0.6]
+factors = [0.0, 1.0, -0.5]
+)");
+  const LoadHistory& h = sc.loads.at(0).history;
+  for (const auto& [t, expected] : std::vector<std::pair<double, double>>{{0.0, 0.0}, {0.2, 0.5}, {0.3, 1.0}, {0.45, 0.25}, {0.9, -0.5}})
+    EXPECT_NEAR(h.factor(t), expected, 1e-15) << t;
+  const std::vector<double> expected_breaks{0.1, 0.3, 0.6};
+  EXPECT_EQ(sc.breakpoints(), expected_breaks);
+  auto sys = make_scene_system(sc);
+  VectorXd q, v, f;
+  sys->initial_state(0.0, q, v);
+  sys->force(0.45, q, v, f);  // at rest: the elastic force is zero, the load alone remains
+  double fx = 0;
+  for (int f3 = 0; f3 < sys->dofs().num_free(); ++f3) fx += f[3 * f3];
+  EXPECT_NEAR(fx, 0.25 * 4.0, 1e-12);
+  EXPECT_NE(test::error_of([&] { scene(std::string(kBar) + "[[load]]\nselect = { kind = \"set\", name = \"xmax\" }\nforce = [1.0, 0.0, 0.0]\ntimes = [0.0, 1.0]\nfactors = [1.0]\n"); })
+                .find("expected one factor per time (2), got 1"),
+            std::string::npos);
+}

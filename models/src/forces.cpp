@@ -84,7 +84,7 @@ double ExternalPotential::add_gradient(const Points& x, Eigen::VectorXd& grad) c
   double E = 0.0;
   const Vec3 gravity = g();
   for (const NodeLoad& l : loads_) {
-    const double s = l.factor(time_);
+    const double s = l.history.factor(time_);
     for (std::size_t k = 0; k < l.nodes.size(); ++k) {
       E -= s * l.force[k].dot(x.col(l.nodes[k]));
       grad.segment<3>(3 * l.nodes[k]) -= s * l.force[k];
@@ -113,6 +113,22 @@ void ExternalPotential::add_hessian(const Points& x, double scale, double* value
     }
 }
 
+double LoadHistory::factor(double t) const {
+  if (!times.empty()) {
+    if (t <= times.front()) return factors.front();
+    if (t >= times.back()) return factors.back();
+    const std::size_t i = static_cast<std::size_t>(std::upper_bound(times.begin(), times.end(), t) - times.begin()) - 1;
+    const double s = (t - times[i]) / (times[i + 1] - times[i]);
+    return (1 - s) * factors[i] + s * factors[i + 1];
+  }
+  return ramp > 0 ? std::clamp(t / ramp, 0.0, 1.0) : 1.0;
+}
+
+void LoadHistory::breakpoints(std::vector<double>& out) const {
+  if (ramp > 0) out.push_back(ramp);
+  out.insert(out.end(), times.begin(), times.end());
+}
+
 PressureLoads::PressureLoads(std::vector<PressureLoad> loads, const DofMap& dofs, const Pattern& pattern)
     : loads_(std::move(loads)) {
   for (const PressureLoad& l : loads_) {
@@ -127,7 +143,7 @@ PressureLoads::PressureLoads(std::vector<PressureLoad> loads, const DofMap& dofs
 
 void PressureLoads::add_gradient(const Points& x, Eigen::VectorXd& grad) const {
   for (const PressureLoad& l : loads_) {
-    const double p = l.pressure * l.factor(time_);
+    const double p = l.pressure * l.history.factor(time_);
     for (const Tri& t : l.faces) {
       const Vec3 a = 0.5 * (x.col(t[1]) - x.col(t[0])).cross(x.col(t[2]) - x.col(t[0]));
       for (int v : t) grad.segment<3>(3 * v) += p / 3.0 * a;
@@ -138,7 +154,7 @@ void PressureLoads::add_gradient(const Points& x, Eigen::VectorXd& grad) const {
 void PressureLoads::add_jacobian(const Points& x, double* values) const {
   for (std::size_t k = 0; k < loads_.size(); ++k) {
     const PressureLoad& l = loads_[k];
-    const double p = l.pressure * l.factor(time_);
+    const double p = l.pressure * l.history.factor(time_);
     for (std::size_t f = 0; f < l.faces.size(); ++f) {
       const Tri& t = l.faces[f];
       const Index* s = slots_[k].data() + 81 * f;

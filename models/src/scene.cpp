@@ -62,10 +62,8 @@ std::vector<double> Scene::breakpoints() const {
   for (const GroundSpec& p : contact_planes())
     if (p.enabled && p.displacement.squaredNorm() > 0) t.insert(t.end(), {p.t0, p.t1});
   if (gravity_ramp > 0) t.push_back(gravity_ramp);
-  for (const NodeLoad& l : loads)
-    if (l.ramp > 0) t.push_back(l.ramp);
-  for (const PressureLoad& l : pressure_loads)
-    if (l.ramp > 0) t.push_back(l.ramp);
+  for (const NodeLoad& l : loads) l.history.breakpoints(t);
+  for (const PressureLoad& l : pressure_loads) l.history.breakpoints(t);
   std::sort(t.begin(), t.end());
   t.erase(std::unique(t.begin(), t.end()), t.end());
   return t;
@@ -214,12 +212,24 @@ void parse_load(const Section& l, const Mesh& mesh, Scene& sc) {
   if (!sel.exists()) l.fail("select", "missing, expected the nodes to load, e.g. { kind = \"set\", name = \"xmax\" }");
   const std::vector<int> nodes = select_nodes(mesh, Selection::parse(sel));
   const std::string kind = l.string("kind", "point", {"point", "traction", "pressure"});
-  const double ramp = l.number("ramp", 0.0, Range::non_negative());
+  LoadHistory history;
+  history.ramp = l.number("ramp", 0.0, Range::non_negative());
+  if (l.has("times") || l.has("factors")) {
+    if (l.has("ramp")) l.fail("ramp", "give either ramp or times and factors, not both");
+    history.times = l.numbers("times");
+    history.factors = l.numbers("factors");
+    if (history.times.size() < 2) l.fail("times", "expected at least 2 increasing times (s)");
+    if (history.factors.size() != history.times.size())
+      l.fail("factors", "expected one factor per time (" + std::to_string(history.times.size()) + "), got " +
+                            std::to_string(history.factors.size()));
+    for (std::size_t i = 1; i < history.times.size(); ++i)
+      if (!(history.times[i] > history.times[i - 1])) l.fail("times", "expected increasing times");
+  }
   if (kind == "point") {
     if (!l.has("force")) l.fail("force", "missing, a point load needs its force [x, y, z] (N)");
     const Vec3 f = l.vec3("force", {});
     const bool split = l.boolean("split", true);
-    sc.loads.push_back({nodes, std::vector<Vec3>(nodes.size(), split ? Vec3(f / static_cast<double>(nodes.size())) : f), ramp});
+    sc.loads.push_back({nodes, std::vector<Vec3>(nodes.size(), split ? Vec3(f / static_cast<double>(nodes.size())) : f), history});
     return;
   }
   std::vector<char> in(mesh.num_nodes(), 0);
@@ -230,7 +240,7 @@ void parse_load(const Section& l, const Mesh& mesh, Scene& sc) {
   if (faces.empty()) l.fail("select", "selects no surface triangle (expected the corners of at least one boundary face)");
   if (kind == "pressure") {
     if (!l.has("pressure")) l.fail("pressure", "missing, a pressure load needs its pressure (Pa)");
-    sc.pressure_loads.push_back({faces, l.number("pressure", 0.0), ramp});
+    sc.pressure_loads.push_back({faces, l.number("pressure", 0.0), history});
     return;
   }
   if (!l.has("traction")) l.fail("traction", "missing, a traction needs its force per area [x, y, z] (N/m^2)");
@@ -242,7 +252,7 @@ void parse_load(const Section& l, const Mesh& mesh, Scene& sc) {
     for (int v : t) per_node.try_emplace(v, Vec3::Zero()).first->second += tr * area / 3.0;
   }
   NodeLoad load;
-  load.ramp = ramp;
+  load.history = history;
   for (const auto& [v, f] : per_node) {
     load.nodes.push_back(v);
     load.force.push_back(f);

@@ -26,18 +26,28 @@ struct GroundSpec {
   Vec3 velocity_at(double t) const;
 };
 
+// How a load grows in time (statics: pseudo-time): min(1, t / ramp) (ramp = 0: full at once), or
+// piecewise linear through (times, factors), held outside them.
+struct LoadHistory {
+  double ramp = 0.0;  // s
+  std::vector<double> times, factors;
+  double factor(double t) const;
+  // Where the factor is not smooth: the ramp's end, every key.
+  void breakpoints(std::vector<double>& out) const;
+};
+
 // A dead load on nodes ([[load]]): a fixed force on each node (N), from a point load or a
-// traction on a surface, multiplied by min(1, t / ramp) (ramp = 0: full at once).
+// traction on a surface, times its history's factor.
 struct NodeLoad {
   std::vector<int> nodes;
   std::vector<Vec3> force;  // per node
-  double ramp = 0.0;        // s (statics: pseudo-time)
-  double factor(double t) const { return ramp > 0 ? std::clamp(t / ramp, 0.0, 1.0) : 1.0; }
+  LoadHistory history;
 };
 
 // A pressure on surface triangles ([[load]] kind = "pressure"): a follower load, normal to the
 // deformed surface. On a triangle (x0, x1, x2) with area vector a = (x1 - x0) x (x2 - x0) / 2
-// (outward for the mesh's counter-clockwise surface triangles), each corner gets f = -p s(t) a / 3:
+// (outward for the mesh's counter-clockwise surface triangles), each corner gets f = -p s(t) a / 3
+// (s the history's factor):
 // p > 0 pushes into the body. Its Jacobian d f_i / d x_j = -p s / 6 skew(x_(j+2) - x_(j+1))
 // (indices mod 3) is not symmetric on an open surface: exact with KLU (the default of IDA and
 // statics), approximated by its symmetric use in the reduced and krylov solvers. Not an energy in
@@ -45,8 +55,7 @@ struct NodeLoad {
 struct PressureLoad {
   std::vector<Tri> faces;
   double pressure = 0.0;  // Pa
-  double ramp = 0.0;      // s, as NodeLoad
-  double factor(double t) const { return ramp > 0 ? std::clamp(t / ramp, 0.0, 1.0) : 1.0; }
+  LoadHistory history;
 };
 
 class PressureLoads {
