@@ -1,6 +1,7 @@
 #include "isochor/xpbd_system.hpp"
 
 #include <Eigen/Dense>
+#include <map>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -18,9 +19,15 @@ XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_
     throw Error(scene.file.name() + ": [damping] is not available with integrator.kind = \"xpbd\" (expected no Rayleigh damping)");
   if (!scene.loads.empty() || !scene.pressure_loads.empty())
     throw Error(scene.file.name() + ": [[load]] is not available with integrator.kind = \"xpbd\" (expected gravity as its only load)");
+  std::map<int, std::size_t> held_at;
   for (const Driver& d : scene.boundary)
-    if (!d.held.empty())
-      throw Error(scene.file.name() + ": a [[boundary]] that holds some components is not available with integrator.kind = \"xpbd\" (expected drivers of all three components)");
+    for (int v : d.nodes)
+      for (const Eigen::Vector3d& dir : d.held) {
+        auto [it, added] = held_at.try_emplace(v, held_.size());
+        if (added) held_.push_back({v, {}, {}});
+        held_[it->second].dirs.push_back(dir);
+        held_[it->second].drivers.push_back(&d);
+      }
   for (const GroundSpec& g : scene.contact_planes())
     if (g.enabled && g.damping != 0)
       throw Error(scene.file.name() + ": contact damping is not available with integrator.kind = \"xpbd\" (its contact is a "
@@ -64,10 +71,30 @@ void XpbdMeshSystem::external_acceleration(double t, Eigen::VectorXd& a) {
 }
 
 void XpbdMeshSystem::prescribe(double t, Eigen::VectorXd& x, Eigen::VectorXd& v) {
+  t_ = t;
   if (scene_.boundary.empty() && !scene_.skeleton) return;
   Points xp = Eigen::Map<const Points>(x.data(), 3, num_points());
   scene_.drive(t, xp, &v);
   x = Eigen::Map<const Eigen::VectorXd>(xp.data(), xp.size());
+  hold(t, x, &v);
+}
+
+void XpbdMeshSystem::hold(double t, Eigen::VectorXd& x, Eigen::VectorXd* v) const {
+  const Points& X = scene_.mesh.rest_positions();
+  for (const Held& h : held_) {
+    const int k = static_cast<int>(h.dirs.size());
+    Eigen::MatrixXd D(3, k);
+    Eigen::VectorXd r(k), rv(k);
+    for (int j = 0; j < k; ++j) {
+      D.col(j) = h.dirs[j];
+      r[j] = h.dirs[j].dot(x.segment<3>(3 * h.node) - X.col(h.node) - h.drivers[j]->displacement(t));
+      if (v) rv[j] = h.dirs[j].dot(v->segment<3>(3 * h.node) - h.drivers[j]->velocity(t));
+    }
+    // The nearest point (and velocity) that satisfies every held direction: D (D^T D)^-1 r off.
+    const Eigen::MatrixXd DtD = D.transpose() * D;
+    x.segment<3>(3 * h.node) -= D * DtD.ldlt().solve(r);
+    if (v) v->segment<3>(3 * h.node) -= D * DtD.ldlt().solve(rv);
+  }
 }
 
 double XpbdMeshSystem::constraint(int c, const Eigen::VectorXd& x, std::vector<int>& points, std::vector<double>& grad) {
@@ -93,6 +120,11 @@ double XpbdMeshSystem::constraint(int c, const Eigen::VectorXd& x, std::vector<i
 }
 
 void XpbdMeshSystem::after_sweep(double, Eigen::VectorXd& x) {
+  project_zones(x);
+  hold(t_, x, nullptr);  // last: the held components exactly, the zones to the sweeps' tolerance
+}
+
+void XpbdMeshSystem::project_zones(Eigen::VectorXd& x) {
   if (zones_.size() == 0) return;
   // Each zone: one hard constraint V_j(x) = V_j(rest), projected in turn with fresh values.
   for (int j = 0; j < zones_.size(); ++j) {

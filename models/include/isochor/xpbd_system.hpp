@@ -2,8 +2,9 @@
 // C_D = sqrt(tr F^T F) with compliance 1/(mu V) and a hydrostatic one C_H = det F - gamma with
 // compliance 1/(lambda' V), lambda' = lambda + mu, gamma = 1 + mu/lambda' (Smith et al.'s rest
 // stability; the energy of `snh_simple`); lambda = infinity (nu = 0.5) makes C_H hard with
-// gamma = 1. Zones add one hard zone-volume constraint each, projected after every sweep. Driven
-// nodes have zero inverse mass; the ground is a collision plane points are projected onto.
+// gamma = 1. Zones add one hard zone-volume constraint each, projected after every sweep, and so are
+// the components that partial supports hold. Driven nodes have zero inverse mass; the ground is a
+// collision plane points are projected onto.
 #pragma once
 #include "isochor/constraints.hpp"
 #include "isochor/elements.hpp"
@@ -34,6 +35,18 @@ class XpbdMeshSystem : public ProjectiveSystem {
   double gamma_ = 1.0;
   Eigen::VectorXd w_;
   VolumeConstraints zones_;
+  // Nodes of [[boundary]] drivers that hold some components: their held directions and drivers,
+  // projected exactly (onto the intersection of the planes d . x = d . (X + u(t))) after every
+  // sweep; t_ the substep's time (from prescribe).
+  struct Held {
+    int node;
+    std::vector<Eigen::Vector3d> dirs;
+    std::vector<const Driver*> drivers;
+  };
+  std::vector<Held> held_;
+  double t_ = 0.0;
+  void hold(double t, Eigen::VectorXd& x, Eigen::VectorXd* v) const;
+  void project_zones(Eigen::VectorXd& x);
   std::vector<std::vector<double>> zone_grad_;
   Eigen::VectorXd zone_value_;
 };
