@@ -42,8 +42,9 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
                            bool progress) {
   const auto start = std::chrono::steady_clock::now();
   const bool tets = sys.has_tets();
-  return [&, start, tets, pressure = std::vector<double>()](int k, double t, const VectorXd& q, const VectorXd& v,
-                                                            const VectorXd& lambda, const RunStats::FrameSample& s) mutable {
+  return [&, start, tets, pressure = std::vector<double>(), loads = Points()](
+             int k, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
+             const RunStats::FrameSample& s) mutable {
     sys.set_state(t, q, v);
     Frame f;
     f.time = t;
@@ -53,6 +54,10 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
     if (tets && sc.output.pressure) {
       sys.pressures(lambda, pressure);
       f.pressure = &pressure;
+    }
+    if (sys.has_loads()) {
+      sys.loads(loads);
+      f.loads = &loads;
     }
     if (tets) f.stats.push_back({"inverted_tets", static_cast<double>(sys.inverted_tets())});
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

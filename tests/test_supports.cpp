@@ -7,6 +7,8 @@
 #include <cmath>
 
 #include "isochor/integrator_registry.hpp"
+#include "isochor/output_reader.hpp"
+#include "run.hpp"
 #include "isochor/meshing.hpp"
 #include "isochor/scene.hpp"
 #include "isochor/scene_system.hpp"
@@ -562,4 +564,24 @@ TEST(Supports, XpbdHoldsTheComponentsByProjection) {
   // fall; an error of the scheme (a lost substep, momentum from the supports) is ~1e-5 m.
   EXPECT_LT(worst_yz, 1e-10);
   EXPECT_GT(sag, 1e-4);
+}
+
+// The loads are written with every frame (/frames/load, per node): their sum is the applied force
+// times the history's factor at that frame.
+TEST(Supports, LoadsAreWrittenWithEveryFrame) {
+  const auto dir = test::temp_dir();
+  const Scene sc = scene(std::string(kBar) + R"(
+[[load]]
+select = { kind = "set", name = "xmax" }
+kind = "traction"
+traction = [800.0, 0.0, 0.0]
+ramp = 1.0
+)");
+  RunFile f(run_scene(sc, (dir / "loads.h5").string(), false).output);
+  ASSERT_EQ(f.num_frames(), 11);
+  for (int k = 0; k < f.num_frames(); ++k) {
+    const Eigen::Vector3d total = f.loads(k).rowwise().sum();
+    EXPECT_NEAR(total.x(), 800.0 * kArea * f.times()[k], 1e-9) << k;
+    EXPECT_NEAR(total.tail<2>().norm(), 0.0, 1e-12);
+  }
 }

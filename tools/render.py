@@ -2,13 +2,15 @@
 """Draw frames of an isochor run to PNG (and an MP4 with ffmpeg).
 
     /usr/bin/python3 tools/render.py RUN.h5 [--frames 0,10,-1 | flattest | --every N] [--color displacement|pressure|zone]
-                                     [--out DIR] [--mp4] [--elev 20 --azim -60]
+                                     [--out DIR] [--mp4] [--elev 20 --azim -60] [--loads]
 
 The surface is shaded by its normals and coloured per triangle: by displacement from rest (m),
 (--out FILE.png with one frame writes that file),
 by the pressure of the tet under it (Pa; runs with output.pressure = true), or by zone (the
 first zone holding the tet). The ground (z = 0 plane under the body) is drawn when the run's
-scene enables contact with the ground.
+scene enables contact with the ground. --loads draws the applied loads (/frames/load, runs whose
+scene has [[load]]) as arrows at the loaded nodes, the largest a fifth of the body's size, with
+the total force in the title.
 """
 import argparse
 import os
@@ -45,6 +47,7 @@ def main():
     ap.add_argument("--mp4", action="store_true")
     ap.add_argument("--elev", type=float, default=18)
     ap.add_argument("--azim", type=float, default=-60)
+    ap.add_argument("--loads", action="store_true")
     a = ap.parse_args()
     f = h5py.File(a.run, "r")
     X = f["/mesh/rest_positions"][()]
@@ -75,6 +78,8 @@ def main():
         gz = float(scene.get("contact", {}).get("point", [0, 0, 0])[2])
     except Exception:  # noqa: BLE001 - a run without its scene text is drawn without the ground
         pass
+    if a.loads and "/frames/load" not in f:
+        sys.exit(f"{a.run}: no /frames/load (the scene has no [[load]])")
     if a.color == "pressure" and "/frames/pressure" not in f:
         sys.exit(f"{a.run}: no /frames/pressure (run the scene with output.pressure = true)")
     zone_of = np.zeros(len(T), dtype=int)
@@ -131,6 +136,16 @@ def main():
         order = np.argsort(tri.mean(1) @ view)
         ax.add_collection3d(Poly3DCollection(tri[order], facecolors=(rgb * shade[:, None])[order], edgecolors="none",
                                              zorder=1))
+        title_load = ""
+        if a.loads:
+            L = f["/frames/load"][k]
+            on = np.linalg.norm(L, axis=1) > 0
+            biggest = max(np.linalg.norm(f["/frames/load"][j], axis=1).max() for j in frames) or 1.0
+            s = 0.2 * span / biggest
+            ax.quiver(x[on, 0], x[on, 1], x[on, 2], s * L[on, 0], s * L[on, 1], s * L[on, 2], color="crimson",
+                      arrow_length_ratio=0.3, linewidth=0.8, zorder=2)
+            tot = L.sum(0)
+            title_load = f"  load {np.linalg.norm(tot):.3g} N"
         ax.set_xlim(mid[0] - span / 2, mid[0] + span / 2)
         ax.set_ylim(mid[1] - span / 2, mid[1] + span / 2)
         ax.set_zlim(mid[2] - span / 2, mid[2] + span / 2)
@@ -147,7 +162,7 @@ def main():
             sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(vmin, vmax))
             label = {"displacement": "displacement (m)", "pressure": "pressure (Pa)"}[a.color]
             fig.colorbar(sm, ax=ax, shrink=0.6, label=label)
-        ax.set_title(f"{os.path.basename(a.run)}  t = {times[k]:.4f} s")
+        ax.set_title(f"{os.path.basename(a.run)}  t = {times[k]:.4f} s{title_load}")
         path = a.out if single else os.path.join(out, f"frame_{k:06d}.png")
         fig.savefig(path, dpi=100, bbox_inches="tight")
         plt.close(fig)

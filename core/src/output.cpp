@@ -140,7 +140,7 @@ struct OutputWriter::Impl {
   H file;
   int nodes = 0, tets = 0, frames = 0;
   bool pressure = false;
-  std::unique_ptr<Series> time, positions, volume, energy, pressure_series;
+  std::unique_ptr<Series> time, positions, volume, energy, pressure_series, load_series;
   std::map<std::string, std::unique_ptr<Series>> stats;
   H frames_group, xdmf_group, stats_group;
 
@@ -340,6 +340,15 @@ void OutputWriter::write_frame(const Frame& f) {
     m.pressure_series->append(k, f.pressure->data());
     m.add_frame_view("/frames/pressure", m.frames, 0, "pressure");
   }
+  if (f.loads) {
+    if (f.loads->cols() != m.nodes) throw Error(m.path + ": a frame's loads need every node");
+    if (!m.load_series) {
+      if (k > 0) throw Error(m.path + ": loads appeared after the first frame");
+      m.load_series = std::make_unique<Series>(m.frames_group, "load", std::vector<hsize_t>{static_cast<hsize_t>(m.nodes), 3},
+                                               H5T_NATIVE_DOUBLE);
+    }
+    m.load_series->append(k, f.loads->data());
+  }
   for (const auto& [name, value] : f.stats) {
     auto it = m.stats.find(name);
     if (it == m.stats.end()) {
@@ -369,6 +378,7 @@ void OutputWriter::close() {
   m.volume.reset();
   m.energy.reset();
   m.pressure_series.reset();
+  m.load_series.reset();
   m.stats.clear();
   m.frames_group.reset();
   m.xdmf_group.reset();

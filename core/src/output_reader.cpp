@@ -156,6 +156,13 @@ std::vector<double> RunFile::pressures(int frame) const {
   return p;
 }
 
+Points RunFile::loads(int frame) const {
+  if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
+  Points f(3, num_nodes());
+  read_frame_row(impl_->file, impl_->path, "/frames/load", frame, 3, static_cast<hsize_t>(num_nodes()), f.data());
+  return f;
+}
+
 std::map<std::string, std::string> RunFile::attributes() const {
   std::map<std::string, std::string> out;
   for (const char* k : {"scene", "scene_file", "command", "isochor_version", "git_revision"})

@@ -80,16 +80,22 @@ double ExternalPotential::energy(const Points& x) const {
   return add_gradient(x, unused);
 }
 
-double ExternalPotential::add_gradient(const Points& x, Eigen::VectorXd& grad) const {
+double ExternalPotential::add_load_gradient(Eigen::VectorXd& grad, const Points* x) const {
   double E = 0.0;
-  const Vec3 gravity = g();
   for (const NodeLoad& l : loads_) {
     const double s = l.history.factor(time_);
     for (std::size_t k = 0; k < l.nodes.size(); ++k) {
-      E -= s * l.force[k].dot(x.col(l.nodes[k]));
+      if (x) E -= s * l.force[k].dot(x->col(l.nodes[k]));
       grad.segment<3>(3 * l.nodes[k]) -= s * l.force[k];
     }
   }
+  return E;
+}
+
+double ExternalPotential::add_gradient(const Points& x, Eigen::VectorXd& grad) const {
+  double E = 0.0;
+  const Vec3 gravity = g();
+  E += add_load_gradient(grad, &x);
   for (int i = 0; i < x.cols(); ++i) {
     E -= mass_[i] * gravity.dot(x.col(i));
     grad.segment<3>(3 * i) -= mass_[i] * gravity;

@@ -174,6 +174,13 @@ void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd
   if (neg_dfdv && damping_.alpha != 0) RayleighDamping{damping_.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
 }
 
+void MeshSystem::loads(Points& out) const {
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(x_.size());
+  external_->add_load_gradient(g);
+  pressure_loads_->add_gradient(x_, g);
+  out = -Eigen::Map<const Points>(g.data(), 3, x_.cols());
+}
+
 void MeshSystem::set_positions(double t, const VectorXd& q) {
   for (int f = 0; f < dofs_.num_free(); ++f) x_.col(dofs_.free_nodes[f]) = q.segment<3>(3 * f);
   if (t != state_t_) {

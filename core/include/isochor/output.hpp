@@ -23,6 +23,7 @@ struct Frame {
   std::vector<double> volumes;           // total, then each zone (in the order given at open)
   std::array<double, 3> energy{0, 0, 0};  // kinetic, elastic, external potential
   const std::vector<double>* pressure = nullptr;  // per tet, when pressure output is on
+  const Points* loads = nullptr;  // the applied load on every node (N), when the scene has loads
   std::vector<std::pair<std::string, double>> stats;  // per-frame series under /stats
 };
 

@@ -26,6 +26,7 @@ class RunFile {
   Points rest_positions() const;
   Points positions(int frame) const;
   std::vector<double> pressures(int frame) const;  // per tet; the run must have output.pressure = true
+  Points loads(int frame) const;                   // per node (N); the scene must have [[load]]
   std::map<std::string, std::string> attributes() const;       // root attributes (strings)
   std::map<std::string, double> stat_totals() const;           // numeric attributes of /stats
   std::map<std::string, std::vector<double>> stat_series() const;  // datasets under /stats

@@ -93,6 +93,8 @@ class ExternalPotential {
   // Moves the contact planes to where they are at time t, and scales the loads.
   void set_time(double t);
   void set_loads(std::vector<NodeLoad> loads) { loads_ = std::move(loads); }
+  // grad += -(the loads' forces) at the current time; returns their potential -f . x.
+  double add_load_gradient(Eigen::VectorXd& grad, const Points* x = nullptr) const;
   // The contact planes' normal damping: grad += -f (every node, 3 N), for velocities xdot (3 N).
   void add_damping(const Points& x, const Eigen::VectorXd& xdot, Eigen::VectorXd& grad) const;
   // -df/dx and -df/dv of the damping over the free dofs (either may be null).

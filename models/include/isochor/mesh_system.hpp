@@ -61,6 +61,8 @@ class MeshSystem : public SceneSystem {
   void pressures(const VectorXd& lambda, std::vector<double>& p) const override;
   bool has_tets() const override { return true; }
   int inverted_tets() const override { return elastic_->inverted_tets(x_); }
+  bool has_loads() const override { return !scene_.loads.empty() || !pressure_loads_->empty(); }
+  void loads(Points& out) const override;
   const DofMap& dofs() const override { return dofs_; }
 
  private:

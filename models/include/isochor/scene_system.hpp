@@ -29,6 +29,9 @@ class SceneSystem : public ConstrainedSystem {
   virtual void pressures(const VectorXd& /*lambda*/, std::vector<double>& /*p*/) const {}
   // Inverted tets at the current state.
   virtual int inverted_tets() const { return 0; }
+  // Whether the scene applies [[load]]s, and the load on every node at the current state (N).
+  virtual bool has_loads() const { return false; }
+  virtual void loads(Points& /*out*/) const {}
 };
 
 // The scene's system: MassSpringSystem for material.model = "mass_spring", else MeshSystem.
