@@ -2,6 +2,8 @@
 
 #include "isochor/fixed_step.hpp"
 
+#include <Eigen/LU>
+
 namespace isochor {
 
 HongStep::HongStep(ConstrainedSystem& system, HongOptions options) : sys_(system), opt_(std::move(options)) {}
@@ -9,17 +11,22 @@ HongStep::HongStep(ConstrainedSystem& system, HongOptions options) : sys_(system
 RunStats HongStep::run(const std::vector<double>& times, const FrameCallback& on_frame) {
   RunStats stats;
   const Index n = sys_.num_dofs(), m = sys_.num_constraints();
-  if (m > 1) throw IntegrationError(times.front(), "Hong's step enforces one constraint, this system has " + std::to_string(m));
   const int group = sys_.dofs_per_group();
   VectorXd w = VectorXd::Ones(n);
   if (opt_.weights.size())
     for (Index i = 0; i < n; ++i) w[i] = opt_.weights[i / group];
   const VectorXd& M = sys_.mass();
   const double h = opt_.dt;
-  VectorXd q0, v0, f(n), g(m), gt(m), Gf = VectorXd::Zero(n);
+  const auto& rows = sys_.constraint_rows();
+  VectorXd q0, v0, f(n), g(m), gt(m), c = VectorXd::Zero(n);
+  Eigen::MatrixXd A(m, m);
+  VectorXd b(m);
   std::vector<std::vector<double>> G(m);
-  if (m) G[0].resize(sys_.constraint_rows()[0].size());
+  for (Index j = 0; j < m; ++j) G[j].resize(rows[j].size());
   sys_.initial_state(times.front(), q0, v0);
+  // Row k's velocity correction is -h W_k M^-1 G_k^T l_k, W_k Hong's weights for the first
+  // weighted_rows rows (the enclosed volume), 1 for the rest (supports).
+  auto weight = [&](Index k, Index d) { return k < opt_.weighted_rows ? w[d] : 1.0; };
   auto step = [&](double t, double, const VectorXd& q, const VectorXd& v, VectorXd& q1, VectorXd& v1, VectorXd& l1,
                   std::string& reason) {
     sys_.force(t, q, v, f);
@@ -27,17 +34,27 @@ RunStats HongStep::run(const std::vector<double>& times, const FrameCallback& on
     v1 = v + h * f.cwiseQuotient(M);
     l1.resize(m);
     if (m) {
+      // Every row holds after the step to first order: G (q + h v1) + g = 0 with g_t, i.e.
+      // sum_k (G_j W_k M^-1 G_k^T) l_k = g_j / h^2 + g_t,j / h + G_j (v / h + M^-1 f).
       sys_.constraint(t, q, g);
       sys_.constraint_jacobian(t, q, G, &gt);
-      const auto& rows = sys_.constraint_rows()[0];
-      double a = 0, b = g[0] / (h * h) + gt[0] / h;
-      for (std::size_t k = 0; k < rows.size(); ++k) {
-        const Index d = rows[k];
-        a += G[0][k] * w[d] * G[0][k] / M[d];
-        b += G[0][k] * (v[d] / h + f[d] / M[d]);
+      for (Index j = 0; j < m; ++j) {
+        b[j] = g[j] / (h * h) + gt[j] / h;
+        for (std::size_t k = 0; k < rows[j].size(); ++k) b[j] += G[j][k] * (v[rows[j][k]] / h + f[rows[j][k]] / M[rows[j][k]]);
       }
-      l1[0] = b / a;
-      for (std::size_t k = 0; k < rows.size(); ++k) v1[rows[k]] -= h * w[rows[k]] * G[0][k] * l1[0] / M[rows[k]];
+      for (Index k = 0; k < m; ++k) {
+        for (std::size_t i = 0; i < rows[k].size(); ++i) c[rows[k][i]] = weight(k, rows[k][i]) * G[k][i] / M[rows[k][i]];
+        for (Index j = 0; j < m; ++j) {
+          double s = 0;
+          for (std::size_t i = 0; i < rows[j].size(); ++i) s += G[j][i] * c[rows[j][i]];
+          A(j, k) = s;
+        }
+        for (Index d : rows[k]) c[d] = 0;
+      }
+      l1 = m == 1 ? VectorXd(b / A(0, 0)) : VectorXd(A.partialPivLu().solve(b));
+      for (Index k = 0; k < m; ++k)
+        for (std::size_t i = 0; i < rows[k].size(); ++i)
+          v1[rows[k][i]] -= h * weight(k, rows[k][i]) * G[k][i] * l1[k] / M[rows[k][i]];
     }
     q1 = q + h * v1;
     if (!q1.allFinite()) {

@@ -31,10 +31,6 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
   if (!scene.pressure_loads.empty())
     throw Error(scene.file.name() + ": a pressure [[load]] is not available with material.model = \"mass_spring\" (expected "
                                     "point loads or tractions)");
-  for (const Driver& d : scene.boundary)
-    if (!d.held.empty())
-      throw Error(scene.file.name() + ": a [[boundary]] that holds some components is not available with material.model = "
-                                      "\"mass_spring\" (expected drivers of all three components)");
   std::vector<char> moving(N, 0);
   for (int v : mesh.surface_nodes()) moving[v] = 1;
   // Driven surface nodes follow their drivers; driven interior nodes are carried like the rest
@@ -76,6 +72,9 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
   volume_ = VolumeConstraints::surface(mesh, dofs_, pattern_);
   rest_volume_ = volume_.rest_volumes()[0];
   if (constrained_) rows_.push_back(volume_.row_dofs(0));
+  supports_ = make_supports(scene, dofs_);
+  if (supports_)
+    for (int j = 0; j < supports_->size(); ++j) rows_.push_back(supports_->row_dofs(j));
   double Lmean = 0;
   for (const Spring& s : springs_) Lmean += s.rest_length / springs_.size();
   force_scale_ = std::max(node_mass_.sum() * std::max(scene.gravity.norm(), 1.0), k_ * Lmean);
@@ -106,6 +105,7 @@ void MassSpringSystem::place(double t, const VectorXd& q) {
   for (int f = 0; f < dofs_.num_free(); ++f) x_.col(dofs_.free_nodes[f]) = q.segment<3>(3 * f);
   if (t != state_t_) {
     scene_at_time(scene_, t, x_, xdot_, *external_);
+    if (supports_) supports_->set_time(t);
     state_t_ = t;
   }
 }
@@ -171,26 +171,36 @@ void MassSpringSystem::add_force_jacobians(double t, const VectorXd& q, const Ve
 
 void MassSpringSystem::constraint(double t, const VectorXd& q, VectorXd& g) {
   place(t, q);
-  if (constrained_) volume_.value(x_, g);
-  else g.resize(0);
+  g.resize(num_constraints());
+  if (constrained_) volume_.value(x_, g.data());
+  if (supports_) supports_->value(x_, g.data() + volume_rows());
 }
 
 void MassSpringSystem::constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* g_t) {
   place(t, q);
-  if (!constrained_) return;
-  volume_.gradient(x_, G);
-  if (g_t) volume_.time_derivative(x_, xdot_, *g_t);
+  G.resize(num_constraints());
+  if (g_t) g_t->resize(num_constraints());
+  if (constrained_) {
+    volume_.gradient(x_, G.data());
+    if (g_t) volume_.time_derivative(x_, xdot_, g_t->data());
+  }
+  if (supports_) {
+    supports_->gradient(x_, G.data() + volume_rows());
+    if (g_t) supports_->time_derivative(x_, xdot_, g_t->data() + volume_rows());
+  }
 }
 
 void MassSpringSystem::add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) {
   place(t, q);
-  if (constrained_) volume_.add_hessian(x_, w, scale, values);
+  if (constrained_) volume_.add_hessian(x_, w.data(), scale, values);  // the supports' rows are linear
 }
 
 void MassSpringSystem::constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
                                                     std::vector<std::vector<double>>& rows) {
   place(t, q, v);
-  if (constrained_) volume_.hessian_times(x_, xdot_, rows);
+  rows.resize(num_constraints());
+  if (constrained_) volume_.hessian_times(x_, xdot_, rows.data());
+  if (supports_) supports_->hessian_times(x_, xdot_, rows.data() + volume_rows());
 }
 
 std::array<double, 3> MassSpringSystem::energies() const {

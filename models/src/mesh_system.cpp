@@ -6,8 +6,6 @@
 #include "isochor/error.hpp"
 #include "isochor/supports.hpp"
 
-#include <Eigen/SVD>
-
 namespace isochor {
 
 std::shared_ptr<const Material> make_material(const MaterialSpec& m) {
@@ -60,28 +58,7 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
 }
 
 void MeshSystem::add_supports(const Scene& scene) {
-  std::vector<ComponentSupports::Row> rows;
-  std::vector<std::vector<Vec3>> dirs(scene.mesh.num_nodes());
-  std::vector<int> first_driver(scene.mesh.num_nodes(), -1);
-  for (std::size_t k = 0; k < scene.boundary.size(); ++k) {
-    const Driver& d = scene.boundary[k];
-    for (int v : d.nodes)
-      for (const Vec3& dir : d.held) {
-        if (first_driver[v] < 0) first_driver[v] = static_cast<int>(k);
-        dirs[v].push_back(dir);
-        // A node's held directions must be independent, or its rows would be singular.
-        Eigen::Matrix<double, 3, Eigen::Dynamic> D(3, dirs[v].size());
-        for (std::size_t i = 0; i < dirs[v].size(); ++i) D.col(static_cast<Index>(i)) = dirs[v][i];
-        const Eigen::JacobiSVD<Eigen::MatrixXd> svd(D);
-        if (dirs[v].size() > 3 || svd.singularValues().minCoeff() < 1e-6)
-          throw Error(scene.file.name() + ": boundary[" + std::to_string(k) + "]: node " + std::to_string(v) +
-                      " is held along a direction that boundary[" + std::to_string(first_driver[v]) +
-                      "] already holds (expected independent components on each node)");
-        rows.push_back({v, dir, &d});
-      }
-  }
-  if (rows.empty()) return;
-  add_constraints(std::make_unique<ComponentSupports>(scene.mesh, std::move(rows), dofs_, std::cbrt(scene.mesh.rest_volume())));
+  if (auto supports = make_supports(scene, dofs_)) add_constraints(std::move(supports));
 }
 
 void MeshSystem::add_constraints(std::unique_ptr<ConstraintSet> set) {

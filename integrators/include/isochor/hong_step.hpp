@@ -5,7 +5,10 @@
 // one scalar lambda, no linear solve. W are their weight vectors (eq. 15; all ones for global
 // deformation); the left side carries W so that the linearised constraint holds exactly (the
 // paper leaves W out there and accepts the error). Without a constraint it is the conventional
-// mass-spring step.
+// mass-spring step. Further rows (supports that hold some components, linear) join the same
+// equation as an m x m system, sum_k Phi_q,j M^-1 W_k Phi_q,k^T lambda_k = ..., W_k Hong's
+// weights for the volume and ones for the supports, so every row's linearisation holds after the
+// step (a linear row exactly).
 #pragma once
 #include "isochor/constrained_system.hpp"
 #include "isochor/integrator.hpp"
@@ -15,6 +18,7 @@ namespace isochor {
 struct HongOptions {
   double dt = 1e-4;
   Eigen::VectorXd weights;  // per dof group (free node); empty: all ones
+  long weighted_rows = 1;   // the first rows the weights apply to (the enclosed volume); 1 for the rest
   long max_steps = 100000000;
 };
 

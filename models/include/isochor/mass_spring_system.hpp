@@ -14,6 +14,7 @@
 #include "isochor/forces.hpp"
 #include "isochor/scene.hpp"
 #include "isochor/scene_system.hpp"
+#include "isochor/supports.hpp"
 
 namespace isochor {
 
@@ -22,7 +23,10 @@ class MassSpringSystem : public SceneSystem {
   explicit MassSpringSystem(const Scene& scene);
 
   int num_dofs() const override { return 3 * dofs_.num_free(); }
-  int num_constraints() const override { return constrained_ ? 1 : 0; }
+  // The enclosed volume (row 0, unless material.volume_constraint = false), then the supports
+  // that hold some components of surface nodes.
+  int num_constraints() const override { return static_cast<int>(rows_.size()); }
+  int volume_rows() const { return constrained_ ? 1 : 0; }
   const VectorXd& mass() const override { return dof_mass_; }
   const SparsePattern& pattern() const override { return pattern_; }
   const std::vector<std::vector<Index>>& constraint_rows() const override { return rows_; }
@@ -36,7 +40,7 @@ class MassSpringSystem : public SceneSystem {
                                     std::vector<std::vector<double>>& rows) override;
   std::vector<double> breakpoints() const override { return scene_.breakpoints(); }
   double force_scale() const override { return force_scale_; }
-  double constraint_scale(int) const override { return rest_volume_; }
+  double constraint_scale(int j) const override { return j < volume_rows() ? rest_volume_ : supports_->scale(0); }
 
   // Diagnostics at a state, as MeshSystem's: every node's position (interior ones carried).
   void set_state(double t, const VectorXd& q, const VectorXd& v) override;
@@ -58,6 +62,7 @@ class MassSpringSystem : public SceneSystem {
   Pattern pattern_;
   std::unique_ptr<ExternalPotential> external_;
   VolumeConstraints volume_;
+  std::unique_ptr<ComponentSupports> supports_;
   std::vector<std::vector<Index>> rows_;
   bool constrained_ = true;
   double k_, c_, rest_volume_, force_scale_ = 1.0;

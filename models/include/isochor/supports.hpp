@@ -9,6 +9,8 @@
 #pragma once
 #include <vector>
 
+#include <memory>
+
 #include "isochor/constraint_set.hpp"
 #include "isochor/drivers.hpp"
 
@@ -41,5 +43,11 @@ class ComponentSupports : public ConstraintSet {
   std::vector<double> target_, rate_;  // d . (X_i + u(t)) and d . u'(t) at the time set
   double length_;
 };
+
+struct Scene;
+// The supports of a scene's [[boundary]] drivers that hold some components (null if none), over
+// `dofs`. Throws an Error naming the drivers if a node's held directions are not independent, or
+// if a held node is not one of the model's unknowns (the mass-spring model's interior).
+std::unique_ptr<ComponentSupports> make_supports(const Scene& scene, const DofMap& dofs);
 
 }  // namespace isochor

@@ -17,6 +17,7 @@ std::unique_ptr<Integrator> make_hong(const Scene& scene, SceneSystem& system) {
   // The scene parser allows this kind only with material.model = "mass_spring".
   auto& springs = dynamic_cast<MassSpringSystem&>(system);
   HongOptions o = scene.integrator.hong;
+  o.weighted_rows = springs.volume_rows();
   if (scene.integrator.weights_radius > 0) {
     VectorXd q, v;
     springs.initial_state(scene.frames.times().front(), q, v);
