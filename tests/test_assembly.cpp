@@ -108,7 +108,9 @@ TEST(Assembly, ColoursShareNoNodeAndThreadsAgree) {
       for (int k = s.chunk_start[c]; k < s.chunk_start[c + 1]; ++k) {
         visits[s.order[k]]++;
         for (int v : tets[s.order[k]]) {
-          if (!mine.count(v)) EXPECT_FALSE(seen[v]);
+          if (!mine.count(v)) {
+            EXPECT_FALSE(seen[v]);
+          }
           mine.insert(v);
         }
       }
