@@ -24,6 +24,9 @@ with meshio.xdmf.TimeSeriesReader(path) as reader:
         expected += 0.01 * k * np.array([1.0, 2.0, 3.0])
         err = np.abs(point_data["position"] - expected).max()
         assert err < 1e-12, (k, err)
+        load = point_data["load"]
+        expected_load = np.stack([0.001 * np.arange(nodes), np.zeros(nodes), np.full(nodes, float(k))], axis=1)
+        assert np.abs(load - expected_load).max() == 0.0, k
         pressure = cell_data["pressure"][0]
         assert pressure.shape == (tets,) and np.all(pressure == 10.0 * k), pressure[:3]
 print("meshio read", nodes, "nodes,", tets, "tets,", frames, "frames: ok")

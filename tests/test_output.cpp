@@ -39,6 +39,9 @@ void write_frames(OutputWriter& w, const Mesh& m, int first, int count, bool zon
     std::vector<double> p(m.num_tets(), 10.0 * k);
     f.pressure = &p;
     f.stats = {{"steps", 4.0 * k}};
+    Points load = Points::Zero(3, m.num_nodes());  // node i: (0.001 i, 0, k) N
+    for (int i = 0; i < m.num_nodes(); ++i) load.col(i) << 0.001 * i, 0.0, k;
+    f.loads = &load;
     w.write_frame(f);
   }
 }

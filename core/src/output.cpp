@@ -191,6 +191,10 @@ struct OutputWriter::Impl {
       << "    <Attribute Name=\"position\" AttributeType=\"Vector\" Center=\"Node\">\n"
       << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
       << h5_name << ":/frames/xdmf/position_" << f << "</DataItem>\n    </Attribute>\n";
+    if (load_series)
+      x << "    <Attribute Name=\"load\" AttributeType=\"Vector\" Center=\"Node\">\n"
+        << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
+        << h5_name << ":/frames/xdmf/load_" << f << "</DataItem>\n    </Attribute>\n";
     if (pressure)
       x << "    <Attribute Name=\"pressure\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
         << "     <DataItem Dimensions=\"" << tets << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name
@@ -348,6 +352,7 @@ void OutputWriter::write_frame(const Frame& f) {
                                                H5T_NATIVE_DOUBLE);
     }
     m.load_series->append(k, f.loads->data());
+    m.add_frame_view("/frames/load", m.frames, 3, "load");
   }
   for (const auto& [name, value] : f.stats) {
     auto it = m.stats.find(name);
