@@ -16,9 +16,7 @@
 #ifndef ISOCHOR_VERSION
 #define ISOCHOR_VERSION "0.0.0"
 #endif
-#ifndef ISOCHOR_GIT_REVISION
-#define ISOCHOR_GIT_REVISION "unknown"
-#endif
+#include "isochor_git_revision.hpp"  // generated at build time (cmake/git_revision.cmake)
 
 namespace isochor {
 
