@@ -48,17 +48,13 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
         throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first + "\" has only driven nodes on its boundary: its volume cannot be kept");
     add_constraints(std::move(zones));
   }
-  add_supports(scene);
+  if (auto supports = make_supports(scene, dofs_)) add_constraints(std::move(supports));  // [[boundary]] components
   dof_mass_.resize(num_dofs());
   for (int f = 0; f < dofs_.num_free(); ++f) dof_mass_.segment<3>(3 * f).setConstant(node_mass_[dofs_.free_nodes[f]]);
   const double V = scene.mesh.rest_volume();
   force_scale_ = std::max(node_mass_.sum() * std::max(scene.gravity.norm(), 1.0), scene.material.mu * std::cbrt(V * V));
   x_ = scene.mesh.rest_positions();
   xdot_ = Eigen::VectorXd::Zero(3 * scene.mesh.num_nodes());
-}
-
-void MeshSystem::add_supports(const Scene& scene) {
-  if (auto supports = make_supports(scene, dofs_)) add_constraints(std::move(supports));
 }
 
 void MeshSystem::add_constraints(std::unique_ptr<ConstraintSet> set) {

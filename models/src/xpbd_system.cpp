@@ -8,6 +8,7 @@
 
 #include "isochor/assembly.hpp"
 #include "isochor/error.hpp"
+#include "isochor/supports.hpp"
 #include "isochor/material.hpp"
 #include "isochor/mesh_system.hpp"
 
@@ -19,15 +20,16 @@ XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_
     throw Error(scene.file.name() + ": [damping] is not available with integrator.kind = \"xpbd\" (expected no Rayleigh damping)");
   if (!scene.loads.empty() || !scene.pressure_loads.empty())
     throw Error(scene.file.name() + ": [[load]] is not available with integrator.kind = \"xpbd\" (expected gravity as its only load)");
-  std::map<int, std::size_t> held_at;
-  for (const Driver& d : scene.boundary)
-    for (int v : d.nodes)
-      for (const Eigen::Vector3d& dir : d.held) {
-        auto [it, added] = held_at.try_emplace(v, held_.size());
-        if (added) held_.push_back({v, {}, {}});
-        held_[it->second].dirs.push_back(dir);
-        held_[it->second].drivers.push_back(&d);
-      }
+  // The same supports (and checks) as the other models, grouped by node for the projection.
+  if (const auto supports = make_supports(scene, dofs_)) {
+    std::map<int, std::size_t> held_at;
+    for (const ComponentSupports::Row& r : supports->rows()) {
+      auto [it, added] = held_at.try_emplace(r.node, held_.size());
+      if (added) held_.push_back({r.node, {}, {}});
+      held_[it->second].dirs.push_back(r.dir);
+      held_[it->second].drivers.push_back(r.driver);
+    }
+  }
   for (const GroundSpec& g : scene.contact_planes())
     if (g.enabled && g.damping != 0)
       throw Error(scene.file.name() + ": contact damping is not available with integrator.kind = \"xpbd\" (its contact is a "

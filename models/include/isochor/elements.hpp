@@ -25,7 +25,8 @@ struct TetShape {
   // dFdx^T vec(P) (the gradient of an energy density with first Piola P, per unit volume) and
   // dFdx^T A dFdx (its Hessian for A = dP/dF), using dFdx's structure.
   Vec12 scatter(const Mat3& P) const;
-  Mat12 pull_back(const Mat9& A) const;
+  Mat12 pull_back(const Mat9& A) const;  // the generic path; tet_energy builds its Hessian term by
+                                         // term, and is tested against this
 };
 
 // Energy V psi(F) of a tet; gradient V dFdx^T vec(P), Hessian V dFdx^T dP/dF dFdx (dFdx = dvec(F)/dx).

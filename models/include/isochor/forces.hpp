@@ -1,7 +1,6 @@
 // Forces other than elasticity: gravity and ground contact (as a potential), Rayleigh damping,
 // and the spring network of the mass-spring model.
 #pragma once
-#include <algorithm>
 #include <vector>
 
 #include "isochor/assembly.hpp"

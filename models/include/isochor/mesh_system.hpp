@@ -80,7 +80,6 @@ class MeshSystem : public SceneSystem {
   std::vector<std::vector<Index>> rows_;
   std::vector<double> row_scale_;
   void add_constraints(std::unique_ptr<ConstraintSet> set);
-  void add_supports(const Scene& scene);  // [[boundary]] drivers that hold some components
   Eigen::VectorXd node_mass_, dof_mass_;
   double force_scale_ = 1.0;
   // State cache: positions and velocities of every node.
