@@ -1,11 +1,13 @@
 // The isochor command line.
 #include <CLI/CLI.hpp>
 
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 
 #include "isochor/error.hpp"
+#include "isochor/interrupt.hpp"
 #include "isochor/output.hpp"
 #include "isochor/output_reader.hpp"
 #include "isochor/scene.hpp"
@@ -30,18 +32,45 @@ std::vector<double> zone_volumes(const Mesh& mesh, const Points& x,
   return v;
 }
 
-int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& overrides, std::string out) {
+// SIGINT and SIGTERM ask the run to stop at the next step boundary (interrupt.hpp); a second one
+// kills at once (the handler is reset by the first). A full file size limit makes writes fail
+// with EFBIG instead of killing the process, so that the output reports it.
+void on_signal(int sig) { request_stop(sig); }
+void install_signal_handlers() {
+  struct sigaction a {};
+  a.sa_handler = on_signal;
+  sigemptyset(&a.sa_mask);
+  a.sa_flags = SA_RESETHAND;
+  sigaction(SIGINT, &a, nullptr);
+  sigaction(SIGTERM, &a, nullptr);
+  std::signal(SIGXFSZ, SIG_IGN);
+}
+
+// How to continue a run: the command as given, with --resume (and without --overwrite).
+std::string resume_command(int argc, char** argv) {
+  std::string cmd = "isochor";
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--overwrite" || a == "--resume") continue;
+    const bool plain = a.find_first_of(" \t'\"$`\\[]{}*?;&|<>()") == std::string::npos && !a.empty();
+    cmd += " " + (plain ? a : "'" + a + "'");
+  }
+  return cmd + " --resume";
+}
+
+int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& overrides, std::string out, bool overwrite) {
   Scene sc = load_scene(scene_path, overrides);
   if (out.empty()) {
     std::filesystem::path p(sc.output.path);
     out = (p.parent_path() / (p.stem().string() + "_mesh.h5")).string();
   }
   RunInfo info{sc.file.text_as_run(), scene_path, "mesh"};
-  OutputWriter w(out, sc.mesh, sc.zones, info, false);
+  OutputWriter w(out, sc.mesh, sc.zones, info, false, overwrite ? OutputWriter::Mode::overwrite : OutputWriter::Mode::create);
   Frame f;
   f.positions = &sc.mesh.rest_positions();
   f.volumes = zone_volumes(sc.mesh, sc.mesh.rest_positions(), sc.zones);
   w.write_frame(f);
+  w.set_status("finished");
   w.close();
   const Mesh& m = sc.mesh;
   std::printf("%s: %d nodes, %d tets, %zu surface triangles, volume %.9g", scene_path.c_str(), m.num_nodes(),
@@ -72,6 +101,8 @@ int study_report(const std::string& dir) {
 int main(int argc, char** argv) {
   CLI::App app{"isochor: volume-preserving simulation of soft, nearly incompressible solids"};
   app.require_subcommand(1);
+  // Bad command lines, like bad input, stop with one line.
+  app.failure_message([](const CLI::App*, const CLI::Error& e) { return std::string("isochor: ") + e.what() + " (see --help)\n"; });
   app.set_version_flag("--version", std::string(isochor_version()) + " (" + isochor_git_revision() + ")");
 
   std::string scene_path, out_path, h5_path, dir, prefix = "frame";
@@ -81,6 +112,8 @@ int main(int argc, char** argv) {
   mesh->add_option("scene", scene_path, "Scene file (TOML)")->required();
   mesh->add_option("--set", overrides, "Override a scene key, e.g. --set mesh.cells=8")->take_all();
   mesh->add_option("-o,--output", out_path, "Output .h5 (default: output.path with _mesh)");
+  bool overwrite = false, resume_run = false;
+  mesh->add_flag("--overwrite", overwrite, "Replace an existing output");
 
   bool quiet = false;
   auto* run = app.add_subcommand("run", "Simulate a dynamic scene and write every frame (HDF5 + XDMF)");
@@ -88,6 +121,10 @@ int main(int argc, char** argv) {
   run->add_option("--set", overrides, "Override a scene key, e.g. --set integrator.rtol=1e-8")->take_all();
   run->add_option("-o,--output", out_path, "Output .h5 (default: output.path of the scene)");
   run->add_flag("-q,--quiet", quiet, "No progress line");
+  run->add_flag("--overwrite", overwrite, "Replace an existing output (else an existing output is an error)");
+  run->add_flag("--resume", resume_run,
+                "Continue a killed, interrupted or failed run from the last complete frame of its output (same scene and --set)");
+  run->get_option("--overwrite")->excludes("--resume");
 
   auto* info = app.add_subcommand("info", "Summarise an output file: mesh, zones, frames, volume drift, solver statistics");
   info->add_option("file", h5_path, "Output file (.h5)")->required();
@@ -114,10 +151,29 @@ int main(int argc, char** argv) {
 
   CLI11_PARSE(app, argc, argv);
   try {
-    if (mesh->parsed()) return cmd_mesh(scene_path, overrides, out_path);
+    if (mesh->parsed()) return cmd_mesh(scene_path, overrides, out_path, overwrite);
     if (run->parsed()) {
       Scene sc = load_scene(scene_path, overrides);
-      RunSummary r = run_scene(sc, out_path, !quiet);
+      install_signal_handlers();
+      RunOptions opt;
+      opt.output = out_path;
+      opt.progress = !quiet;
+      opt.mode = resume_run  ? OutputWriter::Mode::resume
+                 : overwrite ? OutputWriter::Mode::overwrite
+                             : OutputWriter::Mode::create;
+      RunSummary r;
+      try {
+        r = run_scene(sc, opt);
+      } catch (const RunInterrupted& e) {
+        std::fprintf(stderr, "isochor: %s; continue with: %s\n", e.what(), resume_command(argc, argv).c_str());
+        return 128 + e.signal;
+      }
+      if (r.already_finished) {
+        std::printf("%s: finished earlier (%d frames, t = %g s): nothing to resume\n", r.output.c_str(), r.frames, r.resumed_time);
+        return 0;
+      }
+      if (r.resumed_from >= 0)
+        std::printf("%s: resumed from frame %d (t = %g s)\n", r.output.c_str(), r.resumed_from, r.resumed_time);
       const RunStats& s = r.stats;
       std::printf("%s: %d frames, %ld steps, %ld Newton iterations, %ld Jacobians, %.2f s wall "
                   "(assembly %.2f, factorisation %.2f, solve %.2f",

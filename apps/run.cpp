@@ -2,8 +2,13 @@
 
 
 #include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstring>
+#include <map>
 
 #include "isochor/integrator_registry.hpp"
+#include "isochor/interrupt.hpp"
 #include "isochor/error.hpp"
 #include "isochor/memory.hpp"
 #include "isochor/output.hpp"
@@ -38,17 +43,30 @@ void write_totals(OutputWriter& w, const RunStats& s) {
 }
 
 // Each frame of the integrator, measured by the scene system and written with its statistics.
+// The per-frame series that count from the start of the run: a resumed run adds the values they
+// had at the frame it continues from.
+const char* const kCumulative[] = {"steps", "newton_iterations", "jacobian_evaluations", "rejected_steps_error_test",
+                                   "rejected_steps_newton", "wall_seconds"};
+
+// Each frame of the integrator, measured by the scene system and written with its statistics. A
+// resumed run's integrator starts at the file's last frame (first = its index), which is not
+// written again.
 FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, Progress& bar, RunSummary& summary,
-                           bool progress) {
+                           bool progress, int first, const std::map<std::string, double>& offsets,
+                           const std::function<bool(int, const Frame&)>& on_frame) {
   const auto start = std::chrono::steady_clock::now();
   const bool tets = sys.has_tets();
-  return [&, start, tets, pressure = std::vector<double>(), loads = Points()](
-             int k, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
+  return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), velocities = Points()](
+             int j, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
              const RunStats::FrameSample& s) mutable {
+    if (first >= 0 && j == 0) return;
+    const int k = std::max(first, 0) + j;
     sys.set_state(t, q, v);
     Frame f;
     f.time = t;
     f.positions = &sys.positions();
+    velocities = Eigen::Map<const Points>(sys.velocities().data(), 3, sys.positions().cols());
+    f.velocities = &velocities;
     f.volumes = sys.volumes();
     f.energy = sys.energies();
     if (tets && sc.output.pressure) {
@@ -71,39 +89,113 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
                     {sc.integrator.kind == IntegratorKind::statics ? "residual_norm" : "step_size", s.step_size},
                     {"wall_seconds", wall},
                     {"resident_mb", resident_memory_mb()}});
+    for (auto& [name, value] : f.stats)
+      if (auto it = offsets.find(name); it != offsets.end()) value += it->second;
     w.write_frame(f);
     summary.frames = k + 1;
     if (progress) bar.update(k, t);
+    if (on_frame && !on_frame(k, f)) throw Interrupted(t, 0);
   };
+}
+
+// A resumed run's totals: the cumulative counts from the file at the frame it continues from.
+void add_offsets(RunStats& s, const std::map<std::string, double>& off) {
+  auto at = [&](const char* name) {
+    auto it = off.find(name);
+    return it == off.end() ? 0.0 : it->second;
+  };
+  s.steps += static_cast<long>(at("steps"));
+  s.newton_iterations += static_cast<long>(at("newton_iterations"));
+  s.jacobian_evals += static_cast<long>(at("jacobian_evaluations"));
+  s.error_test_failures += static_cast<long>(at("rejected_steps_error_test"));
+  s.newton_failures += static_cast<long>(at("rejected_steps_newton"));
+  s.wall_seconds += at("wall_seconds");
+}
+
+// The frame times from the one a resumed run continues at (index `first`, time `t`).
+std::vector<double> times_from(const std::vector<double>& times, int first, double t, const std::string& path) {
+  if (first < 0) return times;
+  if (first >= static_cast<int>(times.size()) || std::abs(times[static_cast<std::size_t>(first)] - t) > 1e-9 * (1 + std::abs(t)))
+    throw Error(path + ": its frame " + std::to_string(first) + " at t = " + std::to_string(t) +
+                " s is not a frame of the scene (cannot be resumed)");
+  return {times.begin() + first, times.end()};
 }
 
 }  // namespace
 
-RunSummary run_scene(const Scene& sc, const std::string& output, bool progress) {
+RunSummary run_scene(const Scene& scene, const RunOptions& opt) {
   RunSummary summary;
-  summary.output = output.empty() ? sc.output.path : output;
+  summary.output = opt.output.empty() ? scene.output.path : opt.output;
+  const bool resume = opt.mode == OutputWriter::Mode::resume;
+  // The systems are built before the file is touched, so that a scene they refuse leaves no
+  // output behind; a resumed run's start is handed to them once the file has said where it is.
+  const Scene& sc = scene;
   const std::unique_ptr<SceneSystem> sys = make_scene_system(sc);
   const std::unique_ptr<Integrator> integrator = make_integrator(sc, *sys);
   // (The mass-spring model has no zones: its scene is refused with any.)
   OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run"},
-                 sc.output.pressure && sys->has_tets());
-  const std::vector<double> times = sc.frames.times();
-  Progress bar(sc.file.name(), static_cast<int>(times.size()) - 1, progress ? stderr : nullptr);
+                 sc.output.pressure && sys->has_tets(), opt.mode);
+  const ResumePoint& rp = w.resume_point();
+  std::map<std::string, double> offsets;
+  StartState start;
+  if (resume) {
+    summary.frames = rp.frame + 1;
+    summary.resumed_from = rp.frame;
+    summary.resumed_time = rp.time;
+    if (rp.status == "finished") {
+      summary.already_finished = true;
+      return summary;
+    }
+    start = StartState{rp.positions, rp.velocities};
+    sys->set_start(&start);
+    for (const char* name : kCumulative)
+      if (auto it = rp.stats.find(name); it != rp.stats.end() && std::isfinite(it->second)) offsets[name] = it->second;
+    w.set_status("running");
+  }
+  const std::vector<double> all_times = sc.frames.times();
+  const std::vector<double> times = times_from(all_times, resume ? rp.frame : -1, rp.time, summary.output);
+  Progress bar(sc.file.name(), static_cast<int>(all_times.size()) - 1, opt.progress ? stderr : nullptr);
+  auto finish_failed = [&](const std::string& status, const std::vector<std::pair<std::string, double>>& numbers,
+                           const std::string& failure) {
+    // Best effort: the file may be what failed (a full disk).
+    try {
+      for (const auto& [name, value] : numbers) w.set_stat(name, value);
+      if (!failure.empty()) w.set_stat("failure", failure);
+      w.set_status(status);
+      w.close();
+    } catch (...) {
+    }
+  };
   try {
-    summary.stats = integrator->run(times, frame_writer(sc, *sys, w, bar, summary, progress));
+    summary.stats = integrator->run(times, frame_writer(sc, *sys, w, bar, summary, opt.progress, resume ? rp.frame : -1, offsets, opt.on_frame));
+  } catch (const Interrupted& e) {
+    add_offsets(summary.stats, offsets);
+    finish_failed("interrupted", {{"interrupted_at", e.time}, {"signal", static_cast<double>(e.signal)}}, "");
+    bar.finish();
+    const std::string how = e.signal == 0         ? "stopped by the frame callback"
+                            : e.signal == SIGINT  ? "interrupted by SIGINT"
+                            : e.signal == SIGTERM ? "interrupted by SIGTERM"
+                                                  : "interrupted by signal " + std::to_string(e.signal);
+    throw RunInterrupted(sc.file.name() + ": " + how + " at t = " + std::to_string(e.time) + " s; " +
+                             std::to_string(summary.frames) + " frames kept in " + summary.output,
+                         e.signal);
   } catch (const IntegrationError& e) {
-    w.set_stat("failed_at_time", e.time);
-    w.set_stat("failure", std::string(e.what()));
-    w.close();
+    finish_failed("failed", {{"failed_at_time", e.time}}, e.what());
     throw Error(sc.file.name() + ": " + e.what() + "; " + std::to_string(summary.frames) + " frames saved in " +
                 summary.output);
+  } catch (const Error& e) {  // the output could not be written (a full disk, a size limit)
+    finish_failed("failed", {}, e.what());
+    throw;
   }
+  add_offsets(summary.stats, offsets);
   write_totals(w, summary.stats);
   if (sc.skeleton) {
     summary.simbody_seconds = sc.skeleton->simbody_seconds();
     w.set_stat("simbody_seconds", summary.simbody_seconds);
     w.set_stat("simbody_realizations", static_cast<double>(sc.skeleton->realizations()));
   }
+  if (resume) w.set_stat("resumed_at", rp.time);
+  w.set_status("finished");
   w.close();
   bar.finish();
   return summary;

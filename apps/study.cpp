@@ -108,7 +108,8 @@ struct Outcome {
 // and messages into the study's cases/ directory. Returns the exit status and CPU seconds.
 Outcome run_case(const Study& s, const StudyCase& c, const std::string& exe) {
   const auto dir = s.output / "cases";
-  std::vector<std::string> args{exe, "run", s.scene.string(), "-q", "-o", (dir / (c.label + ".h5")).string()};
+  // The study owns its directory: a case run again replaces its file.
+  std::vector<std::string> args{exe, "run", s.scene.string(), "-q", "--overwrite", "-o", (dir / (c.label + ".h5")).string()};
   for (const std::string& o : c.overrides) {
     args.push_back("--set");
     args.push_back(o);

@@ -10,9 +10,9 @@ duration=${3:-2.0}
 cd "$(dirname "$0")/.."
 mkdir -p out/bench
 for r in $(seq 1 "$rounds"); do
-  OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$build/isochor" run demos/arm_flex.toml -q --set frames.duration="$duration" \
+  OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$build/isochor" run demos/arm_flex.toml --overwrite -q --set frames.duration="$duration" \
     -o "out/bench/arm_cnh_r$r.h5" > /dev/null
-  OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$build/isochor" run demos/arm_flex.toml -q --set frames.duration="$duration" \
+  OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$build/isochor" run demos/arm_flex.toml --overwrite -q --set frames.duration="$duration" \
     --set material.model=unh --set material.lambda=27000 --set zones.keep=false -o "out/bench/arm_unh_r$r.h5" > /dev/null
 done
 /usr/bin/python3 - "$rounds" <<'PY'

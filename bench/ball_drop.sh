@@ -12,7 +12,7 @@ run() {  # name, then overrides
   local name=$1; shift
   local sets=()
   for s in "$@"; do sets+=(--set "$s"); done
-  "$build/isochor" run demos/ball_drop.toml "${sets[@]}" -o "out/bench/$name.h5" -q > "out/bench/$name.log" 2>&1 \
+  "$build/isochor" run demos/ball_drop.toml --overwrite "${sets[@]}" -o "out/bench/$name.h5" -q > "out/bench/$name.log" 2>&1 \
     || echo "$name: FAILED ($(tail -n 1 "out/bench/$name.log"))"
   /usr/bin/python3 tools/run_report.py "out/bench/$name.h5"
 }

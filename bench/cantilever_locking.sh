@@ -24,7 +24,7 @@ for name in unh_nu0.45 unh_nu0.499 cnh_rings1 cnh_patches2 cnh_global_penalty; d
   for m in $meshes; do
     sets=(--set "mesh.cells=[$m]")
     for s in ${cases[$name]}; do sets+=(--set "$s"); done
-    OMP_NUM_THREADS=1 "$build/isochor" run demos/cantilever_tip.toml -q -o "$tmp/r.h5" "${sets[@]}" > /dev/null
+    OMP_NUM_THREADS=1 "$build/isochor" run demos/cantilever_tip.toml --overwrite -q -o "$tmp/r.h5" "${sets[@]}" > /dev/null
     /usr/bin/python3 - "$tmp/r.h5" "$name" "$m" >> "$tmp/tip.csv" <<'PY'
 import sys, h5py
 f = h5py.File(sys.argv[1], "r")

@@ -24,6 +24,8 @@ for r in $(seq 1 "$rounds"); do
       extra=()
       for o in ${NEW_SET:-}; do extra+=(--set "$o"); done
     fi
+    # Removed first rather than --overwrite: an old build does not know the flag.
+    rm -f out/bench/cmp_{cube,ball}_${b}_r$r.{h5,xdmf}
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$exe" run demos/pinned_cube.toml -q --set integrator.kind=backward_euler \
       --set frames.duration="$duration" "${extra[@]}" -o "out/bench/cmp_cube_${b}_r$r.h5" > /dev/null
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$exe" run demos/ball_drop.toml -q --set integrator.kind=backward_euler \

@@ -23,7 +23,7 @@ mkdir -p out/bench
 echo "BLAS: $(ldd "$build/isochor" | grep -Eo 'lib(open)?blas[^ ]*' | head -1) -> $(readlink -f /etc/alternatives/libblas.so.3-x86_64-linux-gnu 2>/dev/null || echo '?')"
 for n in $sizes; do
   for s in $solvers; do
-    OMP_NUM_THREADS=$threads OPENBLAS_NUM_THREADS=1 "$build/isochor" run demos/ball_drop.toml -q -o "out/bench/ls_${n}_${s}.h5" \
+    OMP_NUM_THREADS=$threads OPENBLAS_NUM_THREADS=1 "$build/isochor" run demos/ball_drop.toml --overwrite -q -o "out/bench/ls_${n}_${s}.h5" \
       --set mesh.target_tets="$n" --set frames.duration="$duration" --set integrator.rtol=1e-4 \
       --set integrator.atol=1e-7 --set integrator.linear_solver="$s" "${extra[@]}" > /dev/null || echo "tets $n, $s: failed"
   done

@@ -13,10 +13,10 @@ cd "$(dirname "$0")/.."
 mkdir -p out/bench
 export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 for r in $(seq 1 "$runs"); do
-  "$build/isochor" run demos/arm_cycle.toml -q --set frames.duration="$duration" -o "out/bench/long_r$r.h5" > /dev/null
+  "$build/isochor" run demos/arm_cycle.toml --overwrite -q --set frames.duration="$duration" -o "out/bench/long_r$r.h5" > /dev/null
 done
 # Two frames only: the steps the motion itself needs.
-"$build/isochor" run demos/arm_cycle.toml -q --set frames.duration="$duration" \
+"$build/isochor" run demos/arm_cycle.toml --overwrite -q --set frames.duration="$duration" \
   --set frames.rate="$(/usr/bin/python3 -c "print(1 / $duration)")" -o out/bench/long_two.h5 > /dev/null
 /usr/bin/python3 - "$runs" <<'PY'
 import sys, h5py, numpy as np

@@ -14,7 +14,7 @@ mkdir -p out/bench
 for r in $(seq 1 "$rounds"); do
   for threads in 1 2; do
     for kind in backward_euler ida; do
-      OMP_NUM_THREADS=$threads OPENBLAS_NUM_THREADS=$threads "$build/isochor" run demos/pinned_cube.toml -q \
+      OMP_NUM_THREADS=$threads OPENBLAS_NUM_THREADS=$threads "$build/isochor" run demos/pinned_cube.toml --overwrite -q \
         --set integrator.kind=$kind --set frames.duration="$duration" -o "out/bench/pinned_${kind}_t${threads}_r$r.h5" \
         > /dev/null
     done

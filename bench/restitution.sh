@@ -17,7 +17,7 @@ for ball in "soft E=46400 0.15" "stiff E=4.64e7 0.03"; do
   read -r name E duration <<< "$ball"
   for v0 in 1 3; do
   for alpha in 0 0.03 0.1 0.3; do
-    "$build/isochor" run demos/ball_drop.toml -q -o "$out/r.h5" --set mesh.target_tets=600 \
+    "$build/isochor" run demos/ball_drop.toml --overwrite -q -o "$out/r.h5" --set mesh.target_tets=600 \
       --set "mesh.center=[0, 0, 0.1021]" --set "initial.velocity=[0, 0, -$v0]" --set forces.gravity=[0,0,0] \
       --set contact.damping=$alpha --set frames.rate=1000 --set frames.duration=$duration --set material.$E \
       --set integrator.rtol=1e-6 --set integrator.atol=1e-9 > /dev/null

@@ -29,7 +29,7 @@ PY
 median() { sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
 run() {  # scene, extra settings... -> wall seconds
   local scene=$1; shift
-  OMP_NUM_THREADS=1 "$build/isochor" run "$tmp/$scene.toml" -q -o "$tmp/r.h5" --set "mesh.cells=[$cells]" \
+  OMP_NUM_THREADS=1 "$build/isochor" run "$tmp/$scene.toml" --overwrite -q -o "$tmp/r.h5" --set "mesh.cells=[$cells]" \
     --set material.lambda=9e5 "$@" > /dev/null
   /usr/bin/python3 -c "import h5py,sys; s=h5py.File(sys.argv[1],'r')['/stats'].attrs; print(s['wall_seconds'])" "$tmp/r.h5"
 }

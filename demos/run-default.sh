@@ -5,7 +5,7 @@
 set -euo pipefail
 build=${1:-build}
 cd "$(dirname "$0")/.."
-"$build/isochor" run demos/ball_drop.toml --set integrator.rtol=1e-4 --set integrator.atol=1e-6
+"$build/isochor" run demos/ball_drop.toml --overwrite --set integrator.rtol=1e-4 --set integrator.atol=1e-6
 /usr/bin/python3 tools/run_report.py out/ball_drop.h5
 "$build/isochor" info out/ball_drop.h5
 # The README's picture (docs/images/ball_drop.png) drawn from this run: the ball at its flattest,

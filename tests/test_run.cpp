@@ -329,7 +329,9 @@ TEST(BackwardEulerRun, KrylovAndCholmodStepsAgree) {
     const RunFile f(r.output);
     ASSERT_EQ(f.num_frames(), 11);
     for (int k = 0; k < f.num_frames(); ++k) frames[s].push_back(f.positions(k));
-    if (s == 1) EXPECT_GT(f.stat_totals().at("linear_iterations"), 0.0);
+    if (s == 1) {
+      EXPECT_GT(f.stat_totals().at("linear_iterations"), 0.0);
+    }
   }
   for (int k = 0; k < 11; ++k) EXPECT_LT((frames[1][k] - frames[0][k]).cwiseAbs().maxCoeff(), 1e-5) << "frame " << k;
 }

@@ -289,7 +289,9 @@ TEST(MassSpringLong, SqueezedBallKeepsItsVolumeWithTheConstraint) {
     RunFile r = run(scene, {"frames.duration=0.2", std::string("integrator.dt=") + h}, (dir / (std::string(h) + ".h5")).string());
     const double e = relative_l2(r, ida);
     std::printf("squeezed ball, first 0.2 s, Hong's step h = %s against IDA: relative L2 %.3e\n", h, e);
-    if (previous > 0) EXPECT_GT(previous / e, 1.6);
+    if (previous > 0) {
+      EXPECT_GT(previous / e, 1.6);
+    }
     previous = e;
   }
 }

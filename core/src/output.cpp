@@ -3,9 +3,15 @@
 #include <hdf5.h>
 
 #include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -51,11 +57,32 @@ class H {
   herr_t (*close_)(hid_t) = nullptr;
 };
 
+// The innermost message of HDF5's error stack: the system's reason when there is one ("No space
+// left on device", "File too large"), else HDF5's description.
+herr_t innermost(unsigned n, const H5E_error2_t* e, void* out) {
+  if (n != 0 || !e->desc) return 0;
+  std::string d = e->desc;
+  const std::string key = "error message = '";
+  const std::size_t at = d.find(key);
+  if (at != std::string::npos) {
+    const std::size_t end = d.find('\'', at + key.size());
+    d = d.substr(at + key.size(), end == std::string::npos ? std::string::npos : end - at - key.size());
+  }
+  *static_cast<std::string*>(out) = d;
+  return 0;
+}
+std::string hdf5_reason() {
+  std::string r;
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost, &r);
+  H5Eclear2(H5E_DEFAULT);
+  return r.empty() ? "" : " (" + r + ")";
+}
+
 void check(herr_t status, const std::string& what) {
-  if (status < 0) throw Error("HDF5: " + what + " failed");
+  if (status < 0) throw Error("HDF5: " + what + " failed" + hdf5_reason());
 }
 hid_t checked(hid_t id, const std::string& what) {
-  if (id < 0) throw Error("HDF5: " + what + " failed");
+  if (id < 0) throw Error("HDF5: " + what + " failed" + hdf5_reason());
   return id;
 }
 
@@ -110,6 +137,42 @@ struct Series {
     ds = H(checked(H5Dcreate2(loc, name.c_str(), type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT), "create " + name), H5Dclose);
   }
 
+  // An existing series of the file (resume).
+  Series(hid_t loc, const std::string& name, hid_t t) : type(t) {
+    ds = H(checked(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), "open " + name), H5Dclose);
+    H space(H5Dget_space(ds), H5Sclose);
+    std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
+    H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+    if (dims.empty()) throw Error("HDF5: " + name + " is not a per-frame series");
+    row.assign(dims.begin() + 1, dims.end());
+  }
+
+  hsize_t rows() const {
+    H space(H5Dget_space(ds), H5Sclose);
+    std::vector<hsize_t> dims(row.size() + 1);
+    H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+    return dims[0];
+  }
+
+  void truncate(hsize_t frames) {
+    std::vector<hsize_t> dims{frames};
+    dims.insert(dims.end(), row.begin(), row.end());
+    check(H5Dset_extent(ds, dims.data()), "shrink dataset");
+  }
+
+  // Frame `frame` into `out` (row-major, the row's size).
+  void read(hsize_t frame, double* out) const {
+    std::vector<hsize_t> start{frame}, count{1};
+    for (hsize_t d : row) {
+      start.push_back(0);
+      count.push_back(d);
+    }
+    H file_space(H5Dget_space(ds), H5Sclose);
+    check(H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr), "select");
+    H mem_space(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr), H5Sclose);
+    check(H5Dread(ds, H5T_NATIVE_DOUBLE, mem_space, file_space, H5P_DEFAULT, out), "read frame");
+  }
+
   void append(hsize_t frame, const void* data) {
     std::vector<hsize_t> dims{frame + 1}, start{frame}, count{1};
     for (hsize_t d : row) {
@@ -131,6 +194,48 @@ std::string frame_name(int k) {
   return buf;
 }
 
+std::string read_string_attribute(hid_t loc, const std::string& name) {
+  if (H5Aexists(loc, name.c_str()) <= 0) return "";
+  H attr(checked(H5Aopen(loc, name.c_str(), H5P_DEFAULT), "open attribute " + name), H5Aclose);
+  H type(H5Aget_type(attr), H5Tclose);
+  if (H5Tget_class(type) != H5T_STRING) return "";
+  H mem(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(mem, H5T_VARIABLE);
+  H5Tset_cset(mem, H5T_CSET_UTF8);
+  char* p = nullptr;
+  if (!H5Tis_variable_str(type) || H5Aread(attr, mem, &p) < 0 || !p) return "";
+  std::string v = p;
+  H5free_memory(p);
+  return v;
+}
+
+void delete_attribute(hid_t loc, const std::string& name) {
+  if (H5Aexists(loc, name.c_str()) > 0) H5Adelete(loc, name.c_str());
+}
+
+// The writer's lock on its output: an open-file-description lock (F_OFD_SETLK) on the file
+// itself, held while the descriptor is open. Unlike flock (HDF5's own locking) and process-wide
+// fcntl locks, HDF5 opening and closing the same file in this process does not release it.
+bool try_lock(int fd) {
+  struct flock l {};
+  l.l_type = F_WRLCK;
+  l.l_whence = SEEK_SET;
+  return ::fcntl(fd, F_OFD_SETLK, &l) == 0;
+}
+
+std::string kb(double bytes) { return std::to_string(static_cast<long long>(bytes / 1024 + 0.5)) + " KB"; }
+
+// The first line where two texts differ (1-based), for the resume check's message.
+int first_difference(const std::string& a, const std::string& b) {
+  std::istringstream x(a), y(b);
+  std::string la, lb;
+  for (int line = 1;; ++line) {
+    const bool ga = static_cast<bool>(std::getline(x, la)), gb = static_cast<bool>(std::getline(y, lb));
+    if (!ga && !gb) return 0;
+    if (ga != gb || la != lb) return line;
+  }
+}
+
 }  // namespace
 
 struct OutputWriter::Impl {
@@ -138,9 +243,80 @@ struct OutputWriter::Impl {
   H file;
   int nodes = 0, tets = 0, frames = 0;
   bool pressure = false;
-  std::unique_ptr<Series> time, positions, volume, energy, pressure_series, load_series;
+  std::unique_ptr<Series> time, positions, velocities, volume, energy, pressure_series, load_series;
   std::map<std::string, std::unique_ptr<Series>> stats;
   H frames_group, xdmf_group, stats_group;
+  int lock_fd = -1;
+  double frame_bytes = 0;  // what a frame adds to the file: an estimate, then the largest measured
+  off_t file_size = 0;     // after the last flush
+  ResumePoint resume;
+
+  // Every per-frame series of the file.
+  std::vector<Series*> all_series() {
+    std::vector<Series*> all{time.get(), positions.get(), velocities.get(), volume.get(), energy.get(),
+                             pressure_series.get(), load_series.get()};
+    for (auto& [name, series] : stats) all.push_back(series.get());
+    all.erase(std::remove(all.begin(), all.end(), nullptr), all.end());
+    return all;
+  }
+
+  // Frames k, k+1, ... removed: the series cut to k rows and their XDMF views unlinked.
+  void cut_frames(int k) {
+    for (Series* series : all_series())
+      if (series->rows() > static_cast<hsize_t>(k)) series->truncate(static_cast<hsize_t>(k));
+    for (int j = k;; ++j) {
+      bool any = false;
+      for (const char* prefix : {"position_", "pressure_", "load_"}) {
+        const std::string name = prefix + frame_name(j);
+        if (H5Lexists(xdmf_group, name.c_str(), H5P_DEFAULT) > 0) {
+          check(H5Ldelete(xdmf_group, name.c_str(), H5P_DEFAULT), "unlink " + name);
+          any = true;
+        }
+      }
+      if (!any) break;
+    }
+  }
+
+  // Room for one more frame on the file system and under the file size limit (ulimit -f), with a
+  // margin for the metadata written at close; checked before a frame is started, so that a full
+  // disk stops the run with every frame before it intact.
+  void ensure_room(int k) {
+    const double need = 2 * frame_bytes + 256 * 1024;
+    const std::string dir = std::filesystem::path(path).parent_path().empty()
+                                ? std::string(".")
+                                : std::filesystem::path(path).parent_path().string();
+    const std::string kept = k > 0 ? "frames 0-" + std::to_string(k - 1) + " are intact" : "no frame was written";
+    struct statvfs fs {};
+    if (::statvfs(dir.c_str(), &fs) == 0) {
+      const double avail = static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize);
+      if (avail < need)
+        throw Error(path + ": the disk is full (" + kb(avail) + " free, frame " + std::to_string(k) + " needs about " +
+                    kb(need) + "); " + kept);
+    }
+    struct rlimit lim {};
+    if (::getrlimit(RLIMIT_FSIZE, &lim) == 0 && lim.rlim_cur != RLIM_INFINITY &&
+        static_cast<double>(file_size) + need > static_cast<double>(lim.rlim_cur))
+      throw Error(path + ": the file size limit (ulimit -f: " + kb(static_cast<double>(lim.rlim_cur)) + ") is reached at frame " +
+                  std::to_string(k) + "; " + kept);
+  }
+
+  void append_frame(const Frame& f, hsize_t k);
+
+  // A frame's bytes before any is measured (positions, velocities, loads, pressures, the scalars
+  // and their per-frame views), and the file's size now.
+  void start_measuring(std::size_t zones) {
+    struct stat st {};
+    if (lock_fd >= 0 && ::fstat(lock_fd, &st) == 0) file_size = st.st_size;
+    frame_bytes = 8.0 * (9.0 * nodes + (pressure ? tets : 0) + static_cast<double>(zones) + 32) + 4096;
+  }
+
+  void measure_growth() {
+    struct stat st {};
+    if (lock_fd >= 0 && ::fstat(lock_fd, &st) == 0) {
+      frame_bytes = std::max(frame_bytes, static_cast<double>(st.st_size - file_size));
+      file_size = st.st_size;
+    }
+  }
 
   void add_frame_view(const std::string& source, int k, hsize_t width, const std::string& prefix) {
     // /frames/xdmf/<prefix>_<k>: a (rows, width) virtual dataset over frame k of `source`, so
@@ -201,20 +377,31 @@ struct OutputWriter::Impl {
     return x.str();
   }
 
-  // The header and the tail, written to a temporary file and renamed over the sidecar.
-  void start_xdmf() {
+  // The header, the <Grid>s of the frames already in the file (`times`: a resumed run's) and the
+  // tail, written to a temporary file and renamed over the sidecar.
+  void start_xdmf(const std::vector<double>& times = {}) {
     const std::string header = "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
                                "  <Grid Name=\"isochor\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     const std::string xp = xdmf_file(), tmp = xp + ".tmp";
+    off_t size = static_cast<off_t>(header.size());
     {
       std::ofstream out(tmp);
-      out << header << kXdmfTail;
-      if (!out) throw Error(xp + ": cannot be written");
+      out << header;
+      for (std::size_t k = 0; k < times.size(); ++k) {
+        const std::string grid = xdmf_frame(static_cast<int>(k), times[k]);
+        out << grid;
+        size += static_cast<off_t>(grid.size());
+      }
+      out << kXdmfTail;
+      if (!out) {
+        std::filesystem::remove(tmp);
+        throw Error(xp + ": cannot be written (" + std::strerror(errno) + ")");
+      }
     }
     std::filesystem::rename(tmp, xp);
     xdmf_fd = ::open(xp.c_str(), O_WRONLY);
     if (xdmf_fd < 0) throw Error(xp + ": cannot be opened for writing");
-    xdmf_tail = static_cast<off_t>(header.size());
+    xdmf_tail = size;
   }
 
   // Frame k's <Grid>, where the tail was, and the tail after it.
@@ -230,14 +417,75 @@ struct OutputWriter::Impl {
     if (xdmf_fd >= 0) ::close(xdmf_fd);
     xdmf_fd = -1;
   }
-  ~Impl() { close_xdmf(); }
+  ~Impl() {
+    close_xdmf();
+    if (lock_fd >= 0) ::close(lock_fd);
+  }
 
   std::string xdmf_file() const { return std::filesystem::path(path).replace_extension(".xdmf").string(); }
+
+  // Mode::resume: the file of an earlier run of the same scene, cut back to its last complete
+  // frame (a killed writer may have extended some series and not others), its failure or
+  // interruption attributes removed, its sidecar rewritten for the frames kept.
+  void open_for_resume(hid_t fapl, const RunInfo& info, std::size_t zones) {
+    const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl);
+    if (f < 0) throw Error(path + ": cannot be opened to resume" + hdf5_reason() + " (expected an isochor output file)");
+    file = H(f, H5Fclose);
+    const std::string command = read_string_attribute(file, "command");
+    if (command != info.command)
+      throw Error(path + ": was written by `isochor " + (command.empty() ? "?" : command) + "`, not `isochor " +
+                  info.command + "` (cannot be resumed)");
+    const std::string scene = read_string_attribute(file, "scene");
+    if (scene != info.scene_text)
+      throw Error(path + ": was written from a different scene (line " + std::to_string(first_difference(scene, info.scene_text)) +
+                  " of the scene as run differs; expected the same scene file and --set options, or --overwrite to start over)");
+    frames_group = H(checked(H5Gopen2(file, "frames", H5P_DEFAULT), "open /frames"), H5Gclose);
+    xdmf_group = H(checked(H5Gopen2(frames_group, "xdmf", H5P_DEFAULT), "open /frames/xdmf"), H5Gclose);
+    stats_group = H(checked(H5Gopen2(file, "stats", H5P_DEFAULT), "open /stats"), H5Gclose);
+    if (H5Lexists(frames_group, "velocities", H5P_DEFAULT) <= 0)
+      throw Error(path + ": has no velocities (written before runs could be resumed): cannot be resumed");
+    time = std::make_unique<Series>(frames_group, "time", H5T_NATIVE_DOUBLE);
+    positions = std::make_unique<Series>(frames_group, "positions", H5T_NATIVE_DOUBLE);
+    velocities = std::make_unique<Series>(frames_group, "velocities", H5T_NATIVE_DOUBLE);
+    volume = std::make_unique<Series>(frames_group, "volume", H5T_NATIVE_DOUBLE);
+    energy = std::make_unique<Series>(frames_group, "energy", H5T_NATIVE_DOUBLE);
+    if (positions->row.at(0) != static_cast<hsize_t>(nodes) || volume->row.at(0) != 1 + zones)
+      throw Error(path + ": its mesh or zones differ from the scene's (a mesh file changed since?): cannot be resumed");
+    if (pressure) pressure_series = std::make_unique<Series>(frames_group, "pressure", H5T_NATIVE_DOUBLE);
+    if (H5Lexists(frames_group, "load", H5P_DEFAULT) > 0)
+      load_series = std::make_unique<Series>(frames_group, "load", H5T_NATIVE_DOUBLE);
+    H5G_info_t g{};
+    check(H5Gget_info(stats_group, &g), "list /stats");
+    for (hsize_t i = 0; i < g.nlinks; ++i) {
+      char name[256];
+      if (H5Lget_name_by_idx(stats_group, ".", H5_INDEX_NAME, H5_ITER_INC, i, name, sizeof name, H5P_DEFAULT) < 0) continue;
+      stats.emplace(name, std::make_unique<Series>(stats_group, name, H5T_NATIVE_DOUBLE));
+    }
+    hsize_t complete = time->rows();
+    for (Series* series : all_series()) complete = std::min(complete, series->rows());
+    if (complete == 0) throw Error(path + ": has no complete frame to resume from (run it again with --overwrite)");
+    cut_frames(static_cast<int>(complete));
+    frames = static_cast<int>(complete);
+    resume.frame = frames - 1;
+    resume.status = read_string_attribute(file, "status");
+    time->read(complete - 1, &resume.time);
+    resume.positions.resize(3, nodes);
+    resume.velocities.resize(3, nodes);
+    positions->read(complete - 1, resume.positions.data());
+    velocities->read(complete - 1, resume.velocities.data());
+    for (auto& [name, series] : stats) series->read(complete - 1, &resume.stats[name]);
+    for (const char* a : {"failed_at_time", "failure", "interrupted_at", "signal"}) delete_attribute(stats_group, a);
+    std::vector<double> times(complete);
+    check(H5Dread(time->ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, times.data()), "read /frames/time");
+    check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush");
+    start_xdmf(times);
+    start_measuring(zones);
+  }
 };
 
 OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh,
                            const std::vector<std::pair<std::string, std::vector<int>>>& zones, const RunInfo& info,
-                           bool pressure)
+                           bool pressure, Mode mode)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.path = path;
@@ -246,10 +494,27 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh,
   m.tets = mesh.num_tets();
   m.pressure = pressure;
   std::error_code ec;
+  const std::string xp = m.xdmf_file();
+  if (xp == path)
+    throw Error(path + ": the XDMF sidecar would overwrite the output itself (expected an output path ending in .h5)");
+  if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory (expected an output file path)");
+  const bool existed = std::filesystem::exists(path, ec);
+  if (mode == Mode::create && (existed || std::filesystem::exists(xp, ec)))
+    throw Error((existed ? path : xp) + ": exists (pass --overwrite to replace it" +
+                (existed && info.command == "run" ? ", or --resume to continue the run in it" : "") + ")");
+  if (mode == Mode::resume && !existed) throw Error(path + ": no such file to resume (expected the output of an earlier run)");
   auto dir = std::filesystem::path(path).parent_path();
   if (!dir.empty()) std::filesystem::create_directories(dir, ec);
   if (ec) throw Error(path + ": cannot create the directory " + dir.string() + " (" + ec.message() + ")");
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported by Error, not printed
+  // Locked before anything is truncated: a second writer fails here and leaves the file alone.
+  m.lock_fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (m.lock_fd < 0) throw Error(path + ": cannot be created (" + std::strerror(errno) + ")");
+  if (!try_lock(m.lock_fd)) {
+    ::close(m.lock_fd);
+    m.lock_fd = -1;
+    throw Error(path + ": another process is writing it (one writer per output: wait for it, or choose another path)");
+  }
   // Default format bounds: the superblock then has no "open for writing" flag, so a file whose
   // writer was killed opens without h5clear.
   // A metadata cache of 1 MB, fixed: HDF5's default grows to 32 MB as a long run adds objects,
@@ -257,6 +522,10 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh,
   // resident memory 72 -> 82 MB and the last frames written at a third of the first ones' rate;
   // with 1 MB, 47 MB throughout and the rate within noise, bench/bench_output.cpp).
   H fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  // HDF5's own file locking (flock) is off: the writer's lock above keeps writers apart, and a
+  // reader that holds HDF5's shared lock (isochor info, h5py, ParaView on a running file) would
+  // otherwise make the writer's open or create fail.
+  check(H5Pset_file_locking(fapl, false, true), "file locking");
   {
     H5AC_cache_config_t c;
     c.version = H5AC__CURR_CACHE_CONFIG_VERSION;
@@ -266,9 +535,18 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh,
     c.min_size = c.max_size / 4;
     check(H5Pset_mdc_config(fapl, &c), "metadata cache configuration");
   }
+  if (mode == Mode::resume) {
+    m.open_for_resume(fapl, info, zones.size());
+    return;
+  }
   hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
-  if (f < 0) throw Error(path + ": cannot be created (expected a writable output path)");
+  if (f < 0) {
+    const std::string reason = hdf5_reason();
+    if (!existed) std::filesystem::remove(path, ec);
+    throw Error(path + ": cannot be created" + reason);
+  }
   m.file = H(f, H5Fclose);
+  string_attribute(m.file, "status", "running");
 
   string_attribute(m.file, "scene", info.scene_text);
   string_attribute(m.file, "scene_file", info.scene_file);
@@ -314,7 +592,10 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh,
   if (pressure)
     m.pressure_series = std::make_unique<Series>(m.frames_group, "pressure",
                                                  std::vector<hsize_t>{static_cast<hsize_t>(m.tets)}, H5T_NATIVE_DOUBLE);
-  H5Fflush(m.file, H5F_SCOPE_GLOBAL);
+  check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
+  // A frame's bytes before any is measured: positions, velocities, loads, pressures, the
+  // scalars and their per-frame views.
+  m.start_measuring(zones.size());
 }
 
 OutputWriter::~OutputWriter() {
@@ -328,11 +609,41 @@ void OutputWriter::write_frame(const Frame& f) {
   Impl& m = *impl_;
   if (!m.file.valid()) throw Error(m.path + ": the output is closed");
   if (!f.positions || f.positions->cols() != m.nodes) throw Error(m.path + ": a frame needs the positions of every node");
+  if (f.velocities && f.velocities->cols() != m.nodes) throw Error(m.path + ": a frame's velocities need every node");
   const hsize_t k = static_cast<hsize_t>(m.frames);
   if (f.volumes.size() != m.volume->row[0])
     throw Error(m.path + ": a frame needs " + std::to_string(m.volume->row[0]) + " volumes (total and each zone)");
+  m.ensure_room(m.frames);
+  try {
+    m.append_frame(f, k);
+  } catch (const Error& e) {
+    // Whatever the frame extended is cut back, so that the file ends at the frame before it.
+    try {
+      m.cut_frames(m.frames);
+      H5Fflush(m.file, H5F_SCOPE_GLOBAL);
+    } catch (...) {
+    }
+    H5Eclear2(H5E_DEFAULT);
+    throw Error(m.path + ": frame " + std::to_string(k) + " (t = " + std::to_string(f.time) + " s) could not be written: " +
+                e.what() + (k > 0 ? "; frames 0-" + std::to_string(k - 1) + " are intact" : ""));
+  }
+  m.frames++;
+  m.measure_growth();
+  m.append_xdmf(m.frames - 1, f.time);
+}
+
+void OutputWriter::Impl::append_frame(const Frame& f, hsize_t k) {
+  Impl& m = *this;
   m.time->append(k, &f.time);
   m.positions->append(k, f.positions->data());
+  if (f.velocities) {
+    if (!m.velocities) {
+      if (k > 0) throw Error(m.path + ": velocities appeared after the first frame");
+      m.velocities = std::make_unique<Series>(m.frames_group, "velocities",
+                                              std::vector<hsize_t>{static_cast<hsize_t>(m.nodes), 3}, H5T_NATIVE_DOUBLE);
+    }
+    m.velocities->append(k, f.velocities->data());
+  }
   m.volume->append(k, f.volumes.data());
   m.energy->append(k, f.energy.data());
   m.add_frame_view("/frames/positions", m.frames, 3, "position");
@@ -361,14 +672,30 @@ void OutputWriter::write_frame(const Frame& f) {
     }
     it->second->append(k, &value);
   }
-  m.frames++;
-  H5Fflush(m.file, H5F_SCOPE_GLOBAL);
-  m.append_xdmf(m.frames - 1, f.time);
+  check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
 }
 
 void OutputWriter::set_stat(const std::string& name, double value) { number_attribute(impl_->stats_group, name, value); }
 void OutputWriter::set_stat(const std::string& name, const std::string& value) {
   string_attribute(impl_->stats_group, name, value);
+}
+
+void OutputWriter::set_status(const std::string& status) {
+  string_attribute(impl_->file, "status", status);
+  check(H5Fflush(impl_->file, H5F_SCOPE_GLOBAL), "flush");
+}
+
+const ResumePoint& OutputWriter::resume_point() const { return impl_->resume; }
+
+bool output_is_being_written(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  struct flock l {};
+  l.l_type = F_WRLCK;
+  l.l_whence = SEEK_SET;
+  const bool locked = ::fcntl(fd, F_OFD_GETLK, &l) == 0 && l.l_type != F_UNLCK;
+  ::close(fd);
+  return locked;
 }
 
 void OutputWriter::close() {
@@ -378,6 +705,7 @@ void OutputWriter::close() {
   m.close_xdmf();
   m.time.reset();
   m.positions.reset();
+  m.velocities.reset();
   m.volume.reset();
   m.energy.reset();
   m.pressure_series.reset();
@@ -387,6 +715,8 @@ void OutputWriter::close() {
   m.xdmf_group.reset();
   m.stats_group.reset();
   m.file.reset();
+  if (m.lock_fd >= 0) ::close(m.lock_fd);  // the file is complete: other writers may have it
+  m.lock_fd = -1;
 }
 
 int OutputWriter::frames_written() const { return impl_->frames; }

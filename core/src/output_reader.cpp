@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "isochor/error.hpp"
+#include "isochor/output.hpp"
 
 namespace isochor {
 
@@ -66,7 +67,12 @@ RunFile::RunFile(const std::string& path) : impl_(std::make_unique<Impl>()) {
   if (!std::filesystem::exists(path, ec)) throw Error(path + ": no such file (expected an isochor .h5 output)");
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not an HDF5 file (expected an isochor .h5 output)");
-  impl_->file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  // Read without HDF5's file lock, which would stop a run from opening the file to write or
+  // resume it while it is read (a file being written is consistent up to its last flushed frame).
+  const hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  H5Pset_file_locking(fapl, false, true);
+  impl_->file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl);
+  H5Pclose(fapl);
   if (impl_->file < 0) throw Error(path + ": cannot be opened");
   impl_->dims("/mesh/tets");
 }
@@ -149,6 +155,13 @@ Points RunFile::positions(int frame) const {
   return x;
 }
 
+Points RunFile::velocities(int frame) const {
+  if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
+  Points v(3, num_nodes());
+  read_frame_row(impl_->file, impl_->path, "/frames/velocities", frame, 3, static_cast<hsize_t>(num_nodes()), v.data());
+  return v;
+}
+
 std::vector<double> RunFile::pressures(int frame) const {
   if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
   std::vector<double> p(num_tets());
@@ -165,7 +178,7 @@ Points RunFile::loads(int frame) const {
 
 std::map<std::string, std::string> RunFile::attributes() const {
   std::map<std::string, std::string> out;
-  for (const char* k : {"scene", "scene_file", "command", "isochor_version", "git_revision"})
+  for (const char* k : {"scene", "scene_file", "command", "isochor_version", "git_revision", "status"})
     out[k] = impl_->string_attr(impl_->file, k);
   return out;
 }
@@ -188,6 +201,14 @@ herr_t collect_name(hid_t, const char* name, const H5L_info_t*, void* data) {
   return 0;
 }
 }  // namespace
+
+std::string RunFile::stat_text(const std::string& name) const {
+  hid_t g = H5Gopen2(impl_->file, "/stats", H5P_DEFAULT);
+  if (g < 0) return "";
+  std::string v = impl_->string_attr(g, name.c_str());
+  H5Gclose(g);
+  return v;
+}
 
 std::map<std::string, double> RunFile::stat_totals() const {
   std::map<std::string, double> out;
@@ -226,6 +247,30 @@ std::string describe_run(const std::string& path) {
   s << "  frames      " << t.size();
   if (!t.empty()) s << ", t = " << t.front() << " .. " << t.back() << " s";
   s << "\n";
+  // What became of the run: the writer's lock says whether it is still running; the status
+  // attribute what it said last (a killed writer leaves "running" behind, unlocked).
+  if (attrs["command"] == "run") {
+    auto totals = r.stat_totals();
+    auto at = [&](const char* k) { return totals.count(k) ? totals[k] : std::nan(""); };
+    const std::string status = attrs["status"];
+    const std::string resume = "; continue it with `isochor run " + attrs["scene_file"] + " --resume -o " + path +
+                               "` and the same --set options";
+    s << "  status      ";
+    if (output_is_being_written(path))
+      s << "still being written (a running isochor holds its lock)";
+    else if (status == "finished")
+      s << "finished";
+    else if (status == "interrupted")
+      s << "interrupted at t = " << at("interrupted_at") << " s (signal " << at("signal") << ")" << resume;
+    else if (status == "failed")
+      s << "failed at t = " << at("failed_at_time") << " s: " << r.stat_text("failure") << resume;
+    else if (status == "running")
+      s << "unfinished: its writer stopped without closing it (killed?) after t = " << (t.empty() ? 0.0 : t.back()) << " s"
+        << resume;
+    else
+      s << "not recorded (written before runs recorded it)";
+    s << "\n";
+  }
   auto vol = r.volumes();
   if (!vol.empty()) {
     auto names = r.zone_names();

@@ -5,6 +5,7 @@
 
 #include "isochor/ggl.hpp"
 #include "isochor/initial_state.hpp"
+#include "isochor/interrupt.hpp"
 
 #include <ida/ida.h>
 #include <klu.h>
@@ -323,6 +324,7 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
       ++k;
       continue;
     }
+    throw_if_stop_requested(tcur);
     while (next_stop != stops.end() && *next_stop <= tcur) ++next_stop;
     check(IDASetStopTime(mem, *next_stop), "IDASetStopTime", tcur);
     double tret = tcur;

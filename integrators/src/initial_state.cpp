@@ -77,7 +77,7 @@ void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, Ve
   const VectorXd Minv = sys.mass().cwiseInverse();
   VectorXd f(n);
   if (m > 0) {
-    project_state(sys, t0, q, v);
+    if (!sys.starts_from_stored_state()) project_state(sys, t0, q, v);
     std::vector<std::vector<double>> G(m);
     for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
     sys.constraint_jacobian(t0, q, G, nullptr);

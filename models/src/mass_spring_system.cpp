@@ -96,7 +96,7 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
 }
 
 void MassSpringSystem::initial_state(double t0, VectorXd& q, VectorXd& v) {
-  scene_initial_state(scene_, dofs_, q, v);
+  scene_initial_state(scene_, dofs_, start(), q, v);
   state_t_ = std::numeric_limits<double>::quiet_NaN();
   set_state(t0, q, v);
 }

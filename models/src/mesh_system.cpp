@@ -71,12 +71,13 @@ void MeshSystem::set_state(double t, const VectorXd& q, const VectorXd& v) {
   set_positions(t, q);
 }
 
-void scene_initial_state(const Scene& s, const DofMap& dofs, VectorXd& q, VectorXd& v) {
+void scene_initial_state(const Scene& s, const DofMap& dofs, const StartState* start, VectorXd& q, VectorXd& v) {
   q.resize(3 * dofs.num_free());
   v.resize(3 * dofs.num_free());
   for (int f = 0; f < dofs.num_free(); ++f) {
-    q.segment<3>(3 * f) = s.mesh.rest_positions().col(dofs.free_nodes[f]);
-    v.segment<3>(3 * f) = s.initial_velocity;
+    const int node = dofs.free_nodes[f];
+    q.segment<3>(3 * f) = start ? start->positions.col(node) : s.mesh.rest_positions().col(node);
+    v.segment<3>(3 * f) = start ? Eigen::Vector3d(start->velocities.col(node)) : s.initial_velocity;
   }
 }
 
@@ -87,7 +88,7 @@ void scene_at_time(const Scene& s, double t, Points& x, Eigen::VectorXd& xdot, E
 }
 
 void MeshSystem::initial_state(double t0, VectorXd& q, VectorXd& v) {
-  scene_initial_state(scene_, dofs_, q, v);
+  scene_initial_state(scene_, dofs_, start(), q, v);
   state_t_ = std::numeric_limits<double>::quiet_NaN();
   set_state(t0, q, v);
 }

@@ -59,10 +59,11 @@ XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_
 }
 
 void XpbdMeshSystem::initial_state(double t0, Eigen::VectorXd& x, Eigen::VectorXd& v) {
-  const Points& X = scene_.mesh.rest_positions();
+  const Points& X = start ? start->positions : scene_.mesh.rest_positions();
   x = Eigen::Map<const Eigen::VectorXd>(X.data(), X.size());
   v.resize(x.size());
-  for (int n = 0; n < scene_.mesh.num_nodes(); ++n) v.segment<3>(3 * n) = scene_.initial_velocity;
+  for (int n = 0; n < scene_.mesh.num_nodes(); ++n)
+    v.segment<3>(3 * n) = start ? Eigen::Vector3d(start->velocities.col(n)) : scene_.initial_velocity;
   prescribe(t0, x, v);
 }
 

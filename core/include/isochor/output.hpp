@@ -20,6 +20,7 @@ struct RunInfo {
 struct Frame {
   double time = 0.0;
   const Points* positions = nullptr;     // all nodes
+  const Points* velocities = nullptr;    // all nodes (m/s): with the positions, what a resume needs
   std::vector<double> volumes;           // total, then each zone (in the order given at open)
   std::array<double, 3> energy{0, 0, 0};  // kinetic, elastic, external potential
   const std::vector<double>* pressure = nullptr;  // per tet, when pressure output is on
@@ -27,12 +28,27 @@ struct Frame {
   std::vector<std::pair<std::string, double>> stats;  // per-frame series under /stats
 };
 
+// Where a resumed run continues: its last complete frame, read back from the file.
+struct ResumePoint {
+  int frame = -1;  // index of the last complete frame (frames after it were dropped)
+  double time = 0;
+  Points positions, velocities;                   // every node
+  std::map<std::string, double> stats;            // the per-frame /stats series at that frame
+  std::string status;                             // what the file said before: running, failed, ...
+};
+
 class OutputWriter {
  public:
-  // `zones` are written under /zones and name the columns of /frames/volume.
+  enum class Mode {
+    create,     // a new file; an existing one (or its sidecar) is an error
+    overwrite,  // a new file, replacing what is there
+    resume,     // continue the file: it must have been written from the same scene
+  };
+  // `zones` are written under /zones and name the columns of /frames/volume. The file is locked
+  // for the writer's life (a second writer on the same path fails at start).
   OutputWriter(const std::string& path, const Mesh& mesh,
                const std::vector<std::pair<std::string, std::vector<int>>>& zones, const RunInfo& info,
-               bool pressure);
+               bool pressure, Mode mode = Mode::create);
   ~OutputWriter();
   OutputWriter(const OutputWriter&) = delete;
   OutputWriter& operator=(const OutputWriter&) = delete;
@@ -41,6 +57,11 @@ class OutputWriter {
   // Attributes on /stats (run totals).
   void set_stat(const std::string& name, double value);
   void set_stat(const std::string& name, const std::string& value);
+  // The root attribute `status`: "running" while written, then "finished", "interrupted" or
+  // "failed" (docs/output.md).
+  void set_status(const std::string& status);
+  // Mode::resume: the frame the run continues from.
+  const ResumePoint& resume_point() const;
   // Closes the file (also done by the destructor).
   void close();
 
@@ -52,6 +73,9 @@ class OutputWriter {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// Whether a process holds the writer's lock on this file (a run still writing it).
+bool output_is_being_written(const std::string& path);
 
 // The version and git revision compiled into this build.
 const char* isochor_version();

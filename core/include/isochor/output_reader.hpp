@@ -25,10 +25,12 @@ class RunFile {
   std::vector<Tri> surface() const;
   Points rest_positions() const;
   Points positions(int frame) const;
+  Points velocities(int frame) const;  // every node (m/s): runs written since they could be resumed
   std::vector<double> pressures(int frame) const;  // per tet; the run must have output.pressure = true
   Points loads(int frame) const;                   // per node (N); the scene must have [[load]]
   std::map<std::string, std::string> attributes() const;       // root attributes (strings)
   std::map<std::string, double> stat_totals() const;           // numeric attributes of /stats
+  std::string stat_text(const std::string& name) const;        // a string attribute of /stats ("" if none)
   std::map<std::string, std::vector<double>> stat_series() const;  // datasets under /stats
 
  private:

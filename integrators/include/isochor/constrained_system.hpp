@@ -38,6 +38,10 @@ class ConstrainedSystem {
 
   // Positions and velocities at the start.
   virtual void initial_state(double t0, VectorXd& q, VectorXd& v) = 0;
+  // Whether that start is an integrator's own state stored by an earlier run (a resume): it is
+  // then taken as it is, not projected onto the constraints again (backward Euler's velocities
+  // hold G v + dg/dt = 0 only to its step error, and a projection would change the run).
+  virtual bool starts_from_stored_state() const { return false; }
   // f(q, v, t), every force on the free dofs.
   virtual void force(double t, const VectorXd& q, const VectorXd& v, VectorXd& f) = 0;
   // neg_dfdq += -df/dq and neg_dfdv += -df/dv, both in pattern() (either may be null).

@@ -34,6 +34,18 @@ class IntegrationError : public std::runtime_error {
   IntegrationError(double t, const std::string& reason)
       : std::runtime_error("integration failed at t = " + std::to_string(t) + " s: " + reason), time(t) {}
   double time;
+
+ protected:
+  IntegrationError(const std::string& message, double t) : std::runtime_error(message), time(t) {}
+};
+
+// A run stopped from outside (interrupt.hpp) at a step boundary at time t, by this signal.
+class Interrupted : public IntegrationError {
+ public:
+  Interrupted(double t, int sig)
+      : IntegrationError("interrupted by signal " + std::to_string(sig) + " at t = " + std::to_string(t) + " s", t),
+        signal(sig) {}
+  int signal;
 };
 
 // Called at each frame with the frame index, time, the state (q, v, lambda) and the solver's

@@ -45,6 +45,7 @@ class MassSpringSystem : public SceneSystem {
   // Diagnostics at a state, as MeshSystem's: every node's position (interior ones carried).
   void set_state(double t, const VectorXd& q, const VectorXd& v) override;
   const Points& positions() const override { return x_; }
+  const Eigen::VectorXd& velocities() const override { return xdot_; }
   std::array<double, 3> energies() const override;  // kinetic, springs, external
   std::vector<double> volumes() const override;      // the enclosed volume (no zones)
   const DofMap& dofs() const override { return dofs_; }

@@ -19,7 +19,7 @@ std::shared_ptr<const Material> make_material(const MaterialSpec& m);
 DofMap scene_dofs(const Scene& s);
 std::vector<std::vector<int>> scene_zone_tets(const Scene& s);
 // The free nodes' rest positions and the scene's initial velocity, as (q, v) of the free dofs.
-void scene_initial_state(const Scene& s, const DofMap& dofs, VectorXd& q, VectorXd& v);
+void scene_initial_state(const Scene& s, const DofMap& dofs, const StartState* start, VectorXd& q, VectorXd& v);
 // What changes with time alone: driven nodes' positions and velocities, contact planes, gravity.
 void scene_at_time(const Scene& s, double t, Points& x, Eigen::VectorXd& xdot, ExternalPotential& external);
 
@@ -52,7 +52,7 @@ class MeshSystem : public SceneSystem {
   void set_state(double t, const VectorXd& q, const VectorXd& v) override;
   void set_positions(double t, const VectorXd& q);
   const Points& positions() const override { return x_; }
-  const Eigen::VectorXd& velocities() const { return xdot_; }
+  const Eigen::VectorXd& velocities() const override { return xdot_; }
   // Kinetic, elastic and external energy at the current state.
   std::array<double, 3> energies() const override;
   // Total volume, then each zone's volume, at the current state.

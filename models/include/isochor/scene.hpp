@@ -66,6 +66,12 @@ struct OutputSpec {
   bool pressure = false;
 };
 
+// Where a resumed run (isochor run --resume) starts instead of the rest state: every node's
+// position and velocity at a frame of its file (the driven ones are prescribed anyway).
+struct StartState {
+  Points positions, velocities;
+};
+
 struct Scene {
   SceneFile file;
   Mesh mesh;

@@ -17,6 +17,8 @@ class SceneSystem : public ConstrainedSystem {
   // Positions and velocities of every node for a state (q, v) of the unknowns at time t.
   virtual void set_state(double t, const VectorXd& q, const VectorXd& v) = 0;
   virtual const Points& positions() const = 0;
+  // Velocities of every node (3 per node, node by node) at that state.
+  virtual const Eigen::VectorXd& velocities() const = 0;
   // Kinetic, elastic (or spring) and external energy at the current state.
   virtual std::array<double, 3> energies() const = 0;
   // Total volume, then each zone's volume, at the current state.
@@ -32,6 +34,14 @@ class SceneSystem : public ConstrainedSystem {
   // Whether the scene applies [[load]]s, and the load on every node at the current state (N).
   virtual bool has_loads() const { return false; }
   virtual void loads(Points& /*out*/) const {}
+  // A resumed run's start (null: the scene's rest state and initial velocity): initial_state()
+  // returns it for the unknowns.
+  void set_start(const StartState* start) { start_ = start; }
+  const StartState* start() const { return start_; }
+  bool starts_from_stored_state() const override { return start_ != nullptr; }
+
+ private:
+  const StartState* start_ = nullptr;
 };
 
 // The scene's system: MassSpringSystem for material.model = "mass_spring", else MeshSystem.

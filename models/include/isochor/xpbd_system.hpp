@@ -19,6 +19,7 @@ class XpbdMeshSystem : public ProjectiveSystem {
   int num_points() const override { return scene_.mesh.num_nodes(); }
   const Eigen::VectorXd& inverse_mass() const override { return w_; }
   void initial_state(double t0, Eigen::VectorXd& x, Eigen::VectorXd& v) override;
+  const StartState* start = nullptr;  // a resumed run's start (SceneSystem::start)
   void external_acceleration(double t, Eigen::VectorXd& a) override;
   void prescribe(double t, Eigen::VectorXd& x, Eigen::VectorXd& v) override;
   int num_constraints() const override { return 2 * scene_.mesh.num_tets(); }

@@ -21,8 +21,9 @@ namespace {
 class XpbdOnScene : public Integrator {
  public:
   XpbdOnScene(const Scene& scene, const SceneSystem& system, XpbdOptions o)
-      : points_(scene), xpbd_(points_, o), free_(system.dofs().free_nodes) {}
+      : system_(system), points_(scene), xpbd_(points_, o), free_(system.dofs().free_nodes) {}
   RunStats run(const std::vector<double>& times, const FrameCallback& on_frame) override {
+    points_.start = system_.start();
     VectorXd q(3 * free_.size()), v(3 * free_.size());
     return xpbd_.run(times, [&](int k, double t, const VectorXd& x, const VectorXd& xv, const VectorXd& lambda,
                                 const RunStats::FrameSample& s) {
@@ -35,6 +36,7 @@ class XpbdOnScene : public Integrator {
   }
 
  private:
+  const SceneSystem& system_;
   XpbdMeshSystem points_;
   Xpbd xpbd_;
   std::vector<int> free_;

@@ -1,0 +1,361 @@
+// Runs that survive (issue 16): resuming an interrupted or killed run, interrupts at step
+// boundaries, outputs that are never clobbered, and a full file system that keeps every frame.
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <sys/resource.h>
+
+#include <csignal>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "isochor/error.hpp"
+#include "isochor/interrupt.hpp"
+#include "isochor/output.hpp"
+#include "isochor/output_reader.hpp"
+#include "isochor/scene.hpp"
+#include "isochor/meshing.hpp"
+#include "run.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+
+namespace {
+Scene scene(const std::string& text, const std::vector<std::string>& overrides = {}) {
+  return parse_scene(SceneFile::parse(text, "test.toml", overrides));
+}
+
+// A soft block clamped at one end, swinging down under gravity and ringing: smooth, cheap, and
+// every part of it moves.
+const char* kSwing = R"(
+[mesh]
+shape = "box"
+cells = [6, 2, 2]
+size = [0.3, 0.05, 0.05]
+center = [0.15, 0, 0]
+[material]
+model = "cnh"
+mu = 2.0e4
+lambda = 2.0e5
+[damping]
+beta = 1e-3
+[[boundary]]
+select = { kind = "set", name = "xmin" }
+[frames]
+rate = 100.0
+duration = 0.2
+[integrator]
+rtol = 1e-6
+atol = 1e-8
+)";
+
+struct Frames {
+  std::vector<Points> x, v;
+};
+Frames frames_of(const std::string& path) {
+  RunFile f(path);
+  Frames out;
+  for (int k = 0; k < f.num_frames(); ++k) {
+    out.x.push_back(f.positions(k));
+    out.v.push_back(f.velocities(k));
+  }
+  return out;
+}
+double max_difference(const std::vector<Points>& a, const std::vector<Points>& b, std::size_t from = 0) {
+  double worst = 0;
+  for (std::size_t k = from; k < a.size(); ++k) worst = std::max(worst, (a[k] - b[k]).cwiseAbs().maxCoeff());
+  return worst;
+}
+
+RunOptions options(const std::string& path, OutputWriter::Mode mode = OutputWriter::Mode::create) {
+  RunOptions o;
+  o.output = path;
+  o.progress = false;
+  o.mode = mode;
+  return o;
+}
+
+// Runs `sc` into `path`, stopped by the frame callback after frame `stop_after`.
+void run_until(const Scene& sc, const std::string& path, int stop_after) {
+  RunOptions o = options(path);
+  o.on_frame = [stop_after](int k, const Frame&) { return k < stop_after; };
+  EXPECT_THROW(run_scene(sc, o), RunInterrupted);
+}
+}  // namespace
+
+// A run stopped part-way and resumed gives the uninterrupted run's frames to the integration
+// tolerance: IDA restarts from the stored frame (a fresh start of its history, so the steps
+// differ), and the difference must stay within the uninterrupted run's own error (measured
+// against a run at 100 times tighter tolerances).
+TEST(Resume, AnInterruptedIdaRunMatchesTheUninterruptedOne) {
+  const auto dir = test::temp_dir();
+  const Scene sc = scene(kSwing);
+  run_scene(sc, options((dir / "ref.h5").string()));
+  run_scene(scene(kSwing, {"integrator.rtol=1e-8", "integrator.atol=1e-10"}), options((dir / "tight.h5").string()));
+  const std::string path = (dir / "resumed.h5").string();
+  run_until(sc, path, 8);
+  {
+    RunFile f(path);
+    EXPECT_EQ(f.num_frames(), 9);
+    EXPECT_EQ(f.attributes().at("status"), "interrupted");
+  }
+  const RunSummary r = run_scene(sc, options(path, OutputWriter::Mode::resume));
+  EXPECT_EQ(r.resumed_from, 8);
+  EXPECT_EQ(r.frames, 21);
+  const Frames ref = frames_of((dir / "ref.h5").string()), tight = frames_of((dir / "tight.h5").string()),
+               res = frames_of(path);
+  ASSERT_EQ(res.x.size(), ref.x.size());
+  const double own_error = max_difference(ref.x, tight.x), resume_error = max_difference(res.x, ref.x);
+  std::printf("uninterrupted run against a 100x tighter one: %.3e m; resumed against uninterrupted: %.3e m\n", own_error,
+              resume_error);
+  EXPECT_TRUE(std::isfinite(resume_error));
+  EXPECT_EQ(max_difference({res.x.begin(), res.x.begin() + 9}, {ref.x.begin(), ref.x.begin() + 9}), 0.0);
+  EXPECT_GT(max_difference(ref.x, std::vector<Points>(ref.x.size(), ref.x[0])), 100 * own_error);  // it moves
+  // Two runs at the same tolerance, each within own_error of the truth, differ by at most twice it.
+  EXPECT_LE(resume_error, 2 * own_error);
+  RunFile f(path);
+  EXPECT_EQ(f.attributes().at("status"), "finished");
+  EXPECT_NEAR(f.stat_totals().at("resumed_at"), 0.08, 1e-12);
+  EXPECT_EQ(f.stat_totals().count("interrupted_at"), 0u);
+  // The cumulative step count continues from the frame resumed at.
+  const auto steps = f.stat_series().at("steps");
+  for (std::size_t k = 1; k < steps.size(); ++k) EXPECT_GE(steps[k], steps[k - 1]) << k;
+}
+
+// Backward Euler with frames on step boundaries: a resumed run takes the same steps from the same
+// state, and agrees with the uninterrupted one to the Newton tolerance (tightened here to 1e-10
+// of each step's displacement, so that Newton's path, which the restart's fresh factorisation
+// changes, does not show).
+const std::vector<std::string> kBackwardEuler{"integrator.kind=backward_euler", "integrator.dt=2e-3",
+                                              "integrator.newton_tol=1e-10"};
+TEST(Resume, AnInterruptedBackwardEulerRunRepeatsTheSameSteps) {
+  const auto dir = test::temp_dir();
+  const Scene sc = scene(kSwing, kBackwardEuler);
+  run_scene(sc, options((dir / "ref.h5").string()));
+  const std::string path = (dir / "resumed.h5").string();
+  run_until(sc, path, 11);
+  run_scene(sc, options(path, OutputWriter::Mode::resume));
+  const Frames ref = frames_of((dir / "ref.h5").string()), res = frames_of(path);
+  ASSERT_EQ(res.x.size(), 21u);
+  const double dx = max_difference(res.x, ref.x), dv = max_difference(res.v, ref.v);
+  std::printf("backward Euler resumed at frame 11: positions %.3e m, velocities %.3e m/s apart\n", dx, dv);
+  EXPECT_LT(dx, 1e-9);
+  EXPECT_LT(dv, 1e-6);
+}
+
+// A killed writer can leave a frame half written: some series a row longer than others. The
+// resume drops it, continues from the last complete frame, and the file ends as the
+// uninterrupted run's.
+TEST(Resume, AKilledRunsHalfWrittenFrameIsDropped) {
+  const auto dir = test::temp_dir();
+  const Scene sc = scene(kSwing, kBackwardEuler);
+  run_scene(sc, options((dir / "ref.h5").string()));
+  const std::string path = (dir / "killed.h5").string();
+  {
+    RunOptions o = options(path);
+    o.on_frame = [](int k, const Frame&) {
+      if (k == 6) throw std::runtime_error("killed");  // the writer goes away without a word
+      return true;
+    };
+    EXPECT_THROW(run_scene(sc, o), std::runtime_error);
+  }
+  EXPECT_NE(describe_run(path).find("unfinished: its writer stopped without closing it"), std::string::npos);
+  {
+    // Frame 7 half written: its time and positions there, nothing else.
+    const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    for (const char* name : {"/frames/time", "/frames/positions"}) {
+      const hid_t ds = H5Dopen2(f, name, H5P_DEFAULT);
+      const hid_t space = H5Dget_space(ds);
+      hsize_t dims[3];
+      const int rank = H5Sget_simple_extent_dims(space, dims, nullptr);
+      ASSERT_EQ(dims[0], 7u);
+      dims[0] = 8;
+      H5Dset_extent(ds, dims);
+      H5Sclose(space);
+      H5Dclose(ds);
+      (void)rank;
+    }
+    H5Fclose(f);
+  }
+  const RunSummary r = run_scene(sc, options(path, OutputWriter::Mode::resume));
+  EXPECT_EQ(r.resumed_from, 6);
+  const Frames ref = frames_of((dir / "ref.h5").string()), res = frames_of(path);
+  ASSERT_EQ(res.x.size(), 21u);
+  EXPECT_LT(max_difference(res.x, ref.x), 1e-9);
+  EXPECT_EQ(RunFile(path).times(), RunFile((dir / "ref.h5").string()).times());
+}
+
+// A stop requested from outside (what the SIGINT and SIGTERM handler does) ends the run at the
+// next step boundary, before the next frame, with the frames so far kept and the file marked.
+TEST(Resume, AStopRequestEndsTheRunAtTheNextStep) {
+  const auto dir = test::temp_dir();
+  for (const char* kind : {"ida", "backward_euler", "static"}) {
+    std::string text = kSwing;
+    if (std::string(kind) == "static") text.replace(text.find("rate = 100.0\nduration = 0.2"), 27, "count = 6");
+    std::vector<std::string> o{std::string("integrator.kind=") + kind};
+    if (std::string(kind) == "static") o.push_back("forces.gravity_ramp=1");  // load increments
+    const Scene sc = scene(text, o);
+    const std::string path = (dir / (std::string(kind) + ".h5")).string();
+    RunOptions opt = options(path);
+    opt.on_frame = [](int k, const Frame&) {
+      if (k == 3) request_stop(SIGTERM);
+      return true;
+    };
+    try {
+      run_scene(sc, opt);
+      ADD_FAILURE() << kind << ": the run did not stop";
+    } catch (const RunInterrupted& e) {
+      EXPECT_EQ(e.signal, SIGTERM) << kind;
+      EXPECT_NE(std::string(e.what()).find("4 frames kept in " + path), std::string::npos) << e.what();
+    }
+    clear_stop_request();
+    RunFile f(path);
+    EXPECT_EQ(f.num_frames(), 4) << kind;
+    EXPECT_EQ(f.attributes().at("status"), "interrupted");
+    EXPECT_EQ(f.stat_totals().at("signal"), SIGTERM);
+    EXPECT_GE(f.stat_totals().at("interrupted_at"), f.times().back()) << kind;
+    EXPECT_NE(describe_run(path).find("interrupted at t = "), std::string::npos);
+  }
+}
+
+TEST(Resume, OnlyTheSceneTheFileWasWrittenWith) {
+  const auto dir = test::temp_dir();
+  const std::string path = (dir / "a.h5").string();
+  run_until(scene(kSwing), path, 3);
+  const std::string msg =
+      test::error_of([&] { run_scene(scene(kSwing, {"material.mu=3e4"}), options(path, OutputWriter::Mode::resume)); });
+  EXPECT_NE(msg.find(path + ": was written from a different scene"), std::string::npos) << msg;
+  EXPECT_EQ(RunFile(path).num_frames(), 4);  // untouched
+  const std::string none = (dir / "none.h5").string();
+  EXPECT_NE(test::error_of([&] { run_scene(scene(kSwing), options(none, OutputWriter::Mode::resume)); }).find("no such file to resume"),
+            std::string::npos);
+  // A finished run resumed does nothing.
+  run_scene(scene(kSwing), options(path, OutputWriter::Mode::resume));
+  const RunSummary again = run_scene(scene(kSwing), options(path, OutputWriter::Mode::resume));
+  EXPECT_TRUE(again.already_finished);
+  EXPECT_EQ(again.frames, 21);
+}
+
+namespace {
+Mesh small_mesh() { return make_box({0.1, 0.1, 0.1}, {2, 2, 2}, Eigen::Vector3d::Zero(), 6); }
+}  // namespace
+
+TEST(Outputs, AnExistingOutputIsKeptUnlessOverwriteIsAsked) {
+  const auto dir = test::temp_dir();
+  const std::string path = (dir / "mine.h5").string();
+  { std::ofstream(path) << "a user's own file\n"; }
+  const Mesh m = small_mesh();
+  const std::string msg = test::error_of([&] { OutputWriter w(path, m, {}, {"", "", "run"}, false); });
+  EXPECT_NE(msg.find(path + ": exists (pass --overwrite to replace it, or --resume"), std::string::npos) << msg;
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "a user's own file");
+  // Its sidecar counts as the output too.
+  const std::string other = (dir / "other.h5").string();
+  { std::ofstream((dir / "other.xdmf").string()) << "x"; }
+  EXPECT_NE(test::error_of([&] { OutputWriter w(other, m, {}, {"", "", "run"}, false); }).find("other.xdmf: exists"),
+            std::string::npos);
+  OutputWriter w(path, m, {}, {"", "", "run"}, false, OutputWriter::Mode::overwrite);
+  EXPECT_EQ(w.frames_written(), 0);
+}
+
+TEST(Outputs, AnXdmfPathIsRefused) {
+  const auto dir = test::temp_dir();
+  const std::string path = (dir / "run.xdmf").string();
+  const std::string msg = test::error_of([&] { OutputWriter w(path, small_mesh(), {}, {"", "", "run"}, false); });
+  EXPECT_NE(msg.find("the XDMF sidecar would overwrite the output itself"), std::string::npos) << msg;
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+TEST(Outputs, ASecondWriterFailsAtStartAndLeavesTheFirstIntact) {
+  const auto dir = test::temp_dir();
+  const std::string path = (dir / "shared.h5").string();
+  const Mesh m = small_mesh();
+  OutputWriter first(path, m, {}, {"", "", "run"}, false);
+  EXPECT_TRUE(output_is_being_written(path));
+  const std::string msg = test::error_of(
+      [&] { OutputWriter second(path, m, {}, {"", "", "run"}, false, OutputWriter::Mode::overwrite); });
+  EXPECT_NE(msg.find(path + ": another process is writing it"), std::string::npos) << msg;
+  Frame f;
+  f.positions = &m.rest_positions();
+  f.volumes = {m.rest_volume()};
+  first.write_frame(f);
+  first.close();
+  EXPECT_FALSE(output_is_being_written(path));
+  EXPECT_EQ(RunFile(path).num_frames(), 1);
+}
+
+// The file size limit (ulimit -f) reached part-way: the writer stops before the frame that would
+// not fit, says so, and every frame before it reads back exactly as written.
+TEST(Outputs, AFullFileSystemStopsTheRunWithEveryFrameBeforeItIntact) {
+  const auto dir = test::temp_dir();
+  const std::string path = (dir / "full.h5").string();
+  const Mesh m = make_box({0.1, 0.1, 0.1}, {8, 8, 8}, Eigen::Vector3d::Zero(), 6);
+  std::signal(SIGXFSZ, SIG_IGN);
+  rlimit old{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old), 0);
+  std::string msg;
+  int written = 0;
+  std::vector<Points> frames;
+  {
+    OutputWriter w(path, m, {}, {"", "", "run"}, false);
+    rlimit lim = old;
+    lim.rlim_cur = 2 << 20;  // 2 MB: a frame is 8.7 KB of positions and as much of velocities
+    ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &lim), 0);
+    try {
+      for (int k = 0; k < 1000; ++k) {
+        Points x = m.rest_positions() * (1.0 + 1e-3 * k);
+        Frame f;
+        f.time = 0.01 * k;
+        f.positions = &x;
+        f.velocities = &x;
+        f.volumes = {m.rest_volume()};
+        w.write_frame(f);
+        frames.push_back(x);
+        written = k + 1;
+      }
+    } catch (const Error& e) {
+      msg = e.what();
+    }
+    setrlimit(RLIMIT_FSIZE, &old);
+  }
+  std::printf("%d frames, then: %s\n", written, msg.c_str());
+  EXPECT_GT(written, 10);
+  EXPECT_LT(written, 1000);
+  EXPECT_NE(msg.find(path + ": the file size limit (ulimit -f: 2048 KB) is reached at frame " + std::to_string(written)),
+            std::string::npos);
+  EXPECT_NE(msg.find("frames 0-" + std::to_string(written - 1) + " are intact"), std::string::npos);
+  RunFile f(path);
+  ASSERT_EQ(f.num_frames(), written);
+  for (int k = 0; k < written; ++k) EXPECT_EQ((f.positions(k) - frames[k]).cwiseAbs().maxCoeff(), 0.0) << k;
+}
+
+// A file system that refuses every write (/dev/full: ENOSPC): the error names the file and the
+// system's reason.
+TEST(Outputs, AWriteErrorNamesTheFileAndTheReason) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const std::string msg =
+      test::error_of([&] { OutputWriter w("/dev/full", small_mesh(), {}, {"", "", "run"}, false, OutputWriter::Mode::overwrite); });
+  EXPECT_NE(msg.find("/dev/full: "), std::string::npos) << msg;
+  EXPECT_NE(msg.find("No space left on device"), std::string::npos) << msg;
+}
+
+// XPBD keeps no state between steps but the positions and velocities: resumed, it repeats the
+// same steps exactly.
+TEST(Resume, AnInterruptedXpbdRunRepeatsTheSameSteps) {
+  const auto dir = test::temp_dir();
+  std::string text = kSwing;
+  text.erase(text.find("[damping]"), std::string("[damping]\nbeta = 1e-3\n").size());
+  const Scene sc = scene(text, {"integrator.kind=xpbd", "integrator.dt=2e-3"});
+  run_scene(sc, options((dir / "ref.h5").string()));
+  const std::string path = (dir / "resumed.h5").string();
+  run_until(sc, path, 5);
+  run_scene(sc, options(path, OutputWriter::Mode::resume));
+  const Frames ref = frames_of((dir / "ref.h5").string()), res = frames_of(path);
+  ASSERT_EQ(res.x.size(), 21u);
+  const double dx = max_difference(res.x, ref.x);
+  std::printf("XPBD resumed at frame 5: positions %.3e m apart\n", dx);
+  EXPECT_LT(dx, 1e-12);
+}
