@@ -3,7 +3,7 @@
 JOBS ?= $(shell nproc)
 BUILD ?= build
 
-.PHONY: demo test test-long deps configure build bench clean
+.PHONY: demo test test-long sanitize deps configure build bench clean
 
 demo: build
 	./demos/run-default.sh $(BUILD)
@@ -14,6 +14,14 @@ test: build
 
 test-long: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) -L long
+
+# The default suite built with AddressSanitizer and UndefinedBehaviorSanitizer (build-sanitize/).
+SANITIZE_BUILD ?= build-sanitize
+sanitize: deps
+	cmake -S . -B $(SANITIZE_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISOCHOR_SANITIZE=ON
+	cmake --build $(SANITIZE_BUILD) -j$(JOBS)
+	cd $(SANITIZE_BUILD) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 \
+	  ctest --output-on-failure -j$(JOBS) -LE long
 
 bench: build
 	cmake --build $(BUILD) -j$(JOBS) --target isochor_bench

@@ -132,6 +132,23 @@ RunSummary run_scene(const Scene& scene, const RunOptions& opt) {
   const Scene& sc = scene;
   const std::unique_ptr<SceneSystem> sys = make_scene_system(sc);
   const std::unique_ptr<Integrator> integrator = make_integrator(sc, *sys);
+  // Limits before work: the whole run's frames must fit where they are written (positions and
+  // velocities, 48 bytes per node, and per-tet pressures; the scalars and links of a frame and its
+  // XDMF entry about 2 KB).
+  {
+    const double frames = static_cast<double>(sc.frames.num_frames());
+    const double per_frame = 48.0 * sc.mesh.num_nodes() + (sys->has_loads() ? 24.0 * sc.mesh.num_nodes() : 0.0) +
+                             (sc.output.pressure ? 8.0 * sc.mesh.num_tets() : 0.0) + 2048;
+    const double need = frames * per_frame, room = output_room_bytes(summary.output);
+    if (!resume && need > room) {
+      char buf[400];
+      std::snprintf(buf, sizeof buf,
+                    "%s: the run would write about %.3g GB (%.0f frames of %.3g KB), more than the %.3g GB free there "
+                    "(expected fewer frames, frames.rate or frames.duration, or another output.path)",
+                    summary.output.c_str(), need / 1e9, frames, per_frame / 1024, room / 1e9);
+      throw Error(buf);
+    }
+  }
   // (The mass-spring model has no zones: its scene is refused with any.)
   OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run"},
                  sc.output.pressure && sys->has_tets(), opt.mode);
@@ -154,7 +171,8 @@ RunSummary run_scene(const Scene& scene, const RunOptions& opt) {
   }
   const std::vector<double> all_times = sc.frames.times();
   const std::vector<double> times = times_from(all_times, resume ? rp.frame : -1, rp.time, summary.output);
-  Progress bar(sc.file.name(), static_cast<int>(all_times.size()) - 1, opt.progress ? stderr : nullptr);
+  Progress bar(sc.file.name(), static_cast<int>(all_times.size()) - 1, times.front(), times.back(),
+               opt.progress ? stderr : nullptr, last_step_time);
   auto finish_failed = [&](const std::string& status, const std::vector<std::pair<std::string, double>>& numbers,
                            const std::string& failure) {
     // Best effort: the file may be what failed (a full disk).

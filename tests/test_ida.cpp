@@ -264,3 +264,28 @@ TEST(BackwardEuler, PendulumConvergesWithOrderOne) {
     EXPECT_LT(ratio, 2.3);
   }
 }
+
+// A run that makes no progress (issue 16) stops with that reason instead of crawling for days:
+// 1,000 steps in a row below 1e-7 of the frame interval. Here the steps are held below it by
+// integrator.max_step (1e-9 s against frames 0.1 s apart); a body crushed at once, or an inverted
+// mesh, does it by itself.
+TEST(Ida, ARunThatMakesNoProgressStopsAndSaysSo) {
+  Pendulum p;
+  IdaOptions o;
+  o.rtol = o.atol_q = o.atol_v = 1e-6;
+  o.max_step = 1e-9;
+  IdaIntegrator ida(p, o);
+  int frames = 0;
+  try {
+    ida.run(test::frame_times(1.0, 0.1), [&](int, double, const VectorXd&, const VectorXd&, const VectorXd&,
+                                             const RunStats::FrameSample&) { ++frames; });
+    ADD_FAILURE() << "the run went on";
+  } catch (const IntegrationError& e) {
+    std::printf("%s\n", e.what());
+    EXPECT_NE(std::string(e.what()).find("no progress: 1000 steps in a row below 1e-07 of the frame interval"),
+              std::string::npos)
+        << e.what();
+    EXPECT_LE(e.time, 1000 * 1e-9 * (1 + 1e-9));  // 1,000 steps of at most 1e-9 s
+    EXPECT_EQ(frames, 1);
+  }
+}

@@ -145,7 +145,7 @@ TEST(Output, UnwritablePathIsAnError) {
 TEST(Progress, PlainLinesWhenNotATerminal) {
   std::FILE* f = std::tmpfile();
   {
-    Progress p("run", 10, f);
+    Progress p("run", 10, 0.0, 1.0, f);
     p.update(1, 0.1);  // within the first second: nothing
     std::this_thread::sleep_for(std::chrono::milliseconds(1100));
     p.update(4, 0.4);
@@ -158,4 +158,36 @@ TEST(Progress, PlainLinesWhenNotATerminal) {
   EXPECT_EQ(out.find("frame 1 of"), std::string::npos) << out;
   EXPECT_NE(out.find("run: frame 4 of 10, t = 0.4 s, wall 1."), std::string::npos) << out;
   EXPECT_EQ(out.back(), '\n');
+}
+
+// The estimate follows the recent rate: a run that covered 90% of its simulated time in its first
+// 10 s and 5% in the next 100 s has about 100 s left, not the 6 s the average since the start
+// (110 s for 95%) would promise.
+TEST(Progress, TheEstimateFollowsTheRecentRate) {
+  std::deque<std::pair<double, double>> s{{0.0, 0.0}};
+  for (int k = 1; k <= 10; ++k) s.emplace_back(k, 0.09 * k);
+  for (int k = 1; k <= 100; ++k) s.emplace_back(10.0 + k, 0.9 + 0.0005 * k);
+  EXPECT_NEAR(remaining_seconds(s, 1.0), 100.0, 1e-9);  // 0.05 left at 0.0005 per second
+  // A steady run: the average and the recent rate agree.
+  std::deque<std::pair<double, double>> steady{{0.0, 0.0}, {30.0, 0.3}, {60.0, 0.6}};
+  EXPECT_NEAR(remaining_seconds(steady, 1.0), 40.0, 1e-9);
+  EXPECT_LT(remaining_seconds({{0.0, 0.0}}, 1.0), 0.0);  // no rate yet
+}
+
+// Between frames, a log gets a line at least every 30 s with the time the steps have reached.
+TEST(Progress, ALineEvenWhenNoFrameFinishes) {
+  std::FILE* f = std::tmpfile();
+  {
+    Progress p("slow", 10, 0.0, 1.0, f, [] { return 0.25; });
+    p.set_heartbeat(1.5);  // (30 s in a run)
+    p.update(0, 0.0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2200));
+  }
+  std::rewind(f);
+  char buf[256] = {0};
+  const std::size_t n = std::fread(buf, 1, sizeof buf - 1, f);
+  std::fclose(f);
+  const std::string out(buf, n);
+  EXPECT_NE(out.find("slow: steps past frame 0 of 10, t = 0.25 s, wall 1."), std::string::npos) << out;
+  EXPECT_EQ(out.find('\n'), out.size() - 1) << out;  // one line, not one per wake-up
 }

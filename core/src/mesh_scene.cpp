@@ -1,11 +1,46 @@
 // The [mesh] block of a scene.
 #include <filesystem>
 
+#include <cmath>
+#include <cstdio>
+
 #include "isochor/error.hpp"
+#include "isochor/memory.hpp"
 #include "isochor/meshing.hpp"
 #include "isochor/scene_file.hpp"
 
 namespace isochor {
+
+namespace {
+
+// Before meshing: a mesh of about `tets` tets must fit this machine's memory while it runs.
+void check_tets(const Section& s, const std::string& key, double tets) {
+  const double ram = physical_memory_mb();
+  const double need = kBaselineMb + tets * kMinBytesPerTet / (1024.0 * 1024.0);
+  if (need <= ram) return;
+  char buf[320];
+  std::snprintf(buf, sizeof buf,
+                "makes about %.3g tets, which need at least %.3g GB of memory while running (%.0f KB per tet); this "
+                "machine has %.3g GB (expected at most about %.2g tets)",
+                tets, need / 1024, kMinBytesPerTet / 1024, ram / 1024, (ram - kBaselineMb) * 1024 * 1024 / kMinBytesPerTet);
+  s.fail(key, buf);
+}
+
+// Gmsh meshes with an absolute geometric tolerance of 1e-8 m: shapes near it abort inside Gmsh.
+void check_size(const Section& s, const std::string& key, double size) {
+  if (size >= 1e-6) return;
+  char buf[200];
+  std::snprintf(buf, sizeof buf,
+                "%g m is too small to mesh (Gmsh's geometric tolerance is 1e-8 m; expected at least 1e-6 m: sizes are in "
+                "metres)",
+                size);
+  s.fail(key, buf);
+}
+
+// Tets of a Gmsh mesh of volume V at edge length h, at least.
+double gmsh_tets(double volume, double h) { return kGmshTetsPerEdgeCube * volume / (h * h * h); }
+
+}  // namespace
 
 Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
   const bool has_file = s.has("file"), has_shape = s.has("shape");
@@ -27,12 +62,18 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
   }
   const std::string shape = s.string("shape", "", {"box", "capsule", "cylinder", "sphere", "two_tets"});
   if (shape == "box") {
-    return make_box(s.vec3("size", Eigen::Vector3d::Ones(), Range::positive()), s.int3("cells", {4, 4, 4}, 1, 1000),
-                    center, static_cast<int>(s.integer("split", 6, 5, 6)));
+    const auto cells = s.int3("cells", {4, 4, 4}, 1, 1000);
+    const int split = static_cast<int>(s.integer("split", 6, 5, 6));
+    check_tets(s, "cells", static_cast<double>(cells[0]) * static_cast<double>(cells[1]) * static_cast<double>(cells[2]) * split);
+    return make_box(s.vec3("size", Eigen::Vector3d::Ones(), Range::positive()), cells, center, split);
   }
   if (shape == "cylinder") {
-    return make_cylinder(s.number("radius", 0.5, Range::positive()), s.number("height", 1.0, Range::positive()),
-                         static_cast<int>(s.integer("resolution", 24, 6, 10000)), center);
+    const double r = s.number("radius", 0.5, Range::positive()), height = s.number("height", 1.0, Range::positive());
+    const int resolution = static_cast<int>(s.integer("resolution", 24, 6, 10000));
+    check_size(s, "radius", r);
+    check_size(s, "height", height);
+    check_tets(s, "resolution", gmsh_tets(M_PI * r * r * height, 2 * M_PI * r / resolution));
+    return make_cylinder(r, height, resolution, center);
   }
   if (shape == "capsule") {
     if (!s.has("from") || !s.has("to")) s.fail(s.has("from") ? "to" : "from", "missing, a capsule needs the ends of its axis, from = [x, y, z] and to = [x, y, z] (m)");
@@ -41,6 +82,9 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     const double r = s.number("radius", 0.5, Range::positive());
     const double h = s.number("edge_length", r / 3, Range::positive());
     if (center != Eigen::Vector3d::Zero()) s.fail("center", "does not apply to a capsule (it lies between from and to)");
+    check_size(s, "radius", r);
+    check_size(s, "edge_length", h);
+    check_tets(s, "edge_length", gmsh_tets(M_PI * r * r * (b - a).norm() + 4.0 / 3.0 * M_PI * r * r * r, h));
     return make_capsule(a, b, r, h);
   }
   if (shape == "sphere") {
@@ -50,6 +94,12 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     if (h > 0 && s.has("target_tets")) s.fail("edge_length", "give either edge_length or target_tets, not both");
     const double inner = s.number("inner_radius", 0.0, Range::non_negative());
     if (inner >= r) s.fail("inner_radius", "expected less than radius (" + std::to_string(r) + " m)");
+    check_size(s, "radius", r);
+    if (inner > 0) check_size(s, "inner_radius", inner);
+    if (h > 0) check_size(s, "edge_length", h);
+    const double volume = 4.0 / 3.0 * M_PI * (r * r * r - inner * inner * inner);
+    if (h > 0) check_tets(s, "edge_length", gmsh_tets(volume, h));
+    else check_tets(s, "target_tets", static_cast<double>(target));
     return make_sphere(r, h, target, center, inner);
   }
   Mesh m = make_two_tets(s.number("edge", 1.0, Range::positive()));

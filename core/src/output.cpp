@@ -687,6 +687,18 @@ void OutputWriter::set_status(const std::string& status) {
 
 const ResumePoint& OutputWriter::resume_point() const { return impl_->resume; }
 
+double output_room_bytes(const std::string& path) {
+  std::filesystem::path dir = std::filesystem::absolute(path).parent_path();
+  std::error_code ec;
+  while (!dir.empty() && !std::filesystem::exists(dir, ec) && dir != dir.parent_path()) dir = dir.parent_path();
+  double room = std::numeric_limits<double>::infinity();
+  struct statvfs fs {};
+  if (::statvfs(dir.c_str(), &fs) == 0) room = static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize);
+  struct rlimit lim {};
+  if (::getrlimit(RLIMIT_FSIZE, &lim) == 0 && lim.rlim_cur != RLIM_INFINITY) room = std::min(room, static_cast<double>(lim.rlim_cur));
+  return room;
+}
+
 bool output_is_being_written(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return false;

@@ -20,7 +20,7 @@ void run_fixed_steps(const std::vector<double>& times, double h, long max_steps,
     ++k;
   }
   while (k < times.size()) {
-    throw_if_stop_requested(t);
+    step_boundary(t);
     std::string reason;
     const double t1 = t0 + static_cast<double>(stats.steps + 1) * h;
     if (!step(t, t1, q, v, q1, v1, l1, reason)) {

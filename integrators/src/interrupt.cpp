@@ -1,11 +1,13 @@
 #include "isochor/interrupt.hpp"
 
 #include <atomic>
+#include <limits>
 
 namespace isochor {
 
 namespace {
 std::atomic<int> requested{0};
+std::atomic<double> reached{std::numeric_limits<double>::quiet_NaN()};
 static_assert(std::atomic<int>::is_always_lock_free, "a signal handler may only touch lock-free atomics");
 }  // namespace
 
@@ -13,8 +15,11 @@ void request_stop(int signal) noexcept { requested.store(signal, std::memory_ord
 int stop_requested() noexcept { return requested.load(std::memory_order_relaxed); }
 void clear_stop_request() noexcept { requested.store(0, std::memory_order_relaxed); }
 
-void throw_if_stop_requested(double t) {
+void step_boundary(double t) {
+  reached.store(t, std::memory_order_relaxed);
   if (const int s = stop_requested()) throw Interrupted(t, s);
 }
+
+double last_step_time() noexcept { return reached.load(std::memory_order_relaxed); }
 
 }  // namespace isochor

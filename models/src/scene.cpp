@@ -21,6 +21,11 @@ std::pair<double, double> lame_from_young(double E, double nu) {
   return {E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))};
 }
 
+long FramesSpec::num_frames() const {
+  if (count > 0) return count;
+  return std::lround(std::floor(duration * rate + 1e-9)) + 1;
+}
+
 std::vector<double> FramesSpec::times() const {
   std::vector<double> t;
   if (count > 0) {  // statics: pseudo-time 0 .. 1 over the load increments
@@ -298,6 +303,40 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
 
 }  // namespace
 
+namespace {
+// A body that starts inside a contact plane meets a force of its whole penetration at once, and
+// the integrators crawl (IDA at 1e-9 s steps) or fail: an error naming the plane and the nodes.
+// Within the contact thickness the law is as smooth as anywhere (a body may start resting there).
+void check_initial_contact(const Scene& sc, const Section& contact) {
+  const Points x = sc.mesh.rest_positions();
+  const std::vector<GroundSpec> planes = sc.contact_planes();
+  for (std::size_t p = 0; p < planes.size(); ++p) {
+    const GroundSpec& g = planes[p];
+    if (!g.enabled) continue;
+    const Eigen::Vector3d point = g.point_at(0.0);
+    int inside = 0;
+    double deepest = 0;
+    for (int n = 0; n < x.cols(); ++n) {
+      const double d = (x.col(n) - point).dot(g.normal);
+      if (d < -g.thickness) {
+        ++inside;
+        deepest = std::min(deepest, d);
+      }
+    }
+    if (inside == 0) continue;
+    char buf[320];
+    std::snprintf(buf, sizeof buf,
+                  "%d of %d nodes start more than the contact thickness (%g m) below the plane through [%g, %g, %g] "
+                  "with normal [%g, %g, %g] (the deepest %.3g m; expected the body on the normal's side: move "
+                  "mesh.center or the plane)",
+                  inside, static_cast<int>(x.cols()), g.thickness, point.x(), point.y(), point.z(), g.normal.x(),
+                  g.normal.y(), g.normal.z(), -deepest);
+    if (p == 0) contact.fail("ground", buf);
+    contact.tables("plane").at(p - 1).fail("point", buf);
+  }
+}
+}  // namespace
+
 Scene parse_scene(SceneFile file) {
   Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, true, {}, {}, {}, {}};
   const Section root = sc.file.root();
@@ -385,6 +424,39 @@ Scene parse_scene(SceneFile file) {
     fr.fail(ig.kind == IntegratorKind::statics ? "count" : "rate",
             ig.kind == IntegratorKind::statics ? "a static run needs frames.count (load increments)"
                                                : "frames.count is for statics; a dynamic run needs frames.rate and frames.duration");
+
+  // Limits before work: a frame count that the frame times alone would not fit, and fixed steps
+  // that could not reach the end within integrator.max_steps.
+  if (ig.kind != IntegratorKind::statics) {
+    const double frames = std::floor(sc.frames.duration * sc.frames.rate + 1e-9) + 1;
+    if (frames > 1e8) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "%g s at frames.rate = %g makes %.3g frames (expected at most 1e8)", sc.frames.duration,
+                    sc.frames.rate, frames);
+      fr.fail(fr.has("duration") ? "duration" : "rate", buf);
+    }
+    double dt = 0;
+    long max_steps = 0;
+    if (ig.kind == IntegratorKind::backward_euler || ig.kind == IntegratorKind::semi_implicit) {
+      dt = ig.backward_euler.dt;
+      max_steps = ig.backward_euler.max_steps;
+    } else if (ig.kind == IntegratorKind::xpbd) {
+      dt = ig.xpbd.dt;
+      max_steps = ig.xpbd.max_steps;
+    } else if (ig.kind == IntegratorKind::mass_spring) {
+      dt = ig.hong.dt;
+      max_steps = ig.hong.max_steps;
+    }
+    if (dt > 0 && sc.frames.duration / dt > static_cast<double>(max_steps)) {
+      char buf[240];
+      std::snprintf(buf, sizeof buf,
+                    "%g s makes %.3g steps over frames.duration = %g s, more than integrator.max_steps = %ld (expected a "
+                    "larger dt or a shorter run)",
+                    dt, sc.frames.duration / dt, sc.frames.duration, max_steps);
+      in.fail("dt", buf);
+    }
+  }
+  check_initial_contact(sc, contact);
 
   const Section out = root.table("output");
   const std::string stem = std::filesystem::path(sc.file.name()).stem().string();

@@ -22,4 +22,17 @@ inline double peak_memory_mb() {
   return static_cast<double>(ru.ru_maxrss) / 1024.0;
 }
 
+// This machine's physical memory in MB.
+inline double physical_memory_mb() {
+  return static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+// What a run needs at least, to refuse before meshing what cannot fit (measured on the ball
+// drop with IDA and KLU: 6.5 KB per tet from 16K to 64K tets over a baseline of about 80 MB of
+// libraries; the krylov solver 6.4 KB per tet at 250K; Gmsh's meshes have about 5 V / h^3 tets
+// for an edge length h, 4.8-4.9 for the sphere, cylinder and capsule).
+constexpr double kBaselineMb = 80.0;
+constexpr double kMinBytesPerTet = 4096.0;
+constexpr double kGmshTetsPerEdgeCube = 4.0;  // a lower bound on tets per (V / h^3)
+
 }  // namespace isochor

@@ -74,6 +74,10 @@ class OutputWriter {
   std::unique_ptr<Impl> impl_;
 };
 
+// Bytes free for an output at `path` (on the file system of its nearest existing directory), and
+// within the file size limit (ulimit -f); infinity where unknown.
+double output_room_bytes(const std::string& path);
+
 // Whether a process holds the writer's lock on this file (a run still writing it).
 bool output_is_being_written(const std::string& path);
 

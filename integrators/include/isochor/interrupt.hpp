@@ -11,7 +11,11 @@ void request_stop(int signal) noexcept;
 // The signal that asked for the stop, or 0.
 int stop_requested() noexcept;
 void clear_stop_request() noexcept;
-// Throws Interrupted(t, signal) when a stop was asked for.
-void throw_if_stop_requested(double t);
+// Called by the integrators at every step boundary (statics: every load increment): records the
+// time reached (for progress lines between frames) and throws Interrupted(t, signal) when a stop
+// was asked for.
+void step_boundary(double t);
+// The time of the last step boundary (NaN before the first).
+double last_step_time() noexcept;
 
 }  // namespace isochor

@@ -59,6 +59,8 @@ struct FramesSpec {
   int count = 0;           // statics: number of frames (load increments)
   // Frame times 0, 1/rate, ..., duration; statics: pseudo-times 0, 1/(count-1), ..., 1.
   std::vector<double> times() const;
+  // How many: times().size() without making them.
+  long num_frames() const;
 };
 
 struct OutputSpec {
