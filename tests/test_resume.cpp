@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "isochor/error.hpp"
 #include "isochor/interrupt.hpp"
@@ -25,29 +26,14 @@ Scene scene(const std::string& text, const std::vector<std::string>& overrides =
   return parse_scene(SceneFile::parse(text, "test.toml", overrides));
 }
 
-// A soft block clamped at one end, swinging down under gravity and ringing: smooth, cheap, and
-// every part of it moves.
-const char* kSwing = R"(
-[mesh]
-shape = "box"
-cells = [6, 2, 2]
-size = [0.3, 0.05, 0.05]
-center = [0.15, 0, 0]
-[material]
-model = "cnh"
-mu = 2.0e4
-lambda = 2.0e5
-[damping]
-beta = 1e-3
-[[boundary]]
-select = { kind = "set", name = "xmin" }
-[frames]
-rate = 100.0
-duration = 0.2
-[integrator]
-rtol = 1e-6
-atol = 1e-8
-)";
+// demos/swing.toml: a soft block clamped at one end, swinging down under gravity and ringing.
+std::string swing_text() {
+  std::ifstream in(std::string(ISOCHOR_SOURCE_DIR) + "/demos/swing.toml");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+const std::string kSwing = swing_text();
 
 struct Frames {
   std::vector<Points> x, v;
@@ -192,7 +178,10 @@ TEST(Resume, AStopRequestEndsTheRunAtTheNextStep) {
   const auto dir = test::temp_dir();
   for (const char* kind : {"ida", "backward_euler", "static"}) {
     std::string text = kSwing;
-    if (std::string(kind) == "static") text.replace(text.find("rate = 100.0\nduration = 0.2"), 27, "count = 6");
+    if (std::string(kind) == "static") {
+      text.replace(text.find("rate = 100.0\nduration = 0.2"), 27, "count = 6");
+      ASSERT_EQ(text.find("duration"), std::string::npos) << "demos/swing.toml's [frames] changed";
+    }
     std::vector<std::string> o{std::string("integrator.kind=") + kind};
     if (std::string(kind) == "static") o.push_back("forces.gravity_ramp=1");  // load increments
     const Scene sc = scene(text, o);
@@ -347,7 +336,8 @@ TEST(Outputs, AWriteErrorNamesTheFileAndTheReason) {
 TEST(Resume, AnInterruptedXpbdRunRepeatsTheSameSteps) {
   const auto dir = test::temp_dir();
   std::string text = kSwing;
-  text.erase(text.find("[damping]"), std::string("[damping]\nbeta = 1e-3\n").size());
+  text.erase(text.find("[damping]"), std::string("[damping]\nbeta = 1e-3      # s\n").size());
+  ASSERT_EQ(text.find("beta"), std::string::npos) << "demos/swing.toml's [damping] changed";
   const Scene sc = scene(text, {"integrator.kind=xpbd", "integrator.dt=2e-3"});
   run_scene(sc, options((dir / "ref.h5").string()));
   const std::string path = (dir / "resumed.h5").string();

@@ -1,10 +1,18 @@
 // Everything that goes through Gmsh's C++ API: curved shapes, .msh files, closed surfaces.
 #include <gmsh.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
+#include <exception>
 #include <fstream>
+#include <functional>
 #include <mutex>
 #include <unordered_map>
 
@@ -18,12 +26,16 @@ namespace {
 // Gmsh keeps global state: one session per process, used by one thread at a time.
 class GmshSession {
  public:
-  explicit GmshSession(const std::string& model) : lock_(mutex()) {
+  explicit GmshSession(const std::string& model) : lock_(mutex()), exceptions_(std::uncaught_exceptions()) {
     static bool initialised = false;
+    if (broken())
+      throw Error("Gmsh cannot be used again in this process: an earlier file or mesh failed inside it (expected a new process)");
     if (!initialised) {
       gmsh::initialize(0, nullptr, false);
       gmsh::option::setNumber("General.Terminal", 0);
-      std::atexit([] { gmsh::finalize(); });
+      std::atexit([] {
+        if (!broken()) gmsh::finalize();
+      });
       initialised = true;
     }
     gmsh::clear();
@@ -41,10 +53,22 @@ class GmshSession {
     gmsh::logger::start();
     gmsh::model::add(model);
   }
+  // A session that ends by an exception (a file Gmsh could not read, a mesh it could not make)
+  // leaves Gmsh alone: its model may be half-built, and clearing it crashed inside Gmsh 4.8 on a
+  // malformed .msh (found by the fuzzer). Gmsh is then not used again in this process.
   ~GmshSession() {
+    if (std::uncaught_exceptions() > exceptions_) {
+      broken() = true;
+      return;
+    }
     gmsh::logger::stop();
     gmsh::clear();
   }
+  static bool& broken() {
+    static bool b = false;
+    return b;
+  }
+
   // The first error Gmsh logged since the session started, or "".
   static std::string first_error() {
     std::vector<std::string> log;
@@ -60,6 +84,7 @@ class GmshSession {
     return m;
   }
   std::lock_guard<std::mutex> lock_;
+  int exceptions_;
 };
 
 struct Extracted {
@@ -115,6 +140,118 @@ Mesh finish(Extracted e, const std::string& what, std::map<std::string, std::vec
   for (auto& [k, v] : node_sets) std::sort(v.begin(), v.end());
   m.zones = std::move(zones);
   m.node_sets = std::move(node_sets);
+  return m;
+}
+
+// What a Gmsh read or mesh hands back before isochor makes a Mesh of it.
+struct RawMesh {
+  Extracted e;
+  std::map<std::string, std::vector<int>> zones, sets;
+};
+
+template <class T>
+void put(std::string& out, const T& v) {
+  out.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+template <class T>
+void put_vector(std::string& out, const std::vector<T>& v) {
+  put(out, static_cast<std::uint64_t>(v.size()));
+  out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+void put_groups(std::string& out, const std::map<std::string, std::vector<int>>& g) {
+  put(out, static_cast<std::uint64_t>(g.size()));
+  for (const auto& [name, v] : g) {
+    put_vector(out, std::vector<char>(name.begin(), name.end()));
+    put_vector(out, v);
+  }
+}
+struct Reader {
+  const std::string& in;
+  std::size_t at = 0;
+  template <class T>
+  T get() {
+    if (at + sizeof(T) > in.size()) throw Error("internal: a truncated mesh from the Gmsh child process");
+    T v;
+    std::memcpy(&v, in.data() + at, sizeof v);
+    at += sizeof v;
+    return v;
+  }
+  template <class T>
+  std::vector<T> get_vector() {
+    const auto n = get<std::uint64_t>();
+    if (n > (in.size() - at) / sizeof(T)) throw Error("internal: a truncated mesh from the Gmsh child process");
+    std::vector<T> v(n);
+    std::memcpy(v.data(), in.data() + at, n * sizeof(T));
+    at += n * sizeof(T);
+    return v;
+  }
+  std::map<std::string, std::vector<int>> get_groups() {
+    std::map<std::string, std::vector<int>> g;
+    const auto n = get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < n; ++i) {
+      const std::vector<char> name = get_vector<char>();
+      g[std::string(name.begin(), name.end())] = get_vector<int>();
+    }
+    return g;
+  }
+};
+
+// Runs `f` (a Gmsh read or mesh) in a child process and returns what it made. Gmsh 4.8 crashes
+// on some malformed files (the fuzzer found segfaults in getElementsByType and in clearing a
+// half-read model): in the child, a crash is only the child's, and becomes an Error naming
+// `what`. An Error in the child comes back as itself.
+RawMesh in_child(const std::string& what, const std::string& expected, const std::function<RawMesh()>& f) {
+  int fd[2];
+  if (::pipe(fd) != 0) throw Error(what + ": cannot start the Gmsh process (" + std::strerror(errno) + ")");
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) throw Error(what + ": cannot start the Gmsh process (" + std::strerror(errno) + ")");
+  if (pid == 0) {
+    ::close(fd[0]);
+    std::string out;
+    try {
+      const RawMesh r = f();
+      out = "M";
+      put_vector(out, std::vector<double>(r.e.x.data(), r.e.x.data() + r.e.x.size()));
+      put_vector(out, r.e.tets);
+      put_groups(out, r.zones);
+      put_groups(out, r.sets);
+    } catch (const Error& e) {
+      out = std::string("E") + e.what();
+    } catch (const std::exception& e) {
+      out = "E" + what + ": " + expected + " (" + e.what() + ")";
+    }
+    for (std::size_t at = 0; at < out.size();) {
+      const ssize_t n = ::write(fd[1], out.data() + at, out.size() - at);
+      if (n <= 0) _exit(2);
+      at += static_cast<std::size_t>(n);
+    }
+    _exit(0);
+  }
+  ::close(fd[1]);
+  std::string in;
+  char buf[65536];
+  for (ssize_t n; (n = ::read(fd[0], buf, sizeof buf)) != 0;) {
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) break;
+    in.append(buf, static_cast<std::size_t>(n));
+  }
+  ::close(fd[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(status))
+    throw Error(what + ": " + expected + " (Gmsh crashed on it, signal " + std::to_string(WTERMSIG(status)) + ")");
+  if (in.empty() || (in[0] != 'M' && in[0] != 'E') || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw Error(what + ": " + expected + " (the Gmsh process failed)");
+  if (in[0] == 'E') throw Error(in.substr(1));
+  Reader r{in, 1};
+  RawMesh m;
+  const std::vector<double> x = r.get_vector<double>();
+  m.e.x = Eigen::Map<const Points>(x.data(), 3, static_cast<Eigen::Index>(x.size() / 3));
+  m.e.tets = r.get_vector<Tet>();
+  m.zones = r.get_groups();
+  m.sets = r.get_groups();
   return m;
 }
 
@@ -258,8 +395,10 @@ Mesh read_msh(const std::string& path) {
     if (first.rfind("$MeshFormat", 0) != 0)
       throw Error(path + ": is not a readable Gmsh mesh (expected a .msh file, version 2 or 4, starting with $MeshFormat)");
   }
+  const std::string expected = "is not a readable Gmsh mesh (expected a .msh file, version 2 or 4)";
+  RawMesh raw = in_child(path, expected, [&] {
   GmshSession session("file");
-  return guarded(path, "is not a readable Gmsh mesh (expected a .msh file, version 2 or 4)", [&] {
+  return guarded(path, expected, [&] {
   gmsh::open(path);
   std::string err = GmshSession::first_error();
   if (!err.empty()) throw Error(path + ": is not a readable Gmsh mesh: " + err);
@@ -287,8 +426,10 @@ Mesh read_msh(const std::string& path) {
       }
     }
   }
-  return finish(std::move(e), path, std::move(zones), std::move(sets));
+  return RawMesh{std::move(e), std::move(zones), std::move(sets)};
   });
+  });
+  return finish(std::move(raw.e), path, std::move(raw.zones), std::move(raw.sets));
 }
 
 Mesh mesh_closed_surface(const std::string& path, double edge_length) {
@@ -313,6 +454,7 @@ Mesh mesh_closed_surface(const std::string& path, double edge_length) {
   if (vol < 0) {  // inward: flip
     for (Tri& t : tris) std::swap(t[1], t[2]);
   }
+  RawMesh raw = in_child(path, "Gmsh could not tetrahedralise the surface", [&] {
   GmshSession session("surface");
   const int s = gmsh::model::addDiscreteEntity(2);
   std::vector<std::size_t> ntags(x.cols());
@@ -341,8 +483,10 @@ Mesh mesh_closed_surface(const std::string& path, double edge_length) {
       gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
     }
     generate_3d(path);
-    return finish(extract_tets(path), path, {}, {});
+    return RawMesh{extract_tets(path), {}, {}};
   });
+  });
+  return finish(std::move(raw.e), path, {}, {});
 }
 
 }  // namespace isochor

@@ -79,8 +79,20 @@ Mesh read_tetgen(const std::string& path) {
   const long n = nodes.integer(tok[0]);
   if (n <= 0) nodes.fail("expected a positive number of points, got " + tok[0]);
   if (nodes.integer(tok[1]) != 3) nodes.fail("expected dimension 3, got " + tok[1]);
+  // A large count the file cannot hold is refused before anything is allocated for it (a point
+  // line has at least 8 bytes, a tet line 10): the fuzzer's 4294967296-point header ran out of
+  // memory. (A small file that ends early says where, below.)
+  const auto bytes = [](const std::string& path) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    return ec ? 0.0 : static_cast<double>(size);
+  };
+  if (n > 1000000 && static_cast<double>(n) > bytes(node_path) / 8)
+    nodes.fail("the header announces " + tok[0] + " points, more than the file can hold");
   const long nattr = tok.size() > 2 ? nodes.integer(tok[2]) : 0;
   const long nmark = tok.size() > 3 ? nodes.integer(tok[3]) : 0;
+  if (nattr < 0 || nattr > 1000) nodes.fail("expected a number of attributes from 0 to 1000, got " + tok[2]);
+  if (nmark < 0 || nmark > 1) nodes.fail("expected 0 or 1 boundary markers, got " + tok[3]);
   Points x(3, n);
   std::vector<long> markers(n, 0);
   long first = -1;
@@ -108,7 +120,9 @@ Mesh read_tetgen(const std::string& path) {
   if (T <= 0) ele.fail("expected a positive number of tets, got " + tok[0]);
   const long per = ele.integer(tok[1]);
   if (per != 4) ele.fail("expected 4 nodes per tet (linear tets), got " + tok[1]);
+  if (T > 1000000 && static_cast<double>(T) > bytes(ele_path) / 10) ele.fail("the header announces " + tok[0] + " tets, more than the file can hold");
   const long tattr = tok.size() > 2 ? ele.integer(tok[2]) : 0;
+  if (tattr < 0 || tattr > 1000) ele.fail("expected a number of attributes from 0 to 1000, got " + tok[2]);
   std::vector<Tet> tets(T);
   std::map<std::string, std::vector<int>> zones;
   for (long e = 0; e < T; ++e) {

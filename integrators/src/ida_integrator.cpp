@@ -194,10 +194,10 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   }};
 
   check(SUNContext_Create(nullptr, &s.ctx), "SUNContext_Create", t0);
-  yy = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
-  yp = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
-  id = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
-  atol = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
+  yy = new_serial_vector(N, s.ctx);
+  yp = new_serial_vector(N, s.ctx);
+  id = new_serial_vector(N, s.ctx);
+  atol = new_serial_vector(N, s.ctx);
   double* y = N_VGetArrayPointer(yy);
   double* d = N_VGetArrayPointer(yp);
   Eigen::Map<VectorXd>(y, N).setZero();

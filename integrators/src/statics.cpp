@@ -137,9 +137,9 @@ RunStats StaticSolver::run(const std::vector<double>& times, const FrameCallback
   }};
   const double t0 = times.front();
   check(SUNContext_Create(nullptr, &s.ctx), "SUNContext_Create", t0);
-  u = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
-  uscale = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
-  fscale = check_ptr(N_VNew_Serial(N, s.ctx), "N_VNew_Serial");
+  u = new_serial_vector(N, s.ctx);
+  uscale = new_serial_vector(N, s.ctx);
+  fscale = new_serial_vector(N, s.ctx);
   VectorXd q0, v0dummy;
   s.sys.initial_state(t0, q0, v0dummy);
   double* x = N_VGetArrayPointer(u);

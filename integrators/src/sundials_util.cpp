@@ -1,6 +1,14 @@
 #include "sundials_util.hpp"
 
+#include <nvector/nvector_serial.h>
+
 namespace isochor {
+
+N_Vector new_serial_vector(sunindextype n, SUNContext ctx) {
+  N_Vector v = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
+  check(N_VEnableFusedOps_Serial(v, SUNFALSE), "N_VEnableFusedOps_Serial");  // (the default: see the header)
+  return v;
+}
 
 namespace {
 SUNLinearSolver_Type custom_type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }

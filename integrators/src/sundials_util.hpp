@@ -2,6 +2,7 @@
 // matrix-based custom SUNLinearSolver whose setup and solve are the caller's.
 #pragma once
 #include <sundials/sundials_linearsolver.h>
+#include <sundials/sundials_nvector.h>
 
 #include <functional>
 #include <string>
@@ -20,6 +21,13 @@ T* check_ptr(T* p, const char* function) {
   if (!p) throw IntegrationError(0.0, std::string(function) + " returned null (out of memory?)");
   return p;
 }
+
+// A serial vector of length n. Made here, where it also calls a function that only SUNDIALS 6's
+// serial vector has (N_VEnableFusedOps_Serial): Simbody's libSimTKmath.so exports an old copy of
+// N_VNew_Serial and the rest of its API, and a reference to those alone may bind to that copy
+// (the sanitizer build did, and crashed in N_VGetArrayPointer); this reference pulls SUNDIALS'
+// own object out of the static library, and its definitions then win (NOTES-dependencies §0).
+N_Vector new_serial_vector(sunindextype n, SUNContext ctx);
 
 // Runs f when it goes out of scope: SUNDIALS' objects released on success and on a throw alike.
 struct OnExit {

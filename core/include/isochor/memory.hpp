@@ -22,8 +22,15 @@ inline double peak_memory_mb() {
   return static_cast<double>(ru.ru_maxrss) / 1024.0;
 }
 
-// This machine's physical memory in MB.
+// The memory a run may use, in MB: this machine's physical memory, or less if set (the fuzzer
+// sets 200 MB, so that a scene asking for a large mesh is refused rather than meshed).
+inline double& memory_budget_override_mb() {
+  static double mb = 0;
+  return mb;
+}
+inline void set_memory_budget_mb(double mb) { memory_budget_override_mb() = mb; }
 inline double physical_memory_mb() {
+  if (memory_budget_override_mb() > 0) return memory_budget_override_mb();
   return static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
 }
 
