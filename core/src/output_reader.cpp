@@ -253,8 +253,9 @@ std::string describe_run(const std::string& path) {
     auto totals = r.stat_totals();
     auto at = [&](const char* k) { return totals.count(k) ? totals[k] : std::nan(""); };
     const std::string status = attrs["status"];
-    const std::string resume = "; continue it with `isochor run " + attrs["scene_file"] + " --resume -o " + path +
-                               "` and the same --set options";
+    const std::string resume = t.empty() ? "; no frame to continue from (run it again with --overwrite)"
+                                         : "; continue it with `isochor run " + attrs["scene_file"] + " --resume -o " +
+                                               path + "` and the same --set options";
     s << "  status      ";
     if (output_is_being_written(path))
       s << "still being written (a running isochor holds its lock)";
@@ -263,7 +264,8 @@ std::string describe_run(const std::string& path) {
     else if (status == "interrupted")
       s << "interrupted at t = " << at("interrupted_at") << " s (signal " << at("signal") << ")" << resume;
     else if (status == "failed")
-      s << "failed at t = " << at("failed_at_time") << " s: " << r.stat_text("failure") << resume;
+      s << "failed" << (std::isfinite(at("failed_at_time")) ? " at t = " + std::to_string(at("failed_at_time")) + " s" : "")
+        << ": " << r.stat_text("failure") << resume;
     else if (status == "running")
       s << "unfinished: its writer stopped without closing it (killed?) after t = " << (t.empty() ? 0.0 : t.back()) << " s"
         << resume;
