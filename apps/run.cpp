@@ -56,7 +56,8 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
                            const std::function<bool(int, const Frame&)>& on_frame) {
   const auto start = std::chrono::steady_clock::now();
   const bool tets = sys.has_tets();
-  return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), velocities = Points()](
+  return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), velocities = Points(),
+          multipliers = std::vector<double>()](
              int j, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
              const RunStats::FrameSample& s) mutable {
     if (first >= 0 && j == 0) return;
@@ -67,6 +68,8 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
     f.positions = &sys.positions();
     velocities = Eigen::Map<const Points>(sys.velocities().data(), 3, sys.positions().cols());
     f.velocities = &velocities;
+    multipliers.assign(lambda.data(), lambda.data() + lambda.size());
+    f.multipliers = &multipliers;
     f.volumes = sys.volumes();
     f.energy = sys.energies();
     if (tets && sc.output.pressure) {
@@ -163,7 +166,8 @@ RunSummary run_scene(const Scene& scene, const RunOptions& opt) {
       summary.already_finished = true;
       return summary;
     }
-    start = StartState{rp.positions, rp.velocities};
+    start = StartState{rp.positions, rp.velocities,
+                       Eigen::Map<const VectorXd>(rp.multipliers.data(), static_cast<Eigen::Index>(rp.multipliers.size()))};
     sys->set_start(&start);
     for (const char* name : kCumulative)
       if (auto it = rp.stats.find(name); it != rp.stats.end() && std::isfinite(it->second)) offsets[name] = it->second;

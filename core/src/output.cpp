@@ -243,7 +243,7 @@ struct OutputWriter::Impl {
   H file;
   int nodes = 0, tets = 0, frames = 0;
   bool pressure = false;
-  std::unique_ptr<Series> time, positions, velocities, volume, energy, pressure_series, load_series;
+  std::unique_ptr<Series> time, positions, velocities, multipliers, volume, energy, pressure_series, load_series;
   std::map<std::string, std::unique_ptr<Series>> stats;
   H frames_group, xdmf_group, stats_group;
   int lock_fd = -1;
@@ -253,7 +253,7 @@ struct OutputWriter::Impl {
 
   // Every per-frame series of the file.
   std::vector<Series*> all_series() {
-    std::vector<Series*> all{time.get(), positions.get(), velocities.get(), volume.get(), energy.get(),
+    std::vector<Series*> all{time.get(), positions.get(), velocities.get(), multipliers.get(), volume.get(), energy.get(),
                              pressure_series.get(), load_series.get()};
     for (auto& [name, series] : stats) all.push_back(series.get());
     all.erase(std::remove(all.begin(), all.end(), nullptr), all.end());
@@ -447,6 +447,8 @@ struct OutputWriter::Impl {
     time = std::make_unique<Series>(frames_group, "time", H5T_NATIVE_DOUBLE);
     positions = std::make_unique<Series>(frames_group, "positions", H5T_NATIVE_DOUBLE);
     velocities = std::make_unique<Series>(frames_group, "velocities", H5T_NATIVE_DOUBLE);
+    if (H5Lexists(frames_group, "multipliers", H5P_DEFAULT) > 0)
+      multipliers = std::make_unique<Series>(frames_group, "multipliers", H5T_NATIVE_DOUBLE);
     volume = std::make_unique<Series>(frames_group, "volume", H5T_NATIVE_DOUBLE);
     energy = std::make_unique<Series>(frames_group, "energy", H5T_NATIVE_DOUBLE);
     if (positions->row.at(0) != static_cast<hsize_t>(nodes) || volume->row.at(0) != 1 + zones)
@@ -473,6 +475,10 @@ struct OutputWriter::Impl {
     resume.velocities.resize(3, nodes);
     positions->read(complete - 1, resume.positions.data());
     velocities->read(complete - 1, resume.velocities.data());
+    if (multipliers) {
+      resume.multipliers.resize(multipliers->row.at(0));
+      multipliers->read(complete - 1, resume.multipliers.data());
+    }
     for (auto& [name, series] : stats) series->read(complete - 1, &resume.stats[name]);
     for (const char* a : {"failed_at_time", "failure", "interrupted_at", "signal"}) delete_attribute(stats_group, a);
     std::vector<double> times(complete);
@@ -644,6 +650,15 @@ void OutputWriter::Impl::append_frame(const Frame& f, hsize_t k) {
     }
     m.velocities->append(k, f.velocities->data());
   }
+  if (f.multipliers && !f.multipliers->empty()) {
+    if (!m.multipliers) {
+      if (k > 0) throw Error(m.path + ": multipliers appeared after the first frame");
+      m.multipliers = std::make_unique<Series>(m.frames_group, "multipliers", std::vector<hsize_t>{f.multipliers->size()},
+                                               H5T_NATIVE_DOUBLE);
+    }
+    if (f.multipliers->size() != m.multipliers->row[0]) throw Error(m.path + ": a frame's multipliers changed in number");
+    m.multipliers->append(k, f.multipliers->data());
+  }
   m.volume->append(k, f.volumes.data());
   m.energy->append(k, f.energy.data());
   m.add_frame_view("/frames/positions", m.frames, 3, "position");
@@ -718,6 +733,7 @@ void OutputWriter::close() {
   m.time.reset();
   m.positions.reset();
   m.velocities.reset();
+  m.multipliers.reset();
   m.volume.reset();
   m.energy.reset();
   m.pressure_series.reset();

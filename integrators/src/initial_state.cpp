@@ -99,6 +99,7 @@ void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, Ve
     const VectorXd w = (velocity_constraint(t0 + h, q + h * v) - velocity_constraint(t0 - h, q - h * v)) / (2 * h);
     lambda = ldlt.solve(VectorXd(S * Minv.cwiseProduct(f) + w));
     a = Minv.cwiseProduct(f - S.transpose() * lambda);
+    sys.stored_multipliers(lambda);  // a resumed run: the multipliers it had there
   } else {
     sys.force(t0, q, v, f);
     a = Minv.cwiseProduct(f);

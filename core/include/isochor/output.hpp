@@ -21,6 +21,7 @@ struct Frame {
   double time = 0.0;
   const Points* positions = nullptr;     // all nodes
   const Points* velocities = nullptr;    // all nodes (m/s): with the positions, what a resume needs
+  const std::vector<double>* multipliers = nullptr;  // the constraints' multipliers (a resume's start)
   std::vector<double> volumes;           // total, then each zone (in the order given at open)
   std::array<double, 3> energy{0, 0, 0};  // kinetic, elastic, external potential
   const std::vector<double>* pressure = nullptr;  // per tet, when pressure output is on
@@ -33,6 +34,7 @@ struct ResumePoint {
   int frame = -1;  // index of the last complete frame (frames after it were dropped)
   double time = 0;
   Points positions, velocities;                   // every node
+  std::vector<double> multipliers;                // the constraints' (empty if none were written)
   std::map<std::string, double> stats;            // the per-frame /stats series at that frame
   std::string status;                             // what the file said before: running, failed, ...
 };

@@ -42,6 +42,9 @@ class ConstrainedSystem {
   // then taken as it is, not projected onto the constraints again (backward Euler's velocities
   // hold G v + dg/dt = 0 only to its step error, and a projection would change the run).
   virtual bool starts_from_stored_state() const { return false; }
+  // With that stored state, its multipliers if they were stored too (else false): the Newton
+  // iterations of the first step start from them, as an uninterrupted run's would.
+  virtual bool stored_multipliers(VectorXd& /*lambda*/) const { return false; }
   // f(q, v, t), every force on the free dofs.
   virtual void force(double t, const VectorXd& q, const VectorXd& v, VectorXd& f) = 0;
   // neg_dfdq += -df/dq and neg_dfdv += -df/dv, both in pattern() (either may be null).

@@ -72,6 +72,7 @@ struct OutputSpec {
 // position and velocity at a frame of its file (the driven ones are prescribed anyway).
 struct StartState {
   Points positions, velocities;
+  Eigen::VectorXd multipliers;  // the constraints' at that frame (empty: computed afresh)
 };
 
 struct Scene {

@@ -39,6 +39,11 @@ class SceneSystem : public ConstrainedSystem {
   void set_start(const StartState* start) { start_ = start; }
   const StartState* start() const { return start_; }
   bool starts_from_stored_state() const override { return start_ != nullptr; }
+  bool stored_multipliers(VectorXd& lambda) const override {
+    if (!start_ || start_->multipliers.size() != num_constraints()) return false;
+    lambda = start_->multipliers;
+    return true;
+  }
 
  private:
   const StartState* start_ = nullptr;
