@@ -126,13 +126,12 @@ std::vector<double> times_from(const std::vector<double>& times, int first, doub
 
 }  // namespace
 
-RunSummary run_scene(const Scene& scene, const RunOptions& opt) {
+RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   RunSummary summary;
-  summary.output = opt.output.empty() ? scene.output.path : opt.output;
+  summary.output = opt.output.empty() ? sc.output.path : opt.output;
   const bool resume = opt.mode == OutputWriter::Mode::resume;
   // The systems are built before the file is touched, so that a scene they refuse leaves no
   // output behind; a resumed run's start is handed to them once the file has said where it is.
-  const Scene& sc = scene;
   const std::unique_ptr<SceneSystem> sys = make_scene_system(sc);
   const std::unique_ptr<Integrator> integrator = make_integrator(sc, *sys);
   // Limits before work: the whole run's frames must fit where they are written (positions and

@@ -67,6 +67,17 @@ void run_until(const Scene& sc, const std::string& path, int stop_after) {
   o.on_frame = [stop_after](int k, const Frame&) { return k < stop_after; };
   EXPECT_THROW(run_scene(sc, o), RunInterrupted);
 }
+
+// The frames of `sc` run straight through, and run again stopped after frame `stop_after` and
+// resumed.
+std::pair<Frames, Frames> straight_and_resumed(const Scene& sc, int stop_after) {
+  const auto dir = test::temp_dir();
+  const std::string straight = (dir / "straight.h5").string(), resumed = (dir / "resumed.h5").string();
+  run_scene(sc, options(straight));
+  run_until(sc, resumed, stop_after);
+  run_scene(sc, options(resumed, OutputWriter::Mode::resume));
+  return {frames_of(straight), frames_of(resumed)};
+}
 }  // namespace
 
 // A run stopped part-way and resumed gives the uninterrupted run's frames to the integration
@@ -115,13 +126,7 @@ TEST(Resume, AnInterruptedIdaRunMatchesTheUninterruptedOne) {
 const std::vector<std::string> kBackwardEuler{"integrator.kind=backward_euler", "integrator.dt=2e-3",
                                               "integrator.newton_tol=1e-10"};
 TEST(Resume, AnInterruptedBackwardEulerRunRepeatsTheSameSteps) {
-  const auto dir = test::temp_dir();
-  const Scene sc = scene(kSwing, kBackwardEuler);
-  run_scene(sc, options((dir / "ref.h5").string()));
-  const std::string path = (dir / "resumed.h5").string();
-  run_until(sc, path, 11);
-  run_scene(sc, options(path, OutputWriter::Mode::resume));
-  const Frames ref = frames_of((dir / "ref.h5").string()), res = frames_of(path);
+  const auto [ref, res] = straight_and_resumed(scene(kSwing, kBackwardEuler), 11);
   ASSERT_EQ(res.x.size(), 21u);
   const double dx = max_difference(res.x, ref.x), dv = max_difference(res.v, ref.v);
   std::printf("backward Euler resumed at frame 11: positions %.3e m, velocities %.3e m/s apart\n", dx, dv);
@@ -334,16 +339,10 @@ TEST(Outputs, AWriteErrorNamesTheFileAndTheReason) {
 // XPBD keeps no state between steps but the positions and velocities: resumed, it repeats the
 // same steps exactly.
 TEST(Resume, AnInterruptedXpbdRunRepeatsTheSameSteps) {
-  const auto dir = test::temp_dir();
   std::string text = kSwing;
   text.erase(text.find("[damping]"), std::string("[damping]\nbeta = 1e-3      # s\n").size());
   ASSERT_EQ(text.find("beta"), std::string::npos) << "demos/swing.toml's [damping] changed";
-  const Scene sc = scene(text, {"integrator.kind=xpbd", "integrator.dt=2e-3"});
-  run_scene(sc, options((dir / "ref.h5").string()));
-  const std::string path = (dir / "resumed.h5").string();
-  run_until(sc, path, 5);
-  run_scene(sc, options(path, OutputWriter::Mode::resume));
-  const Frames ref = frames_of((dir / "ref.h5").string()), res = frames_of(path);
+  const auto [ref, res] = straight_and_resumed(scene(text, {"integrator.kind=xpbd", "integrator.dt=2e-3"}), 5);
   ASSERT_EQ(res.x.size(), 21u);
   const double dx = max_difference(res.x, ref.x);
   std::printf("XPBD resumed at frame 5: positions %.3e m apart\n", dx);

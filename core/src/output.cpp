@@ -223,6 +223,22 @@ bool try_lock(int fd) {
   return ::fcntl(fd, F_OFD_SETLK, &l) == 0;
 }
 
+// Bytes free on the file system of `path`'s nearest existing directory, and the file size
+// limit (ulimit -f); infinity where unknown or unlimited.
+double free_bytes(const std::string& path) {
+  std::filesystem::path dir = std::filesystem::absolute(path).parent_path();
+  std::error_code ec;
+  while (!dir.empty() && !std::filesystem::exists(dir, ec) && dir != dir.parent_path()) dir = dir.parent_path();
+  struct statvfs fs {};
+  if (::statvfs(dir.c_str(), &fs) != 0) return std::numeric_limits<double>::infinity();
+  return static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize);
+}
+double file_size_limit() {
+  struct rlimit lim {};
+  if (::getrlimit(RLIMIT_FSIZE, &lim) != 0 || lim.rlim_cur == RLIM_INFINITY) return std::numeric_limits<double>::infinity();
+  return static_cast<double>(lim.rlim_cur);
+}
+
 std::string kb(double bytes) { return std::to_string(static_cast<long long>(bytes / 1024 + 0.5)) + " KB"; }
 
 // The first line where two texts differ (1-based), for the resume check's message.
@@ -282,22 +298,14 @@ struct OutputWriter::Impl {
   // disk stops the run with every frame before it intact.
   void ensure_room(int k) {
     const double need = 2 * frame_bytes + 256 * 1024;
-    const std::string dir = std::filesystem::path(path).parent_path().empty()
-                                ? std::string(".")
-                                : std::filesystem::path(path).parent_path().string();
     const std::string kept = k > 0 ? "frames 0-" + std::to_string(k - 1) + " are intact" : "no frame was written";
-    struct statvfs fs {};
-    if (::statvfs(dir.c_str(), &fs) == 0) {
-      const double avail = static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize);
-      if (avail < need)
-        throw Error(path + ": the disk is full (" + kb(avail) + " free, frame " + std::to_string(k) + " needs about " +
-                    kb(need) + "); " + kept);
-    }
-    struct rlimit lim {};
-    if (::getrlimit(RLIMIT_FSIZE, &lim) == 0 && lim.rlim_cur != RLIM_INFINITY &&
-        static_cast<double>(file_size) + need > static_cast<double>(lim.rlim_cur))
-      throw Error(path + ": the file size limit (ulimit -f: " + kb(static_cast<double>(lim.rlim_cur)) + ") is reached at frame " +
-                  std::to_string(k) + "; " + kept);
+    const double avail = free_bytes(path), limit = file_size_limit();
+    if (avail < need)
+      throw Error(path + ": the disk is full (" + kb(avail) + " free, frame " + std::to_string(k) + " needs about " +
+                  kb(need) + "); " + kept);
+    if (static_cast<double>(file_size) + need > limit)
+      throw Error(path + ": the file size limit (ulimit -f: " + kb(limit) + ") is reached at frame " + std::to_string(k) +
+                  "; " + kept);
   }
 
   void append_frame(const Frame& f, hsize_t k);
@@ -702,17 +710,7 @@ void OutputWriter::set_status(const std::string& status) {
 
 const ResumePoint& OutputWriter::resume_point() const { return impl_->resume; }
 
-double output_room_bytes(const std::string& path) {
-  std::filesystem::path dir = std::filesystem::absolute(path).parent_path();
-  std::error_code ec;
-  while (!dir.empty() && !std::filesystem::exists(dir, ec) && dir != dir.parent_path()) dir = dir.parent_path();
-  double room = std::numeric_limits<double>::infinity();
-  struct statvfs fs {};
-  if (::statvfs(dir.c_str(), &fs) == 0) room = static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize);
-  struct rlimit lim {};
-  if (::getrlimit(RLIMIT_FSIZE, &lim) == 0 && lim.rlim_cur != RLIM_INFINITY) room = std::min(room, static_cast<double>(lim.rlim_cur));
-  return room;
-}
+double output_room_bytes(const std::string& path) { return std::min(free_bytes(path), file_size_limit()); }
 
 bool output_is_being_written(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);

@@ -308,7 +308,7 @@ namespace {
 // the integrators crawl (IDA at 1e-9 s steps) or fail: an error naming the plane and the nodes.
 // Within the contact thickness the law is as smooth as anywhere (a body may start resting there).
 void check_initial_contact(const Scene& sc, const Section& contact) {
-  const Points x = sc.mesh.rest_positions();
+  const Points& x = sc.mesh.rest_positions();
   const std::vector<GroundSpec> planes = sc.contact_planes();
   for (std::size_t p = 0; p < planes.size(); ++p) {
     const GroundSpec& g = planes[p];
