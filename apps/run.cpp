@@ -72,7 +72,9 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
     f.multipliers = &multipliers;
     f.volumes = sys.volumes();
     f.energy = sys.energies();
-    if (tets && sc.output.pressure) {
+    // The frame callback gets the pressures whether or not they are written (the writer takes
+    // them only when output.pressure is on).
+    if (tets && (sc.output.pressure || on_frame)) {
       sys.pressures(lambda, pressure);
       f.pressure = &pressure;
     }
@@ -199,7 +201,7 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
                                                   : "interrupted by signal " + std::to_string(e.signal);
     throw RunInterrupted(sc.file.name() + ": " + how + " at t = " + std::to_string(e.time) + " s; " +
                              std::to_string(summary.frames) + " frames kept in " + summary.output,
-                         e.signal);
+                         e.signal, summary);
   } catch (const IntegrationError& e) {
     finish_failed("failed", {{"failed_at_time", e.time}}, e.what());
     throw Error(sc.file.name() + ": " + e.what() + "; " + std::to_string(summary.frames) + " frames saved in " +

@@ -27,8 +27,9 @@ struct RunOptions {
   // create: an existing output is an error; overwrite: replaced; resume: continued from its last
   // complete frame (the scene must be the one it was written with).
   OutputWriter::Mode mode = OutputWriter::Mode::create;
-  // Called after each frame is written (index, and the frame as written); returning false stops
-  // the run there as an interrupt does (status "interrupted", signal 0, RunInterrupted).
+  // Called after each frame is written (index, and the frame as written, with per-tet pressures
+  // even when output.pressure is off); returning false stops the run there as an interrupt does
+  // (status "interrupted", signal 0, RunInterrupted).
   std::function<bool(int, const Frame&)> on_frame;
 };
 
@@ -36,8 +37,10 @@ struct RunOptions {
 // file, marked interrupted; `isochor run --resume` continues it.
 class RunInterrupted : public Error {
  public:
-  RunInterrupted(const std::string& message, int sig) : Error(message), signal(sig) {}
+  RunInterrupted(const std::string& message, int sig, RunSummary done = {})
+      : Error(message), signal(sig), summary(std::move(done)) {}
   int signal;
+  RunSummary summary;  // what was done: the frames kept and the statistics until the stop
 };
 
 // Runs the scene and writes every frame to the output. A solver failure keeps the frames written

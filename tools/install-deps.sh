@@ -10,7 +10,8 @@ packages=(
   libsundials-dev libsuitesparse-dev libmetis-dev libsimbody-dev
   libopenblas0-pthread
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-numpy python3-h5py python3-matplotlib python3-meshio
+  python3 python3-dev python3-numpy python3-h5py python3-matplotlib python3-meshio
+  pybind11-dev python3-pytest
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -293,15 +293,14 @@ SceneFile SceneFile::load(const std::string& path, const std::vector<std::string
   if (!in) throw Error(path + ": cannot be read (expected a readable scene file)");
   std::stringstream buf;
   buf << in.rdbuf();
-  SceneFile f = parse(buf.str(), path, overrides);
-  f.directory_ = std::filesystem::path(path).parent_path().string();
-  return f;
+  return parse(buf.str(), path, overrides, std::filesystem::path(path).parent_path().string());
 }
 
 SceneFile SceneFile::parse(const std::string& text, const std::string& name,
-                           const std::vector<std::string>& overrides) {
+                           const std::vector<std::string>& overrides, const std::string& directory) {
   SceneFile f;
   f.name_ = name;
+  f.directory_ = directory;
   try {
     *f.root_ = toml::parse(text, name);
   } catch (const toml::parse_error& e) {

@@ -88,8 +88,9 @@ class SceneFile {
   // Reads a scene file and applies `--set key=value` overrides (dotted keys, TOML values; a
   // value that is not valid TOML is taken as a string).
   static SceneFile load(const std::string& path, const std::vector<std::string>& overrides = {});
+  // A scene from text (`name` in messages; relative file names resolved against `directory`).
   static SceneFile parse(const std::string& text, const std::string& name,
-                         const std::vector<std::string>& overrides = {});
+                         const std::vector<std::string>& overrides = {}, const std::string& directory = "");
   SceneFile(SceneFile&&) noexcept;
   SceneFile& operator=(SceneFile&&) noexcept;
   ~SceneFile();

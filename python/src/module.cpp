@@ -1,0 +1,294 @@
+// isochor's Python module, `_isochor` (wrapped by the package python/isochor/): scenes from a
+// file or a dict with overrides, runs with a per-frame callback that receives NumPy arrays and
+// may stop the run, and studies. C++'s isochor::Error arrives as isochor.Error with the same
+// one-line message that the command line prints after "isochor: ".
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <filesystem>
+#include <optional>
+#include <sstream>
+#include <variant>
+#include <toml++/toml.h>
+
+#include "isochor/error.hpp"
+#include "isochor/scene.hpp"
+#include "run.hpp"
+#include "study.hpp"
+
+namespace py = pybind11;
+using namespace isochor;
+
+namespace {
+
+// ---- Python values to TOML ------------------------------------------------------------------
+
+toml::table to_table(py::handle d, const std::string& where);
+
+// One TOML value (a plain function, not a template over sinks: that recursed without end).
+using TomlValue = std::variant<bool, int64_t, double, std::string, toml::array, toml::table>;
+
+// The TOML value of a Python value (`where` names it in errors).
+TomlValue to_toml(py::handle v, const std::string& where) {
+  if (py::isinstance<py::array>(v)) return to_toml(v.attr("tolist")(), where);  // a NumPy array: nested lists
+  if (py::isinstance<py::bool_>(v) ||
+      (py::hasattr(v, "dtype") && py::str(v.attr("dtype").attr("kind")).cast<std::string>() == "b"))
+    return v.cast<bool>();
+  if (py::isinstance<py::int_>(v) || (py::hasattr(v, "__index__") && !py::isinstance<py::float_>(v)))
+    return static_cast<int64_t>(py::int_(py::reinterpret_borrow<py::object>(v)).cast<long long>());
+  if (py::isinstance<py::float_>(v) || py::hasattr(v, "__float__"))
+    return py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>();
+  if (py::isinstance<py::str>(v) || py::hasattr(v, "__fspath__"))
+    return py::str(py::module_::import("os").attr("fspath")(v)).cast<std::string>();
+  if (py::isinstance<py::dict>(v)) return to_table(v, where);
+  if (py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
+    toml::array a;
+    int i = 0;
+    for (py::handle item : v)
+      std::visit([&](auto&& x) { a.push_back(std::move(x)); }, to_toml(item, where + "[" + std::to_string(i++) + "]"));
+    return a;
+  }
+  throw Error(where + ": expected a number, string, boolean, list or dict, got a " +
+              py::str(py::type::of(v).attr("__name__")).cast<std::string>());
+}
+
+toml::table to_table(py::handle d, const std::string& where) {
+  toml::table t;
+  for (auto [k, v] : py::reinterpret_borrow<py::dict>(d)) {
+    if (!py::isinstance<py::str>(k)) throw Error(where + ": keys must be strings, got " + py::repr(k).cast<std::string>());
+    const std::string key = k.cast<std::string>();
+    std::visit([&](auto&& x) { t.insert_or_assign(key, std::move(x)); }, to_toml(v, where.empty() ? key : where + "." + key));
+  }
+  return t;
+}
+
+// Overrides as `--set` takes them: "key=value" strings as they are, or a dict of dotted keys (a
+// dict value stands for its keys under the key) to TOML values.
+void add_overrides(py::handle o, const std::string& prefix, std::vector<std::string>& out) {
+  if (o.is_none()) return;
+  if (py::isinstance<py::str>(o)) {
+    out.push_back(o.cast<std::string>());
+  } else if (py::isinstance<py::dict>(o)) {
+    for (auto [k, v] : py::reinterpret_borrow<py::dict>(o)) {
+      const std::string key = prefix + py::str(k).cast<std::string>();
+      if (py::isinstance<py::dict>(v)) {
+        add_overrides(v, key + ".", out);
+        continue;
+      }
+      std::ostringstream s;
+      s << key << '=';
+      std::visit(
+          [&](const auto& x) {
+            using T = std::decay_t<decltype(x)>;
+            if constexpr (std::is_same_v<T, toml::array> || std::is_same_v<T, toml::table>) s << x;
+            else s << toml::value<T>(x);  // TOML's own spelling: true, quoted strings, ...
+          },
+          to_toml(v, "--set " + key));
+      out.push_back(s.str());
+    }
+  } else {
+    for (py::handle item : o) add_overrides(item, prefix, out);  // a list of "key=value"
+  }
+}
+
+std::vector<std::string> overrides_of(py::handle o) {
+  std::vector<std::string> out;
+  add_overrides(o, "", out);
+  return out;
+}
+
+// ---- NumPy views of C++ data ------------------------------------------------------------------
+
+py::array_t<double> points_array(const Points& p) {  // (N,3), a copy
+  py::array_t<double> a({static_cast<py::ssize_t>(p.cols()), py::ssize_t{3}});
+  std::copy(p.data(), p.data() + p.size(), a.mutable_data());
+  return a;
+}
+
+py::array_t<double> vector_array(const std::vector<double>& v) {
+  return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
+}
+
+template <std::size_t K>
+py::array_t<int> index_array(const std::vector<std::array<int, K>>& rows) {
+  py::array_t<int> a({static_cast<py::ssize_t>(rows.size()), static_cast<py::ssize_t>(K)});
+  int* d = a.mutable_data();
+  for (const auto& r : rows)
+    for (int x : r) *d++ = x;
+  return a;
+}
+
+py::dict frame_dict(int index, const Frame& f) {
+  py::dict d;
+  d["index"] = index;
+  d["time"] = f.time;
+  d["positions"] = points_array(*f.positions);
+  if (f.velocities) d["velocities"] = points_array(*f.velocities);
+  d["volumes"] = vector_array(f.volumes);
+  d["energy"] = py::array_t<double>(3, f.energy.data());
+  d["pressure"] = f.pressure ? py::object(vector_array(*f.pressure)) : py::object(py::none());
+  d["multipliers"] = f.multipliers ? vector_array(*f.multipliers) : py::array_t<double>(0);
+  d["loads"] = f.loads ? py::object(points_array(*f.loads)) : py::object(py::none());
+  py::dict stats;
+  for (const auto& [name, value] : f.stats) stats[py::str(name)] = value;
+  d["stats"] = stats;
+  return d;
+}
+
+// ---- Runs ------------------------------------------------------------------------------------
+
+py::dict summary_dict(const RunSummary& r, bool stopped, const std::string& stop_reason) {
+  py::dict d;
+  d["output"] = r.output;
+  d["frames"] = r.frames;
+  d["stopped"] = stopped;
+  d["stop_reason"] = stop_reason;
+  d["resumed_from"] = r.resumed_from;
+  d["already_finished"] = r.already_finished;
+  const RunStats& s = r.stats;
+  d["steps"] = s.steps;
+  d["newton_iterations"] = s.newton_iterations;
+  d["jacobian_evaluations"] = s.jacobian_evals;
+  d["rejected_steps_newton"] = s.newton_failures;
+  d["rejected_steps_error_test"] = s.error_test_failures;
+  d["wall_seconds"] = s.wall_seconds;
+  d["assembly_seconds"] = s.assembly_seconds;
+  d["factorisation_seconds"] = s.factor_seconds;
+  d["solve_seconds"] = s.solve_seconds;
+  d["simbody_seconds"] = r.simbody_seconds;
+  return d;
+}
+
+// Runs the scene with the GIL released; the callback (and a check for Ctrl-C) takes it at every
+// frame. An exception raised by the callback (KeyboardInterrupt included) stops the run at that
+// frame, which the file keeps (status "interrupted"), and is raised again here.
+py::dict run(const Scene& scene, const std::string& output, const std::string& mode, bool progress,
+             py::object on_frame) {
+  RunOptions opt;
+  opt.output = output;
+  opt.progress = progress;
+  if (mode == "create") opt.mode = OutputWriter::Mode::create;
+  else if (mode == "overwrite") opt.mode = OutputWriter::Mode::overwrite;
+  else if (mode == "resume") opt.mode = OutputWriter::Mode::resume;
+  else throw Error("mode: expected create, overwrite or resume, got " + mode);
+  std::optional<py::error_already_set> raised;
+  bool stopped_by_callback = false;
+  opt.on_frame = [&](int k, const Frame& f) {
+    py::gil_scoped_acquire gil;
+    try {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      if (on_frame.is_none()) return true;
+      py::object r = on_frame(frame_dict(k, f));
+      if (!r.is_none() && !r.cast<bool>()) {
+        stopped_by_callback = true;
+        return false;
+      }
+      return true;
+    } catch (py::error_already_set& e) {
+      raised.emplace(std::move(e));
+      return false;
+    }
+  };
+  RunSummary r;
+  std::string stop_reason;
+  try {
+    py::gil_scoped_release nogil;
+    r = run_scene(scene, opt);
+  } catch (const RunInterrupted& e) {
+    if (raised) {
+      py::error_already_set err = std::move(*raised);
+      raised.reset();
+      throw err;
+    }
+    if (!stopped_by_callback) throw;
+    stop_reason = e.what();
+    r = e.summary;
+  }
+  return summary_dict(r, !stop_reason.empty(), stop_reason);
+}
+
+std::shared_ptr<Scene> scene_from_dict(py::dict d, py::object overrides, const std::string& name,
+                                       const std::string& directory) {
+  std::ostringstream text;
+  text << to_table(d, "");
+  return std::make_shared<Scene>(parse_scene(SceneFile::parse(text.str(), name, overrides_of(overrides), directory)));
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_isochor, m) {
+  m.doc() = "isochor's C++ core (use the isochor package)";
+  static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const Error& e) {
+      error(e.what());
+    }
+  });
+
+  py::class_<Scene, std::shared_ptr<Scene>>(m, "Scene")
+      .def_property_readonly("name", [](const Scene& s) { return s.file.name(); })
+      .def_property_readonly("text", [](const Scene& s) { return s.file.text_as_run(); })
+      .def_property_readonly("output_path", [](const Scene& s) { return s.output.path; })
+      .def_property_readonly("num_nodes", [](const Scene& s) { return s.mesh.num_nodes(); })
+      .def_property_readonly("num_tets", [](const Scene& s) { return s.mesh.num_tets(); })
+      .def_property_readonly("rest_positions", [](const Scene& s) { return points_array(s.mesh.rest_positions()); })
+      .def_property_readonly("tets", [](const Scene& s) { return index_array(s.mesh.tets()); })
+      .def_property_readonly("surface", [](const Scene& s) { return index_array(s.mesh.surface()); })
+      .def_property_readonly("zones", [](const Scene& s) {
+        py::dict d;
+        for (const auto& [name, tets] : s.zones) d[py::str(name)] = py::array_t<int>(static_cast<py::ssize_t>(tets.size()), tets.data());
+        return d;
+      })
+      .def_property_readonly("frame_times", [](const Scene& s) { return vector_array(s.frames.times()); })
+      .def_property_readonly("gravity", [](const Scene& s) { return std::vector<double>(s.gravity.data(), s.gravity.data() + 3); })
+      .def_property_readonly("integrator", [](const Scene& s) { return std::string(to_string(s.integrator.kind)); })
+      .def_property_readonly("material", [](const Scene& s) { return std::string(to_string(s.material.model)); });
+
+  m.def(
+      "load_scene",
+      [](const std::string& path, py::object overrides) {
+        return std::make_shared<Scene>(load_scene(path, overrides_of(overrides)));
+      },
+      py::arg("path"), py::arg("overrides") = py::none());
+  m.def("scene_from_dict", &scene_from_dict, py::arg("scene"), py::arg("overrides") = py::none(),
+        py::arg("name") = "<dict>", py::arg("directory") = "");
+  m.def("overrides", &overrides_of, py::arg("overrides"), "The `--set` strings of a dict or list of overrides");
+  m.def("run", &run, py::arg("scene"), py::arg("output") = "", py::arg("mode") = "create",
+        py::arg("progress") = false, py::arg("on_frame") = py::none());
+
+  m.def(
+      "study_cases",
+      [](const std::string& path, py::object overrides) {
+        const Study s = load_study(path, overrides_of(overrides));
+        py::list cases;
+        for (const StudyCase& c : s.cases) {
+          py::dict d;
+          d["method"] = c.method;
+          d["label"] = c.label;
+          d["overrides"] = c.overrides;
+          py::dict sweep;
+          for (const auto& [k, v] : c.sweep) sweep[py::str(k)] = v;
+          d["sweep"] = sweep;
+          cases.append(d);
+        }
+        return py::make_tuple(s.output.string(), cases);
+      },
+      py::arg("path"), py::arg("overrides") = py::none());
+  m.def(
+      "run_study",
+      [](const std::string& path, py::object overrides, bool resume, bool progress) {
+        const Study s = load_study(path, overrides_of(overrides));
+        int failed = 0;
+        {
+          py::gil_scoped_release nogil;
+          failed = run_study(s, ISOCHOR_EXE, resume, progress);
+        }
+        return py::make_tuple(s.output.string(), failed);
+      },
+      py::arg("path"), py::arg("overrides") = py::none(), py::arg("resume") = false, py::arg("progress") = false);
+  m.attr("executable") = ISOCHOR_EXE;
+  m.attr("tools_dir") = ISOCHOR_TOOLS_DIR;
+}

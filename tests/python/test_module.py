@@ -1,0 +1,211 @@
+"""The Python module (issue 21): a run from Python equals the command line's, frame by frame;
+the callback sees what the file holds and can stop the run; errors arrive with the command
+line's message; isochor.open reads what was written; studies run from Python.
+
+Run by CTest (python.pytest) with PYTHONPATH=build/python, ISOCHOR_EXE and ISOCHOR_SOURCE set,
+and OMP_NUM_THREADS=1 (so that the module's run and the command line's are the same arithmetic).
+"""
+import os
+import subprocess
+import tomllib
+
+import numpy as np
+import pytest
+
+import isochor
+
+SOURCE = os.environ.get("ISOCHOR_SOURCE", os.path.join(os.path.dirname(__file__), "..", ".."))
+EXE = os.environ.get("ISOCHOR_EXE", isochor.executable)
+SWING = os.path.join(SOURCE, "demos", "swing.toml")
+SHORT = {"frames.duration": 0.05}  # 6 frames of the 144-tet swinging block
+
+
+def cli(*args, check=True):
+    return subprocess.run([EXE, *args], capture_output=True, text=True, check=check,
+                          env={**os.environ, "OMP_NUM_THREADS": "1"})
+
+
+def tet_volumes(x, tets):
+    """Signed volume of every tet, det[x1-x0, x2-x0, x3-x0] / 6 (independent of isochor)."""
+    a, b, c, d = (x[tets[:, i]] for i in range(4))
+    return np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a) / 6.0
+
+
+def test_a_run_from_python_equals_the_command_lines_frame_by_frame(tmp_path):
+    cli("run", SWING, "-q", "-o", str(tmp_path / "cli.h5"), "--set", "frames.duration=0.05")
+    seen = []
+    result = isochor.run(SWING, tmp_path / "py.h5", overrides=SHORT, on_frame=seen.append)
+    assert result.frames == 6 and not result.stopped and result.steps > 0
+    with isochor.open(tmp_path / "cli.h5") as a, isochor.open(tmp_path / "py.h5") as b:
+        assert a.num_frames == b.num_frames == 6
+        assert a.status == b.status == "finished"
+        np.testing.assert_array_equal(a.times, b.times)
+        np.testing.assert_array_equal(a.positions, b.positions)
+        np.testing.assert_array_equal(a.velocities, b.velocities)
+        np.testing.assert_array_equal(a.volumes, b.volumes)
+        assert a.scene == b.scene  # the scene as run, the override included
+        # The callback saw every frame as written.
+        assert [f.index for f in seen] == list(range(6))
+        for f in seen:
+            np.testing.assert_array_equal(f.positions, b.positions[f.index])
+            np.testing.assert_array_equal(f.velocities, b.velocities[f.index])
+            np.testing.assert_array_equal(f.volumes, b.volumes[f.index])
+            assert f.time == b.times[f.index]
+            assert f.pressure.shape == (len(b.tets),)
+
+
+def test_the_callback_stops_the_run_and_the_run_resumes(tmp_path):
+    out = tmp_path / "stopped.h5"
+    result = isochor.run(SWING, out, overrides=SHORT, on_frame=lambda f: f.index < 2)
+    assert result.stopped and result.frames == 3
+    assert "stopped by the frame callback" in result.stop_reason
+    with isochor.open(out) as r:
+        assert r.num_frames == 3 and r.status == "interrupted"
+    resumed = isochor.run(SWING, out, overrides=SHORT, resume=True)
+    assert resumed.resumed_from == 2 and resumed.frames == 6
+    with isochor.open(out) as r:
+        assert r.num_frames == 6 and r.status == "finished"
+
+
+def test_an_exception_in_the_callback_is_raised_and_the_frames_are_kept(tmp_path):
+    out = tmp_path / "raised.h5"
+
+    def boom(f):
+        if f.index == 3:
+            raise ValueError("enough")
+
+    with pytest.raises(ValueError, match="enough"):
+        isochor.run(SWING, out, overrides=SHORT, on_frame=boom)
+    with isochor.open(out) as r:
+        assert r.num_frames == 4 and r.status == "interrupted"
+
+
+@pytest.mark.parametrize("args, overrides", [
+    (["tests/data/bad_key.toml"], None),
+    (["demos/swing.toml", "--set", "integrator.rtol=-1"], {"integrator.rtol": -1}),
+    (["demos/swing.toml", "--set", "material.modell=cnh"], {"material": {"modell": "cnh"}}),
+    (["tests/data/no_such_scene.toml"], None),
+])
+def test_errors_arrive_with_the_command_lines_message(tmp_path, args, overrides):
+    p = cli("run", os.path.join(SOURCE, args[0]), *args[1:], "-q", "-o", str(tmp_path / "x.h5"), check=False)
+    assert p.returncode == 1
+    line = p.stderr.strip().splitlines()[-1]
+    assert line.startswith("isochor: ")
+    with pytest.raises(isochor.Error) as e:
+        isochor.run(os.path.join(SOURCE, args[0]), tmp_path / "y.h5", overrides=overrides)
+    assert "isochor: " + str(e.value) == line
+    assert not (tmp_path / "y.h5").exists()
+
+
+def test_an_existing_output_is_refused_unless_overwritten(tmp_path):
+    out = tmp_path / "r.h5"
+    isochor.run(SWING, out, overrides={"frames.duration": 0.01})
+    with pytest.raises(isochor.Error, match="exists"):
+        isochor.run(SWING, out, overrides={"frames.duration": 0.01})
+    assert isochor.run(SWING, out, overrides={"frames.duration": 0.02}, overwrite=True).frames == 3
+
+
+def test_overrides_reach_the_scene_exactly():
+    mu = 0.1 + 0.2  # 0.30000000000000004: a value that must not be rounded on the way
+    s = isochor.load(SWING, {"material.mu": mu, "frames": {"duration": 0.05}, "integrator.kind": "ida"})
+    table = tomllib.loads(s.text)
+    assert table["material"]["mu"] == mu
+    assert table["frames"]["duration"] == 0.05
+    assert len(s.frame_times) == 6
+    assert isochor.load(SWING, ["material.mu=3e4"]).text == isochor.load(SWING, {"material.mu": 3e4}).text
+
+
+def test_a_scene_from_a_dict_runs_like_its_file_and_takes_what_overrides_cannot(tmp_path):
+    with open(SWING, "rb") as f:
+        table = tomllib.load(f)
+    table["frames"]["duration"] = 0.05
+    a = isochor.run(isochor.scene(table, directory=os.path.dirname(SWING)), tmp_path / "dict.h5")
+    b = isochor.run(SWING, tmp_path / "file.h5", overrides=SHORT)
+    with isochor.open(a.output) as ra, isochor.open(b.output) as rb:
+        np.testing.assert_array_equal(ra.positions, rb.positions)
+    # An array of tables (a named zone), which `--set` cannot address.
+    table["zones"] = {"zone": [{"name": "tip", "select": {"kind": "box", "min": [0.2, -1, -1], "max": [1, 1, 1]}}]}
+    s = isochor.scene(table, directory=os.path.dirname(SWING))
+    assert list(s.zones) == ["global", "tip"] and 0 < len(s.zones["tip"]) < s.num_tets
+    isochor.run(s, tmp_path / "tip.h5")
+    with isochor.open(tmp_path / "tip.h5") as r:
+        assert r.volume_columns == ["total", "global", "tip"]
+        # Every frame's zone volumes, from the positions by the determinant formula.
+        for k in range(r.num_frames):
+            v = tet_volumes(r.positions[k], r.tets)
+            np.testing.assert_allclose(r.volumes[k], [v.sum(), v[r.zones["global"]].sum(), v[r.zones["tip"]].sum()],
+                                       rtol=1e-12)
+        # ... and each zone keeps its rest volume to the Newton tolerance.
+        rest = [r.rest_volumes.sum(), r.rest_volumes[r.zones["global"]].sum(), r.rest_volumes[r.zones["tip"]].sum()]
+        np.testing.assert_allclose(r.volumes, np.tile(rest, (r.num_frames, 1)), rtol=1e-9)
+        assert r.positions[-1][:, 2].min() < -0.005  # and it swings down
+
+
+def test_the_callback_gets_pressures_that_match_the_written_ones(tmp_path):
+    seen = {}
+    isochor.run(SWING, tmp_path / "p.h5", overrides={**SHORT, "output.pressure": True},
+                on_frame=lambda f: seen.__setitem__(f.index, f.pressure))
+    with isochor.open(tmp_path / "p.h5") as r:
+        for k, p in seen.items():
+            np.testing.assert_array_equal(p, r.pressure[k])
+        assert np.abs(r.pressure[-1]).max() > 0
+
+
+def test_open_refuses_what_is_not_a_run(tmp_path):
+    with pytest.raises(isochor.Error, match="no such file"):
+        isochor.open(tmp_path / "none.h5")
+    (tmp_path / "text.h5").write_text("not hdf5")
+    with pytest.raises(isochor.Error, match="cannot be read as HDF5"):
+        isochor.open(tmp_path / "text.h5")
+
+
+def test_a_study_runs_from_python(tmp_path):
+    study = tmp_path / "tiny.toml"
+    study.write_text(f"""
+[study]
+scene = "{SWING}"
+output = "{tmp_path / 'tiny'}"
+jobs = 2
+set = ["frames.duration=0.1"]
+
+[reference]
+set = ["integrator.rtol=1e-9", "integrator.atol=1e-11"]
+
+[[method]]
+name = "ida"
+sweep = {{ "integrator.rtol" = [1e-2, 1e-5] }}
+set = ["integrator.atol=1e-9"]
+""")
+    cases = isochor.study_cases(study)
+    assert [c["method"] for c in cases] == ["reference", "ida", "ida"]
+    rows = isochor.study(study)
+    assert [r["status"] for r in rows] == ["ok"] * 3, rows
+    by_rtol = {float(r["sweep"].split("=")[1]): r for r in rows if r["method"] == "ida"}
+    loose, tight = by_rtol[1e-2], by_rtol[1e-5]
+    # A tolerance 1000 times tighter gives a smaller error against the reference.
+    assert tight["error_l2"] < loose["error_l2"] / 10
+
+
+def test_ctrl_c_stops_a_run_at_a_frame_and_keeps_the_file(tmp_path):
+    import signal
+    import threading
+
+    out = tmp_path / "ctrl_c.h5"
+    # SIGINT while the run is in C++ (no callback): Python's handler only sets a flag, which the
+    # module checks at every frame.
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            isochor.run(SWING, out, overrides={"frames.duration": 100.0})
+    finally:
+        timer.cancel()
+    with isochor.open(out) as r:
+        assert r.status == "interrupted" and 1 <= r.num_frames < 10001
+
+
+def test_the_documented_example_is_the_example_file():
+    with open(os.path.join(SOURCE, "python", "examples", "sweep_mu.py")) as f:
+        script = f.read()
+    with open(os.path.join(SOURCE, "docs", "python.md")) as f:
+        assert "```python\n" + script + "```" in f.read()
