@@ -138,10 +138,11 @@ int main(int argc, char** argv) {
   auto* report = app.add_subcommand("report", "Write a study's charts, results.h5 and report.md from its results");
   report->add_option("dir", dir, "The study's output directory")->required();
 
-  auto* render = app.add_subcommand("render", "Draw frames of a run to PNG (shaded surface coloured by displacement, pressure or zone; --mp4 with ffmpeg)");
+  auto* render = app.add_subcommand("render", "Draw frames of a run to PNG (smooth-shaded surface, up from the scene, coloured by deformation, displacement, pressure or zone; --mp4 with ffmpeg)");
   render->add_option("file", h5_path, "Output file (.h5)")->required();
-  render->footer("Options after the file go to tools/render.py: --frames 0,10,-1 | --every N, "
-                 "--color displacement|pressure|zone, --out DIR, --mp4, --elev, --azim");
+  render->footer("Options after the file go to tools/render.py: --frames 0,10,-1|flattest | --every N, "
+                 "--color deformation|displacement|pressure|zone, --up z|y|-y|a,b,c, --elev, --azim, "
+                 "--out DIR|FILE.png, --size PIXELS, --loads, --mp4");
   render->prefix_command();
 
   auto* obj = app.add_subcommand("export-obj", "Write the surface of every frame as an OBJ sequence");

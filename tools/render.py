@@ -1,22 +1,31 @@
 #!/usr/bin/python3
 """Draw frames of an isochor run to PNG (and an MP4 with ffmpeg).
 
-    /usr/bin/python3 tools/render.py RUN.h5 [--frames 0,10,-1 | flattest | --every N] [--color displacement|pressure|zone]
-                                     [--out DIR] [--mp4] [--elev 20 --azim -60] [--loads]
+    /usr/bin/python3 tools/render.py RUN.h5 [--frames 0,10,-1 | flattest | --every N]
+        [--color deformation|displacement|pressure|zone] [--up z|y|-y|x,y,z] [--elev 18 --azim -60]
+        [--out DIR | --out FILE.png] [--size 800] [--mp4] [--loads]
 
-The surface is shaded by its normals and coloured per triangle: by displacement from rest (m),
-(--out FILE.png with one frame writes that file),
-by the pressure of the tet under it (Pa; runs with output.pressure = true), or by zone (the
-first zone holding the tet). The ground (z = 0 plane under the body) is drawn when the run's
-scene enables contact with the ground. --loads draws the applied loads (/frames/load, runs whose
-scene has [[load]]) as arrows at the loaded nodes, the largest a fifth of the body's size, with
-the total force in the title.
+The surface is shaded smoothly (per-vertex normals, a key light, a fill light and a highlight)
+and drawn back to front with Gouraud triangles (matplotlib's Agg renderer). The colour is, per
+vertex:
+  deformation   distance from where the body's best rigid motion takes the rest position (m):
+                the deformation, not the fall (the default)
+  displacement  distance from the rest position (m)
+  pressure      the pressure of the tets around the vertex (Pa; runs with output.pressure = true)
+  zone          the zone of the tet under each triangle (smaller zones drawn over larger ones)
+
+Up is the ground's normal when the scene has a ground, else against gravity, else z; --up
+overrides it (a mesh modelled y-up: --up y). --elev and --azim place the camera relative to up.
+The ground and every [[contact.plane]] (moved to the frame's time) are drawn in their own
+planes; the body casts a shadow on the ground. --loads draws the applied loads (/frames/load) as
+arrows, the largest a fifth of the body's size. --out FILE.png with one frame writes that file.
 """
 import argparse
 import os
 import shutil
 import subprocess
 import sys
+import time as clock
 import tomllib
 
 import h5py
@@ -25,153 +34,378 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
+from matplotlib.artist import Artist  # noqa: E402
+from matplotlib.collections import PolyCollection  # noqa: E402
+
+
+# ---- The scene: up, planes ------------------------------------------------------------------
+
+AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1)}
+
+
+def parse_up(text):
+    """'z', '-y' or 'x,y,z' to a unit vector."""
+    t = text.strip().lower()
+    sign = -1.0 if t.startswith("-") else 1.0
+    if t.lstrip("+-") in AXES:
+        return sign * np.array(AXES[t.lstrip("+-")], float)
+    try:
+        v = np.array([float(c) for c in t.split(",")])
+    except ValueError:
+        v = np.zeros(0)
+    if v.shape != (3,) or np.linalg.norm(v) == 0:
+        sys.exit(f"--up {text}: expected x, y, z (optionally with a sign) or a vector a,b,c")
+    return v / np.linalg.norm(v)
+
+
+def scene_of(f):
+    try:
+        text = f.attrs["scene"]
+        return tomllib.loads(text if isinstance(text, str) else text.decode())
+    except Exception:  # noqa: BLE001 - a run without its scene text is drawn without planes
+        return {}
+
+
+def unit(v):
+    v = np.asarray(v, float)
+    n = np.linalg.norm(v)
+    return v / n if n > 0 else v
+
+
+def planes_of(scene):
+    """The ground (when on) and [[contact.plane]]s: dicts of point, normal, displacement, t0, t1."""
+    contact = scene.get("contact", {})
+    planes = []
+    if contact.get("ground", False):
+        planes.append({"point": np.array(contact.get("point", [0, 0, 0]), float),
+                       "normal": unit(contact.get("normal", [0, 0, 1])), "ground": True})
+    for p in contact.get("plane", []):
+        planes.append({"point": np.array(p.get("point", [0, 0, 0]), float), "normal": unit(p.get("normal", [0, 0, 1])),
+                       "displacement": np.array(p.get("displacement", [0, 0, 0]), float),
+                       "t0": float(p.get("t0", 0.0)), "t1": float(p.get("t1", 1.0)), "ground": False})
+    return planes
+
+
+def plane_point(p, t):
+    """A plane's point at time t (moving linearly from t0 to t1, as the scene says)."""
+    if "displacement" not in p:
+        return p["point"]
+    s = np.clip((t - p["t0"]) / max(p["t1"] - p["t0"], 1e-300), 0.0, 1.0)
+    return p["point"] + s * p["displacement"]
+
+
+def up_of(scene, override):
+    if override:
+        return parse_up(override), "--up"
+    contact = scene.get("contact", {})
+    if contact.get("ground", False):
+        return unit(contact.get("normal", [0, 0, 1])), "the ground's normal"
+    g = np.array(scene.get("forces", {}).get("gravity", [0, 0, -9.81]), float)
+    if np.linalg.norm(g) > 0:
+        return -unit(g), "against gravity"
+    return np.array([0.0, 0.0, 1.0]), "z (no ground, no gravity)"
+
+
+# ---- Geometry -----------------------------------------------------------------------------
+
+def rigid_fit(X, x, w):
+    """The rotation R and translation c of the best rigid motion x ~ R (X - Xc) + c (Kabsch,
+    weights w): what is left, x - (R (X - Xc) + c), is the deformation."""
+    w = w / w.sum()
+    Xc, xc = w @ X, w @ x
+    H = (X - Xc).T @ ((x - xc) * w[:, None])
+    U, _, Vt = np.linalg.svd(H)
+    d = np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0
+    R = Vt.T @ np.diag([1.0, 1.0, d]) @ U.T
+    return R, Xc, xc
+
+
+def node_weights(X, tets, vols):
+    """Lumped volume per node (a quarter of each tet's rest volume)."""
+    w = np.zeros(len(X))
+    np.add.at(w, tets.ravel(), np.repeat(np.abs(vols) / 4, 4))
+    return np.maximum(w, 1e-300)
+
+
+def vertex_normals(x, S):
+    """Area-weighted normals at the surface's vertices, and each triangle's normal."""
+    tri = x[S]
+    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    vn = np.zeros_like(x)
+    for i in range(3):
+        np.add.at(vn, S[:, i], fn)
+    vn /= np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
+    return vn, fn
 
 
 def tri_tet(surface, tets):
-    """For each surface triangle, a tet that holds it."""
-    index = {}
-    for e, t in enumerate(tets):
-        for f in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)):
-            index.setdefault(tuple(sorted(t[list(f)])), e)
-    return np.array([index.get(tuple(sorted(s)), 0) for s in surface])
+    """For each surface triangle, the tet that holds it."""
+    faces = np.concatenate([tets[:, [0, 1, 2]], tets[:, [0, 1, 3]], tets[:, [0, 2, 3]], tets[:, [1, 2, 3]]])
+    owner = np.tile(np.arange(len(tets)), 4)
+    keys = np.sort(faces, axis=1)
+    order = np.lexsort(keys.T[::-1])
+    keys, owner = keys[order], owner[order]
+    want = np.sort(surface, axis=1)
+    # Binary search of each surface triangle among the sorted faces (as a structured view).
+    dt = np.dtype([("a", keys.dtype), ("b", keys.dtype), ("c", keys.dtype)])
+    kv = np.ascontiguousarray(keys).view(dt).ravel()
+    wv = np.ascontiguousarray(want.astype(keys.dtype)).view(dt).ravel()
+    pos = np.clip(np.searchsorted(kv, wv), 0, len(kv) - 1)
+    return owner[pos]
 
+
+# ---- Camera and drawing ---------------------------------------------------------------------
+
+class Camera:
+    """Orthographic camera at elevation/azimuth about `up` (for z up: matplotlib's angles)."""
+
+    def __init__(self, up, elev, azim):
+        self.up = unit(up)
+        ref = np.array([1.0, 0.0, 0.0]) if abs(self.up[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        e1 = unit(ref - (ref @ self.up) * self.up)
+        e2 = np.cross(self.up, e1)
+        el, az = np.radians(elev), np.radians(azim)
+        self.toward = unit(np.cos(el) * (np.cos(az) * e1 + np.sin(az) * e2) + np.sin(el) * self.up)  # to the camera
+        fwd = -self.toward
+        self.right = unit(np.cross(fwd, self.up)) if abs(fwd @ self.up) < 0.999 else e2
+        self.screen_up = np.cross(self.right, fwd)
+
+    def project(self, p):
+        """Screen coordinates (right, up) and depth (larger: nearer the camera)."""
+        return np.stack([p @ self.right, p @ self.screen_up], axis=-1), p @ self.toward
+
+
+class GouraudTriangles(Artist):
+    """Triangles with a colour at each corner, interpolated (the Agg renderer's Gouraud fill)."""
+
+    def __init__(self, tris2d, colors, zorder):
+        super().__init__()
+        self.tris, self.colors = tris2d, colors
+        self.set_zorder(zorder)
+
+    def draw(self, renderer):
+        if len(self.tris) == 0:
+            return
+        gc = renderer.new_gc()
+        renderer.draw_gouraud_triangles(gc, self.tris, self.colors, self.axes.transData.frozen())
+        gc.restore()
+
+
+def shade(normals, cam):
+    """Per-vertex light: ambient, a key light over the camera's shoulder, a fill light from the
+    other side and a soft highlight (Blinn-Phong)."""
+    key = unit(0.55 * cam.toward + 0.6 * cam.screen_up - 0.45 * cam.right)
+    fill = unit(0.7 * cam.toward - 0.2 * cam.screen_up + 0.6 * cam.right)
+    half = unit(key + cam.toward)
+    d_key = np.clip(normals @ key, 0, 1)
+    d_fill = np.clip(normals @ fill, 0, 1)
+    spec = np.clip(normals @ half, 0, 1) ** 40
+    return 0.28 + 0.62 * d_key + 0.18 * d_fill, 0.25 * spec
+
+
+def plane_quad(point, normal, centre, half):
+    """A square in the plane through `point` with `normal`, centred under `centre`."""
+    n = unit(normal)
+    c = centre - ((centre - point) @ n) * n
+    a = unit(np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0]))
+    b = np.cross(n, a)
+    return np.array([c - half * a - half * b, c + half * a - half * b, c + half * a + half * b, c - half * a + half * b]), a, b
+
+
+# ---- Main -----------------------------------------------------------------------------------
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("run")
     ap.add_argument("--frames", default="")
     ap.add_argument("--every", type=int, default=0)
-    ap.add_argument("--color", default="displacement", choices=["displacement", "pressure", "zone"])
+    ap.add_argument("--color", default="deformation", choices=["deformation", "displacement", "pressure", "zone"])
     ap.add_argument("--out", default="")
     ap.add_argument("--mp4", action="store_true")
+    ap.add_argument("--up", default="")
     ap.add_argument("--elev", type=float, default=18)
     ap.add_argument("--azim", type=float, default=-60)
+    ap.add_argument("--size", type=int, default=700, help="picture width and height in pixels")
     ap.add_argument("--loads", action="store_true")
+    ap.add_argument("--no-shadow", action="store_true")
     a = ap.parse_args()
-    f = h5py.File(a.run, "r")
+    if not os.path.exists(a.run):
+        sys.exit(f"{a.run}: no such file")
+    f = h5py.File(a.run, "r", locking=False)
     X = f["/mesh/rest_positions"][()]
     S = f["/mesh/surface"][()]
     T = f["/mesh/tets"][()]
     P = f["/frames/positions"]
     times = f["/frames/time"][()]
-    n = len(times)
-    if a.frames == "flattest":  # the frame where the body is lowest relative to its width
-        ratio = [np.ptp(P[k][:, 2]) / max(np.ptp(P[k][:, 0]), 1e-300) for k in range(n)]
+    n = min(len(times), P.shape[0])
+    if n == 0:
+        sys.exit(f"{a.run}: no frames")
+    scene = scene_of(f)
+    up, up_from = up_of(scene, a.up)
+    if a.frames == "flattest":  # the frame where the body is flattest along up
+        ratio = []
+        for k in range(n):
+            h = P[k] @ up
+            w = np.linalg.norm(P[k] - np.outer(h, up), axis=1)
+            ratio.append(np.ptp(h) / max(2 * w.max(), 1e-300))
         frames = [int(np.argmin(ratio))]
     elif a.frames:
-        frames = sorted({int(k) % n for k in a.frames.split(",")})
+        try:
+            frames = sorted({int(k) % n for k in a.frames.split(",")})
+        except ValueError:
+            sys.exit(f"--frames {a.frames}: expected frame indices like 0,10,-1, or flattest")
     elif a.every:
         frames = list(range(0, n, a.every))
     else:
         frames = list(range(n))
-    single = a.out.endswith(".png")  # one frame straight into this file
+    single = a.out.endswith(".png")
     if single and len(frames) != 1:
         sys.exit("--out FILE.png needs exactly one frame")
     out = (os.path.dirname(a.out) or ".") if single else (a.out or os.path.splitext(a.run)[0] + "_png")
     os.makedirs(out, exist_ok=True)
-    under = tri_tet(S, T)
-    ground, gz = False, 0.0
-    try:
-        scene = tomllib.loads(f.attrs["scene"] if isinstance(f.attrs["scene"], str) else f.attrs["scene"].decode())
-        ground = bool(scene.get("contact", {}).get("ground", False))
-        gz = float(scene.get("contact", {}).get("point", [0, 0, 0])[2])
-    except Exception:  # noqa: BLE001 - a run without its scene text is drawn without the ground
-        pass
     if a.loads and "/frames/load" not in f:
         sys.exit(f"{a.run}: no /frames/load (the scene has no [[load]])")
     if a.color == "pressure" and "/frames/pressure" not in f:
         sys.exit(f"{a.run}: no /frames/pressure (run the scene with output.pressure = true)")
-    zone_of = np.zeros(len(T), dtype=int)
-    zone_names = []
+
+    cam = Camera(up, a.elev, a.azim)
+    planes = planes_of(scene)
+    weights = node_weights(X, T, f["/mesh/rest_volumes"][()])
+    under = tri_tet(S, T)
+    surf_nodes = np.unique(S)
+
+    # Per-vertex colour values of a frame.
+    def values(k, x):
+        if a.color == "deformation":
+            R, Xc, xc = rigid_fit(X, x, weights)
+            return np.linalg.norm(x - ((X - Xc) @ R.T + xc), axis=1)
+        if a.color == "displacement":
+            return np.linalg.norm(x - X, axis=1)
+        if a.color == "pressure":
+            p = f["/frames/pressure"][k]
+            acc, cnt = np.zeros(len(X)), np.zeros(len(X))
+            np.add.at(acc, T.ravel(), np.repeat(p, 4))
+            np.add.at(cnt, T.ravel(), 1)
+            return acc / np.maximum(cnt, 1)
+        return None
+
+    zone_names, zone_of = [], np.zeros(len(T), dtype=int)
     if a.color == "zone" and "/zones" in f:
-        # Smaller zones first, so that a zone inside a larger one (e.g. inside "global") shows.
-        for z, name in enumerate(sorted(f["/zones"].keys(), key=lambda nm: f["/zones"][nm].shape[0])):
-            tets = f["/zones"][name][()]
-            mask = zone_of[tets] == 0
-            zone_of[tets[mask]] = z + 1
+        for z, name in enumerate(sorted(f["/zones"].keys(), key=lambda nm: -f["/zones"][nm].shape[0])):
+            zone_of[f["/zones"][name][()]] = z + 1  # smaller zones last: drawn over the larger
             zone_names.append(name)
-    lo = np.min([P[k].min(0) for k in frames], axis=0)
-    hi = np.max([P[k].max(0) for k in frames], axis=0)
-    span = (hi - lo).max()
-    mid = (hi + lo) / 2
-    if a.color == "displacement":
-        vmax = max(np.linalg.norm(P[k] - X, axis=1).max() for k in frames) or 1.0
-        vmin = 0.0
-    elif a.color == "pressure":
-        allp = np.concatenate([f["/frames/pressure"][k] for k in frames])
-        vmin, vmax = np.percentile(allp, 2), np.percentile(allp, 98)
+    # One colour range for all frames drawn.
+    if a.color in ("deformation", "displacement", "pressure"):
+        allv = np.concatenate([values(k, P[k])[surf_nodes] for k in frames])
+        if a.color == "pressure":
+            vmin, vmax = np.percentile(allv, 2), np.percentile(allv, 98)
+        else:  # a range of at least 1e-4 of the body's size: rounding is not drawn as deformation
+            vmin, vmax = 0.0, max(float(allv.max()), 1e-4 * float(np.ptp(X, axis=0).max()))
+        cmap = plt.get_cmap("viridis")
     else:
-        vmin, vmax = 0, 9  # tab10: one colour per zone index, 0 (grey) for tets in no zone
-    cmap = plt.get_cmap("viridis")
-    if a.color == "zone":
+        vmin, vmax = 0, 9
         tab = plt.get_cmap("tab10")
         cmap = matplotlib.colors.ListedColormap([(0.6, 0.6, 0.6)] + [tab(i) for i in range(9)])
-    light = np.array([0.3, -0.5, 0.8])
-    light /= np.linalg.norm(light)
+
+    # The view: every frame drawn, and the planes under the body.
+    all_x = np.concatenate([P[k][surf_nodes] for k in frames])
+    for p in planes:  # the body's shadow on the ground is in the picture too
+        if p["ground"]:
+            all_x = np.concatenate([all_x, all_x - np.outer((all_x - p["point"]) @ p["normal"], p["normal"])])
+    lo, hi = all_x.min(0), all_x.max(0)
+    mid, span = (lo + hi) / 2, float(np.linalg.norm(hi - lo))
     written = []
+    started = clock.perf_counter()
     for k in frames:
         x = P[k]
-        tri = x[S]
-        nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
-        if a.color == "displacement":
-            val = np.linalg.norm(x - X, axis=1)[S].mean(1)
-        elif a.color == "pressure":
-            val = f["/frames/pressure"][k][under]
+        t = float(times[k])
+        vn, fn = vertex_normals(x, S)
+        front = fn @ cam.toward > 0  # back faces of the closed surface are hidden
+        tris = S[front]
+        xy, depth = cam.project(x)
+        order = np.argsort(depth[tris].mean(1))  # far to near
+        tris = tris[order]
+        diffuse, spec = shade(vn, cam)
+        if a.color == "zone":
+            base = cmap(np.clip(zone_of[under[front][order]] / 9, 0, 1))[:, None, :3].repeat(3, axis=1)
         else:
-            val = zone_of[under]
-        rgb = cmap(np.clip((val - vmin) / ((vmax - vmin) or 1), 0, 1))[:, :3]
-        shade = 0.35 + 0.65 * np.clip(nrm @ light, 0, 1)
-        fig = plt.figure(figsize=(6, 6))
-        ax = fig.add_subplot(projection="3d", computed_zorder=False)  # the ground first, the body over it
-        if ground:
-            g = np.array([[mid[0] - span, mid[1] - span, 0], [mid[0] + span, mid[1] - span, 0],
-                          [mid[0] + span, mid[1] + span, 0], [mid[0] - span, mid[1] + span, 0]])
-            g[:, 2] = gz
-            ax.add_collection3d(Poly3DCollection([g], facecolors=(0.8, 0.8, 0.78, 1.0), zorder=0))
-        # Back-to-front by depth along the view direction, so nearer triangles cover farther ones.
-        el, az = np.radians(a.elev), np.radians(a.azim)
-        view = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
-        order = np.argsort(tri.mean(1) @ view)
-        ax.add_collection3d(Poly3DCollection(tri[order], facecolors=(rgb * shade[:, None])[order], edgecolors="none",
-                                             zorder=1))
+            v = values(k, x)
+            base = cmap(np.clip((v - vmin) / ((vmax - vmin) or 1), 0, 1))[:, :3][tris]
+        rgb = np.clip(base * diffuse[tris][..., None] + spec[tris][..., None], 0, 1)
+        colors = np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,))], axis=2)
+
+        fig = plt.figure(figsize=(a.size / 100, a.size / 100), dpi=100)
+        ax = fig.add_axes([0, 0, 1, 1])
+        ax.set_axis_off()
+        ax.set_aspect("equal")
+        behind, in_front = [], []
+        for p in planes:
+            quad, pa, pb = plane_quad(plane_point(p, t), p["normal"], mid, 0.75 * span)
+            q2, qd = cam.project(quad)
+            facing = p["normal"] @ cam.toward > 0
+            colour = (0.86, 0.85, 0.82, 1.0) if p["ground"] else (0.55, 0.7, 0.85, 0.35)
+            if not facing:
+                colour = (0.55, 0.55, 0.55, 0.25)
+            (behind if p["ground"] or qd.mean() < (mid @ cam.toward) else in_front).append((q2, colour, p, pa, pb))
+        for q2, colour, p, pa, pb in behind:
+            ax.add_collection(PolyCollection([q2], facecolors=[colour], edgecolors=(0.6, 0.6, 0.6, 0.6), zorder=0))
+            if p["ground"]:
+                # Grid lines (a tenth of the square) show the ground's plane.
+                quad, _, _ = plane_quad(plane_point(p, t), p["normal"], mid, 0.75 * span)
+                for s in np.linspace(0, 1, 11)[1:-1]:
+                    for e0, e1 in ((quad[0] + s * (quad[1] - quad[0]), quad[3] + s * (quad[2] - quad[3])),
+                                   (quad[0] + s * (quad[3] - quad[0]), quad[1] + s * (quad[2] - quad[1]))):
+                        seg, _ = cam.project(np.array([e0, e1]))
+                        ax.plot(seg[:, 0], seg[:, 1], color=(0.7, 0.7, 0.68), lw=0.5, zorder=0.5)
+                if not a.no_shadow:  # the body's shadow straight down onto the ground
+                    n_ = p["normal"]
+                    pp = plane_point(p, t)
+                    sx = x - np.outer((x - pp) @ n_, n_) + 1e-4 * span * n_
+                    s2, _ = cam.project(sx)
+                    ax.add_collection(PolyCollection(s2[S[fn @ n_ > 0]], facecolors=(0.3, 0.3, 0.3, 0.08),
+                                                     edgecolors="none", zorder=0.6))
+        ax.add_artist(GouraudTriangles(xy[tris], colors, zorder=1))
+        for q2, colour, *_ in in_front:
+            ax.add_collection(PolyCollection([q2], facecolors=[colour], edgecolors=(0.3, 0.4, 0.6, 0.8), zorder=2))
         title_load = ""
         if a.loads:
             L = f["/frames/load"][k]
             on = np.linalg.norm(L, axis=1) > 0
             biggest = max(np.linalg.norm(f["/frames/load"][j], axis=1).max() for j in frames) or 1.0
-            s = 0.2 * span / biggest
-            ax.quiver(x[on, 0], x[on, 1], x[on, 2], s * L[on, 0], s * L[on, 1], s * L[on, 2], color="crimson",
-                      arrow_length_ratio=0.3, linewidth=0.8, zorder=2)
-            tot = L.sum(0)
-            title_load = f"  load {np.linalg.norm(tot):.3g} N"
-        ax.set_xlim(mid[0] - span / 2, mid[0] + span / 2)
-        ax.set_ylim(mid[1] - span / 2, mid[1] + span / 2)
-        ax.set_zlim(mid[2] - span / 2, mid[2] + span / 2)
-        ax.set_box_aspect((1, 1, 1))
-        ax.view_init(elev=a.elev, azim=a.azim)
-        ax.set_axis_off()
+            s0, _ = cam.project(x[on])
+            s1, _ = cam.project(x[on] + 0.2 * span / biggest * L[on])
+            ax.quiver(s0[:, 0], s0[:, 1], s1[:, 0] - s0[:, 0], s1[:, 1] - s0[:, 1], angles="xy", scale_units="xy",
+                      scale=1, color="crimson", width=0.003, zorder=3)
+            title_load = f"  load {np.linalg.norm(L.sum(0)):.3g} N"
+        c2, _ = cam.project(mid)
+        ax.set_xlim(c2[0] - 0.55 * span, c2[0] + 0.55 * span)
+        ax.set_ylim(c2[1] - 0.55 * span, c2[1] + 0.55 * span)
         if a.color == "zone":
             from matplotlib.patches import Patch
             handles = [Patch(color=cmap((z + 1) / 9), label=nm) for z, nm in enumerate(zone_names[:9])]
-            if (zone_of[under] == 0).any() or not zone_names:
-                handles.append(Patch(color=cmap(0.0), label="no zone"))
-            ax.legend(handles=handles, loc="upper right", title="zone")
+            ax.legend(handles=handles, loc="upper right", title="zone", fontsize=8)
         else:
             sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(vmin, vmax))
-            label = {"displacement": "displacement (m)", "pressure": "pressure (Pa)"}[a.color]
-            fig.colorbar(sm, ax=ax, shrink=0.6, label=label)
-        ax.set_title(f"{os.path.basename(a.run)}  t = {times[k]:.4f} s{title_load}")
+            cax = fig.add_axes([0.86, 0.25, 0.025, 0.5])
+            label = {"deformation": "deformation (m, from the best rigid motion)",
+                     "displacement": "displacement (m)", "pressure": "pressure (Pa)"}[a.color]
+            fig.colorbar(sm, cax=cax, label=label)
+            cax.yaxis.label.set_size(8)
+            cax.tick_params(labelsize=7)
+        ax.text(0.02, 0.97, f"{os.path.basename(a.run)}  t = {t:.4f} s{title_load}", transform=ax.transAxes,
+                fontsize=9, va="top")
+        ax.text(0.02, 0.02, f"up: {(np.round(up, 3) + 0.0).tolist()} ({up_from})", transform=ax.transAxes, fontsize=7,
+                color=(0.4, 0.4, 0.4))
         path = a.out if single else os.path.join(out, f"frame_{k:06d}.png")
-        fig.savefig(path, dpi=100, bbox_inches="tight")
+        fig.savefig(path, dpi=100)
         plt.close(fig)
         written.append(path)
-    print(f"wrote {len(written)} PNG files to {out}")
+    per = (clock.perf_counter() - started) / max(len(written), 1)
+    print(f"wrote {len(written)} PNG files to {out} ({per:.2f} s per frame, {len(S)} surface triangles)")
     if a.mp4:
         if not shutil.which("ffmpeg"):
             sys.exit("ffmpeg is not installed (apt-get install -y ffmpeg); the PNG files are written")
-        rate = max(1, round(1 / np.median(np.diff(times)))) if n > 1 else 1
+        rate = max(1, round(1 / np.median(np.diff(times[:n])))) if n > 1 else 1
         listing = os.path.join(out, "frames.txt")
         with open(listing, "w") as lf:
             for p in written:
