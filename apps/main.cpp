@@ -86,6 +86,19 @@ int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& over
   return 0;
 }
 
+// A Python tool of tools/ on a run file, with the options after the file passed on as they are.
+int run_tool(const std::string& script, const std::string& h5_path, const std::vector<std::string>& options) {
+  if (!std::filesystem::exists(h5_path)) throw Error(h5_path + ": no such file");
+  auto quoted = [](const std::string& a) {
+    std::string q = "'";
+    for (char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+  };
+  std::string cmd = "/usr/bin/python3 " + quoted(std::string(ISOCHOR_TOOLS_DIR "/") + script) + " " + quoted(h5_path);
+  for (const std::string& a : options) cmd += " " + quoted(a);
+  return std::system(cmd.c_str()) == 0 ? 0 : 1;
+}
+
 // Charts, results.h5 and report.md of a study directory (tools/study_report.py).
 int study_report(const std::string& dir) {
   if (!std::filesystem::exists(std::filesystem::path(dir) / "results.csv"))
@@ -145,6 +158,12 @@ int main(int argc, char** argv) {
                  "--out DIR|FILE.png, --size PIXELS, --loads, --mp4");
   render->prefix_command();
 
+  auto* paraview = app.add_subcommand("paraview", "Write a ParaView script that opens a run ready to play (pressure and zones, time, ground)");
+  paraview->add_option("file", h5_path, "Output file (.h5)")->required();
+  paraview->footer("Options after the file go to tools/paraview.py: --out SCRIPT.py, --up z|y|a,b,c. Then: "
+                   "paraview --script=SCRIPT.py, or xvfb-run -a pvpython SCRIPT.py --screenshot F.png [--frame K]");
+  paraview->prefix_command();
+
   auto* obj = app.add_subcommand("export-obj", "Write the surface of every frame as an OBJ sequence");
   obj->add_option("file", h5_path, "Output file (.h5)")->required();
   obj->add_option("--dir", dir, "Directory for the OBJ files (default: beside the file, <name>_obj)");
@@ -196,12 +215,8 @@ int main(int argc, char** argv) {
       return rc;
     }
     if (report->parsed()) return study_report(dir);
-    if (render->parsed()) {
-      if (!std::filesystem::exists(h5_path)) throw Error(h5_path + ": no such file");
-      std::string cmd = "/usr/bin/python3 '" ISOCHOR_TOOLS_DIR "/render.py' '" + h5_path + "'";
-      for (const std::string& a : render->remaining()) cmd += " '" + a + "'";
-      return std::system(cmd.c_str()) == 0 ? 0 : 1;
-    }
+    if (render->parsed()) return run_tool("render.py", h5_path, render->remaining());
+    if (paraview->parsed()) return run_tool("paraview.py", h5_path, paraview->remaining());
     if (info->parsed()) {
       std::fputs(describe_run(h5_path).c_str(), stdout);
       return 0;

@@ -259,6 +259,7 @@ struct OutputWriter::Impl {
   H file;
   int nodes = 0, tets = 0, frames = 0;
   bool pressure = false;
+  bool zone_index = false;  // /mesh/zone exists (a cell attribute "zone" in the sidecar)
   std::unique_ptr<Series> time, positions, velocities, multipliers, volume, energy, pressure_series, load_series;
   std::map<std::string, std::unique_ptr<Series>> stats;
   H frames_group, xdmf_group, stats_group;
@@ -377,6 +378,10 @@ struct OutputWriter::Impl {
       x << "    <Attribute Name=\"load\" AttributeType=\"Vector\" Center=\"Node\">\n"
         << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
         << h5_name << ":/frames/xdmf/load_" << f << "</DataItem>\n    </Attribute>\n";
+    if (zone_index)
+      x << "    <Attribute Name=\"zone\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+        << "     <DataItem Dimensions=\"" << tets << "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" << h5_name
+        << ":/mesh/zone</DataItem>\n    </Attribute>\n";
     if (pressure)
       x << "    <Attribute Name=\"pressure\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
         << "     <DataItem Dimensions=\"" << tets << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name
@@ -450,6 +455,10 @@ struct OutputWriter::Impl {
     frames_group = H(checked(H5Gopen2(file, "frames", H5P_DEFAULT), "open /frames"), H5Gclose);
     xdmf_group = H(checked(H5Gopen2(frames_group, "xdmf", H5P_DEFAULT), "open /frames/xdmf"), H5Gclose);
     stats_group = H(checked(H5Gopen2(file, "stats", H5P_DEFAULT), "open /stats"), H5Gclose);
+    {
+      H mesh_group(checked(H5Gopen2(file, "mesh", H5P_DEFAULT), "open /mesh"), H5Gclose);
+      zone_index = H5Lexists(mesh_group, "zone", H5P_DEFAULT) > 0;
+    }
     if (H5Lexists(frames_group, "velocities", H5P_DEFAULT) <= 0)
       throw Error(path + ": has no velocities (written before runs could be resumed): cannot be resumed");
     time = std::make_unique<Series>(frames_group, "time", H5T_NATIVE_DOUBLE);
@@ -577,6 +586,24 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh,
     H sets = group(g, "node_sets");
     for (const auto& [name, nodes] : mesh.node_sets)
       write_array(sets, name, H5T_NATIVE_INT, {nodes.size()}, nodes.data());
+    // One zone per tet for viewers (ParaView colours by it): the index, in /frames/volume's
+    // column order less "total", of the smallest zone that holds the tet; -1 in none.
+    if (!zones.empty()) {
+      std::vector<int> zone(static_cast<std::size_t>(m.tets), -1);
+      std::vector<std::size_t> size_of(static_cast<std::size_t>(m.tets), 0);
+      for (std::size_t z = 0; z < zones.size(); ++z)
+        for (int t : zones[z].second)
+          if (zone[static_cast<std::size_t>(t)] < 0 || zones[z].second.size() < size_of[static_cast<std::size_t>(t)]) {
+            zone[static_cast<std::size_t>(t)] = static_cast<int>(z);
+            size_of[static_cast<std::size_t>(t)] = zones[z].second.size();
+          }
+      write_array(g, "zone", H5T_NATIVE_INT, {static_cast<hsize_t>(m.tets)}, zone.data());
+      std::string names;
+      for (const auto& z : zones) names += (names.empty() ? "" : ",") + z.first;
+      H d(checked(H5Dopen2(g, "zone", H5P_DEFAULT), "open /mesh/zone"), H5Dclose);
+      string_attribute(d, "zones", names);
+      m.zone_index = true;
+    }
   }
   {
     H g = group(m.file, "zones");

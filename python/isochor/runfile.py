@@ -25,7 +25,7 @@ class Run:
         if not os.path.exists(self.path):
             raise Error(f"{self.path}: no such file (expected a run's .h5 file)")
         try:
-            self._h5 = h5py.File(self.path, "r", locking=False)
+            self._h5 = h5py.File(self.path, "r")
         except OSError as e:
             raise Error(f"{self.path}: cannot be read as HDF5 ({e}; expected a run's .h5 file)") from None
         h = self._h5
