@@ -86,17 +86,34 @@ int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& over
   return 0;
 }
 
+std::string shell_quoted(const std::string& a) {
+  std::string q = "'";
+  for (char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
 // A Python tool of tools/ on a run file, with the options after the file passed on as they are.
 int run_tool(const std::string& script, const std::string& h5_path, const std::vector<std::string>& options) {
   if (!std::filesystem::exists(h5_path)) throw Error(h5_path + ": no such file");
-  auto quoted = [](const std::string& a) {
-    std::string q = "'";
-    for (char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-  };
-  std::string cmd = "/usr/bin/python3 " + quoted(std::string(ISOCHOR_TOOLS_DIR "/") + script) + " " + quoted(h5_path);
-  for (const std::string& a : options) cmd += " " + quoted(a);
+  std::string cmd = "/usr/bin/python3 " + shell_quoted(std::string(ISOCHOR_TOOLS_DIR "/") + script) + " " + shell_quoted(h5_path);
+  for (const std::string& a : options) cmd += " " + shell_quoted(a);
   return std::system(cmd.c_str()) == 0 ? 0 : 1;
+}
+
+// `isochor render --blender`: Blender in the background on tools/blender/isochor_blender.py,
+// frames into RUN_blender/ unless --render says otherwise; Blender's own chatter is left out.
+int run_blender(const std::string& h5_path, const std::vector<std::string>& options) {
+  if (!std::filesystem::exists(h5_path)) throw Error(h5_path + ": no such file");
+  if (std::system("command -v blender > /dev/null 2>&1") != 0)
+    throw Error("Blender is not installed (Debian 12: apt-get install blender, 3.4; it is optional); "
+                "`isochor render` without --blender draws with matplotlib");
+  std::filesystem::path p(h5_path);
+  std::string cmd = "set -o pipefail; blender -b --python-exit-code 1 --python " +
+                    shell_quoted(ISOCHOR_TOOLS_DIR "/blender/isochor_blender.py") + " -- " + shell_quoted(h5_path) +
+                    " --render " + shell_quoted((p.parent_path() / (p.stem().string() + "_blender")).string());
+  for (const std::string& a : options) cmd += " " + shell_quoted(a);
+  cmd += " 2>&1 | grep -E --line-buffered '^(isochor_blender|Error|Traceback|  File|[A-Za-z]*Error)'";
+  return std::system(("bash -c " + shell_quoted(cmd)).c_str()) == 0 ? 0 : 1;
 }
 
 // Charts, results.h5 and report.md of a study directory (tools/study_report.py).
@@ -152,11 +169,20 @@ int main(int argc, char** argv) {
   report->add_option("dir", dir, "The study's output directory")->required();
 
   auto* render = app.add_subcommand("render", "Draw frames of a run to PNG (smooth-shaded surface, up from the scene, coloured by deformation, displacement, pressure or zone; --mp4 with ffmpeg)");
+  bool with_blender = false;
+  render->add_flag("--blender", with_blender, "Render with Blender (Cycles on the CPU) through tools/blender/isochor_blender.py");
   render->add_option("file", h5_path, "Output file (.h5)")->required();
   render->footer("Options after the file go to tools/render.py: --frames 0,10,-1|flattest | --every N, "
                  "--color deformation|displacement|pressure|zone, --up z|y|-y|a,b,c, --elev, --azim, "
-                 "--out DIR|FILE.png, --size PIXELS, --loads, --mp4");
+                 "--out DIR|FILE.png, --size PIXELS, --loads, --mp4. With --blender, to "
+                 "tools/blender/isochor_blender.py: --render DIR (default RUN_blender), --frames, --every, "
+                 "--samples 8, --size 640x480, --mp4, --color zone|pressure|none, --save FILE.blend");
   render->prefix_command();
+
+  auto* exporter = app.add_subcommand("export", "Write a run's surface motion as a point cache (PC2 or MDD) for Blender, Maya, Houdini");
+  exporter->add_option("file", h5_path, "Output file (.h5)")->required();
+  exporter->footer("Options after the file go to tools/export.py: --format pc2|mdd, --out FILE, --all-nodes");
+  exporter->prefix_command();
 
   auto* paraview = app.add_subcommand("paraview", "Write a ParaView script that opens a run ready to play (pressure and zones, time, ground)");
   paraview->add_option("file", h5_path, "Output file (.h5)")->required();
@@ -215,7 +241,9 @@ int main(int argc, char** argv) {
       return rc;
     }
     if (report->parsed()) return study_report(dir);
+    if (render->parsed() && with_blender) return run_blender(h5_path, render->remaining());
     if (render->parsed()) return run_tool("render.py", h5_path, render->remaining());
+    if (exporter->parsed()) return run_tool("export.py", h5_path, exporter->remaining());
     if (paraview->parsed()) return run_tool("paraview.py", h5_path, paraview->remaining());
     if (info->parsed()) {
       std::fputs(describe_run(h5_path).c_str(), stdout);

@@ -13,10 +13,8 @@ import numpy as np
 import pytest
 
 import isochor
+from paths import EXE, JELLY, SOURCE, SWING  # noqa: F401
 
-SOURCE = os.environ.get("ISOCHOR_SOURCE", os.path.join(os.path.dirname(__file__), "..", ".."))
-EXE = os.environ.get("ISOCHOR_EXE", isochor.executable)
-SWING = os.path.join(SOURCE, "demos", "swing.toml")
 SHORT = {"frames.duration": 0.05}  # 6 frames of the 144-tet swinging block
 
 

@@ -7,7 +7,8 @@ import sys
 import numpy as np
 import pytest
 
-SOURCE = os.environ.get("ISOCHOR_SOURCE", os.path.join(os.path.dirname(__file__), "..", ".."))
+from paths import SOURCE
+
 sys.path.insert(0, os.path.join(SOURCE, "tools"))
 import render  # noqa: E402
 
