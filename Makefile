@@ -3,7 +3,7 @@
 JOBS ?= $(shell nproc)
 BUILD ?= build
 
-.PHONY: demo test test-long sanitize deps configure build bench clean
+.PHONY: demo test test-long test-mpi sanitize deps configure build bench clean
 
 demo: build
 	./demos/run-default.sh $(BUILD)
@@ -14,6 +14,10 @@ test: build
 
 test-long: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) -L long
+
+# The MPI study executor against the local one (mpirun -n 2; CI runs it).
+test-mpi: build
+	cd $(BUILD) && ctest --output-on-failure -L mpi
 
 # The default suite's unit tests and the fuzz tests, built with AddressSanitizer and
 # UndefinedBehaviorSanitizer (build-sanitize/); the whole-scene tests that take minutes under

@@ -13,6 +13,11 @@
 #include "isochor/scene.hpp"
 #include "run.hpp"
 #include "study.hpp"
+#ifdef ISOCHOR_MPI
+#define OMPI_SKIP_MPICXX 1  // the C interface only
+#define MPICH_SKIP_MPICXX 1
+#include <mpi.h>
+#endif
 
 using namespace isochor;
 
@@ -92,6 +97,45 @@ std::string shell_quoted(const std::string& a) {
   return q + "'";
 }
 
+int study_report(const std::string& dir);
+
+// `mpirun -n N isochor study STUDY --mpi`: rank r runs cases r, r + N, ... one at a time (each in
+// its own process, as the local executor), skipping those done; rank 0 then writes the results
+// and the report.
+int study_mpi(const Study& s, const std::string& exe, const std::string& study_path) {
+#ifdef ISOCHOR_MPI
+  MPI_Init(nullptr, nullptr);
+  int rank = 0, ranks = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  if (rank == 0)
+    std::fprintf(stderr, "%s: %zu cases over %d MPI ranks, into %s\n", study_path.c_str(), s.cases.size(), ranks,
+                 s.output.c_str());
+  int failed = 0;
+  try {
+    failed = run_study_share(s, exe, rank, ranks, true);
+  } catch (const Error& e) {
+    std::fprintf(stderr, "isochor (rank %d): %s\n", rank, e.what());
+    failed = -1;
+  }
+  int all = 0, error = failed < 0 ? 1 : 0, errors = 0;
+  MPI_Reduce(&failed, &all, 1, MPI_INT, MPI_SUM, 0, MPI_COMM_WORLD);
+  MPI_Allreduce(&error, &errors, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  int rc = errors > 0 ? 1 : 0;
+  if (rank == 0 && errors == 0) {
+    write_study_results(s);
+    rc = study_report(s.output.string());
+    std::printf("%s: %zu cases on %d ranks, %d failed (reasons in results.csv); wrote %s/report.md\n",
+                study_path.c_str(), s.cases.size(), ranks, all, s.output.c_str());
+  }
+  MPI_Finalize();
+  return rc;
+#else
+  (void)s, (void)exe;
+  throw Error(study_path + ": --mpi needs isochor built with MPI (Debian: apt-get install libopenmpi-dev openmpi-bin, then rebuild)");
+#endif
+}
+
 // A Python tool of tools/ on a run file, with the options after the file passed on as they are.
 int run_tool(const std::string& script, const std::string& h5_path, const std::vector<std::string>& options) {
   if (!std::filesystem::exists(h5_path)) throw Error(h5_path + ": no such file");
@@ -164,6 +208,11 @@ int main(int argc, char** argv) {
   study->add_option("study", scene_path, "Study file (TOML)")->required();
   study->add_option("--set", overrides, "Override a study key, e.g. --set study.jobs=1")->take_all();
   study->add_flag("--resume", resume, "Keep cases that already finished");
+  bool list_cases = false, use_mpi = false;
+  std::string case_id;
+  study->add_flag("--list", list_cases, "Print the study's case ids, one per line (the reference first), and run nothing");
+  study->add_option("--case", case_id, "Run exactly this case (an id from --list) into the study's directory");
+  study->add_flag("--mpi", use_mpi, "Under mpirun: each rank runs its share of the cases (skipping those done), rank 0 writes the report");
 
   auto* report = app.add_subcommand("report", "Write a study's charts, results.h5 and report.md from its results");
   report->add_option("dir", dir, "The study's output directory")->required();
@@ -232,6 +281,20 @@ int main(int argc, char** argv) {
     if (study->parsed()) {
       const Study s = load_study(scene_path, overrides);
       const std::string exe = std::filesystem::read_symlink("/proc/self/exe").string();
+      if (static_cast<int>(list_cases) + static_cast<int>(!case_id.empty()) + static_cast<int>(use_mpi) + static_cast<int>(resume) > 1)
+        throw Error("study: --list, --case, --mpi and --resume exclude each other");
+      if (list_cases) {
+        for (const StudyCase& c : s.cases) std::printf("%s\n", c.label.c_str());
+        return 0;
+      }
+      if (!case_id.empty()) {
+        const int rc = run_study_case(s, case_id, exe, true);
+        const std::string how = rc == 0 ? "done" : "FAILED (its log: cases/" + case_id + ".log)";
+        std::printf("%s: case %s %s; `isochor report %s` merges the cases done\n", scene_path.c_str(), case_id.c_str(),
+                    how.c_str(), s.output.c_str());
+        return rc;
+      }
+      if (use_mpi) return study_mpi(s, exe, scene_path);
       std::fprintf(stderr, "%s: %zu cases (the reference first), %d at a time, into %s\n", scene_path.c_str(),
                    s.cases.size(), s.jobs, s.output.c_str());
       const int failed = run_study(s, exe, resume, true);
@@ -240,7 +303,11 @@ int main(int argc, char** argv) {
                   s.cases.size(), failed, s.output.c_str());
       return rc;
     }
-    if (report->parsed()) return study_report(dir);
+    if (report->parsed()) {
+      // Cases run one by one (--case, a Slurm array, GNU parallel): results from what is done.
+      if (std::filesystem::exists(std::filesystem::path(dir) / "cases.csv")) write_study_results(load_case_list(dir));
+      return study_report(dir);
+    }
     if (render->parsed() && with_blender) return run_blender(h5_path, render->remaining());
     if (render->parsed()) return run_tool("render.py", h5_path, render->remaining());
     if (exporter->parsed()) return run_tool("export.py", h5_path, exporter->remaining());

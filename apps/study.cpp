@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <fcntl.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cmath>
@@ -163,48 +164,114 @@ std::string csv_field(std::string s) {
   return "\"" + s + "\"";
 }
 
-}  // namespace
-
-int run_study(const Study& s, const std::string& exe, bool resume, bool progress) {
+// Runs the cases `which` (indices into s.cases), `jobs` at a time; with `resume`, a case that
+// finished before (its .cpu file is there) is not run again. Returns how many of them failed.
+int run_cases(const Study& s, const std::vector<std::size_t>& which, const std::string& exe, bool resume,
+              bool progress, int jobs) {
   std::filesystem::create_directories(s.output / "cases");
+  save_case_list(s);
   std::atomic<std::size_t> next{0};
-  std::atomic<int> done{0};
+  std::atomic<int> done{0}, failed{0};
   std::mutex print;
   auto worker = [&]() {
-    for (std::size_t i = next++; i < s.cases.size(); i = next++) {
-      const StudyCase& c = s.cases[i];
+    for (std::size_t i = next++; i < which.size(); i = next++) {
+      const StudyCase& c = s.cases[which[i]];
       const auto cpu = s.output / "cases" / (c.label + ".cpu");
       Outcome o;
-      if (resume && std::filesystem::exists(cpu)) {
+      const bool skip = resume && std::filesystem::exists(cpu);
+      if (skip) {
         std::ifstream in(cpu);
         in >> o.cpu >> o.status;
       } else {
         o = run_case(s, c, exe);
       }
       const int d = ++done;
+      failed += o.status != 0;
       if (progress) {
         std::lock_guard<std::mutex> lock(print);
-        std::fprintf(stderr, "[%d/%zu] %-40s %s (%.1f s CPU)\n", d, s.cases.size(), c.label.c_str(),
-                     o.status == 0 ? "ok" : "FAILED", o.cpu);
+        std::fprintf(stderr, "[%d/%zu] %-40s %s (%.1f s CPU)%s\n", d, which.size(), c.label.c_str(),
+                     o.status == 0 ? "ok" : "FAILED", o.cpu, skip ? ", done before" : "");
       }
     }
   };
   // The reference is started first, but not alone: errors are computed once every case is done,
   // so the other core need not wait for it (the reference is usually the longest case).
   std::vector<std::thread> pool;
-  for (int j = 0; j < s.jobs; ++j) pool.emplace_back(worker);
+  for (int j = 0; j < jobs; ++j) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
-  write_study_results(s);
-  int failed = 0;
-  for (const StudyCase& c : s.cases) {
-    std::ifstream in(s.output / "cases" / (c.label + ".cpu"));
-    double cpu;
-    int st = 1;
-    in >> cpu >> st;
-    failed += st != 0;
-  }
   return failed;
 }
+
+}  // namespace
+
+int run_study(const Study& s, const std::string& exe, bool resume, bool progress) {
+  std::vector<std::size_t> all(s.cases.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  const int failed = run_cases(s, all, exe, resume, progress, s.jobs);
+  write_study_results(s);
+  return failed;
+}
+
+int run_study_case(const Study& s, const std::string& label, const std::string& exe, bool progress) {
+  for (std::size_t i = 0; i < s.cases.size(); ++i)
+    if (s.cases[i].label == label) return run_cases(s, {i}, exe, false, progress, 1) == 0 ? 0 : 1;
+  throw Error(s.file + ": no case " + label + " (`isochor study " + s.file + " --list` lists them)");
+}
+
+int run_study_share(const Study& s, const std::string& exe, int rank, int ranks, bool progress) {
+  std::vector<std::size_t> mine;
+  for (std::size_t i = static_cast<std::size_t>(rank); i < s.cases.size(); i += static_cast<std::size_t>(ranks))
+    mine.push_back(i);
+  return run_cases(s, mine, exe, true, progress, 1);
+}
+
+void save_case_list(const Study& s) {
+  std::filesystem::create_directories(s.output);
+  const auto path = s.output / "cases.csv", tmp = s.output / ("cases.csv." + std::to_string(::getpid()));
+  {
+    std::ofstream out(tmp);
+    out << "method,label,sweep\n";
+    for (const StudyCase& c : s.cases) {
+      std::string sweep;
+      for (const auto& [key, value] : c.sweep) sweep += (sweep.empty() ? "" : ";") + key + "=" + number_text(value);
+      out << c.method << "," << c.label << "," << sweep << "\n";
+    }
+    if (!out) throw Error(tmp.string() + ": cannot be written");
+  }
+  std::filesystem::rename(tmp, path);  // whole or not at all, whichever process writes it last
+}
+
+Study load_case_list(const std::filesystem::path& dir) {
+  const auto path = dir / "cases.csv";
+  std::ifstream in(path);
+  if (!in) throw Error(dir.string() + ": no cases.csv (expected the output directory of `isochor study`)");
+  Study s;
+  s.file = path.string();
+  s.output = dir;
+  std::string line;
+  std::getline(in, line);  // the header
+  int row = 1;
+  while (std::getline(in, line)) {
+    ++row;
+    if (line.empty()) continue;
+    std::stringstream fields(line);
+    StudyCase c;
+    std::string sweep;
+    if (!std::getline(fields, c.method, ',') || !std::getline(fields, c.label, ','))
+      throw Error(path.string() + ":" + std::to_string(row) + ": expected method,label,sweep");
+    std::getline(fields, sweep);
+    std::stringstream items(sweep);
+    for (std::string item; std::getline(items, item, ';');) {
+      const auto eq = item.find('=');
+      if (eq == std::string::npos) throw Error(path.string() + ":" + std::to_string(row) + ": sweep " + item + ": expected key=value");
+      c.sweep.emplace_back(item.substr(0, eq), std::strtod(item.c_str() + eq + 1, nullptr));
+    }
+    s.cases.push_back(c);
+  }
+  if (s.cases.empty()) throw Error(path.string() + ": lists no cases");
+  return s;
+}
+
 
 void write_study_results(const Study& s) {
   const auto dir = s.output / "cases";
@@ -234,13 +301,14 @@ void write_study_results(const Study& s) {
   for (const StudyCase& c : s.cases) {
     double cpu = NAN;
     int status = -1;
-    {
+    const bool ran = std::filesystem::exists(dir / (c.label + ".cpu"));
+    if (ran) {
       std::ifstream in(dir / (c.label + ".cpu"));
       in >> cpu >> status;
     }
     std::string sweep;
     for (const auto& [key, value] : c.sweep) sweep += (sweep.empty() ? "" : ";") + key + "=" + number_text(value);
-    std::string reason = status == 0 ? "" : last_line(dir / (c.label + ".log"));
+    std::string reason = !ran ? "not run yet" : status == 0 ? "" : last_line(dir / (c.label + ".log"));
     int frames = 0;
     double wall = NAN, steps = NAN, err = NAN, vol = NAN, cerr = NAN;
     try {
@@ -268,7 +336,7 @@ void write_study_results(const Study& s) {
     } catch (const Error& e) {
       if (reason.empty()) reason = e.what();
     }
-    csv << c.method << "," << c.label << "," << csv_field(sweep) << "," << (status == 0 ? "ok" : "failed") << ","
+    csv << c.method << "," << c.label << "," << csv_field(sweep) << "," << (!ran ? "missing" : status == 0 ? "ok" : "failed") << ","
         << csv_field(reason) << "," << frames << "," << (ref ? ref->num_frames() : 0) << "," << number_text(cpu) << ","
         << number_text(wall) << "," << number_text(steps) << "," << number_text(err) << "," << number_text(vol) << ","
         << number_text(cerr) << "\n";

@@ -33,7 +33,20 @@ Study load_study(const std::string& path, const std::vector<std::string>& overri
 // `resume`), then writes results.csv. Returns the number of failed cases.
 int run_study(const Study& study, const std::string& exe, bool resume, bool progress);
 
-// Recomputes results.csv from the cases' outputs.
+// Recomputes results.csv from the cases' outputs; a case not run yet is marked "missing".
 void write_study_results(const Study& study);
+
+// The case list kept in the study's directory (cases.csv: method, label, sweep), written by every
+// way of running a study, so that `isochor report DIR` can merge whatever cases are done.
+void save_case_list(const Study& study);
+Study load_case_list(const std::filesystem::path& dir);
+
+// Runs exactly the case `label` (`isochor study STUDY --case ID`); returns its exit status.
+int run_study_case(const Study& study, const std::string& label, const std::string& exe, bool progress);
+
+// Runs rank `rank`'s share of `ranks` (cases rank, rank + ranks, ...; the reference is case 0),
+// one at a time, skipping cases already done (`isochor study STUDY --mpi`). Returns the number of
+// its cases that failed.
+int run_study_share(const Study& study, const std::string& exe, int rank, int ranks, bool progress);
 
 }  // namespace isochor
