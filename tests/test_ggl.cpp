@@ -17,7 +17,13 @@ using namespace isochor;
 
 namespace {
 SymmetricSolverKind solver_kind(const std::string& name) {
-  return name == "pcg" ? SymmetricSolverKind::pcg : SymmetricSolverKind::cholmod;
+  return name == "pcg" ? SymmetricSolverKind::pcg : name == "amg" ? SymmetricSolverKind::amg : SymmetricSolverKind::cholmod;
+}
+// Every solver of the effective stiffness this build has (amg: with hypre).
+std::vector<std::string> symmetric_solvers() {
+  std::vector<std::string> k{"cholmod", "pcg"};
+  if (amg_available()) k.push_back("amg");
+  return k;
 }
 }  // namespace
 
@@ -276,13 +282,13 @@ TEST(Ggl, ReducedSolversWithAnInvertedElement) {
     for (Index i = 0; i < b.size(); ++i) b[i] = nd(rng);
     const VectorXd xd = J.partialPivLu().solve(b);
     const double dense = (J * xd - b).norm() / b.norm();
-    for (const char* kind : {"cholmod", "pcg"}) {
+    for (const std::string& kind : symmetric_solvers()) {
       ReducedSolver rs(f.form, solver_kind(kind));
       VectorXd x(f.form.size());
       const bool ok = rs.setup(cj, vals.data()) && rs.solve(b.data(), x.data(), 1);
       ASSERT_TRUE(ok) << kind << " cj " << cj;
       const double res = (J * x - b).norm() / b.norm();
-      std::printf("%s cj %g: refined residual %.2e, dense LU %.2e, fallbacks %ld\n", kind, cj, res, dense, rs.fallbacks());
+      std::printf("%s cj %g: refined residual %.2e, dense LU %.2e, fallbacks %ld\n", kind.c_str(), cj, res, dense, rs.fallbacks());
       EXPECT_LT(res, std::max(1e-10, 3.0 * dense)) << kind << " cj " << cj;
     }
   }
@@ -337,7 +343,7 @@ TEST(Ggl, SolversOnJacobiansCapturedFromABallDrop) {
     const Eigen::PartialPivLU<Eigen::MatrixXd> lu(J);
     std::mt19937 rng(7);
     std::normal_distribution<double> nd;
-    for (const char* kind : {"cholmod", "pcg"}) {
+    for (const std::string& kind : symmetric_solvers()) {
       ReducedSolver rs(form, solver_kind(kind));
       ASSERT_TRUE(rs.setup(c.cj, c.values.data())) << kind << " t " << c.t;
       for (int trial = 0; trial < 2; ++trial) {
@@ -347,7 +353,7 @@ TEST(Ggl, SolversOnJacobiansCapturedFromABallDrop) {
         const VectorXd xd = lu.solve(b);
         const double res = (J * x - b).norm() / b.norm(), dense = (J * xd - b).norm() / b.norm();
         EXPECT_LT(res, std::max(1e-10, 3.0 * dense)) << kind << " t " << c.t << " cj " << c.cj;
-        std::printf("%s t %.5f cj %.3g, %d inverted tets, mu %.3g: residual %.2e, dense LU %.2e\n", kind, c.t, c.cj,
+        std::printf("%s t %.5f cj %.3g, %d inverted tets, mu %.3g: residual %.2e, dense LU %.2e\n", kind.c_str(), c.t, c.cj,
                     c.inverted, c.y[2 * n + form.m()], res, dense);
       }
     }

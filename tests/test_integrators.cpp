@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "isochor/sparse_factor.hpp"
 #include "isochor/backward_euler.hpp"
 #include "isochor/ida_integrator.hpp"
 #include "isochor/statics.hpp"
@@ -182,11 +183,20 @@ TEST(Integrators, DofsNotAMultipleOfTheGroupSizeAreRejected) {
     EXPECT_NE(m.find("2 dofs, not a multiple of dofs_per_group() = 3"), std::string::npos) << m;
 }
 
+namespace {
+// Every linear solver this build has (amg: with hypre).
+std::vector<LinearSolverKind> every_linear_solver() {
+  std::vector<LinearSolverKind> k{LinearSolverKind::klu, LinearSolverKind::reduced, LinearSolverKind::krylov};
+  if (amg_available()) k.push_back(LinearSolverKind::amg);
+  return k;
+}
+}  // namespace
+
 TEST(Integrators, IdaFollowsTheDoublePendulumWithEveryLinearSolver) {
   // Groups of 2 dofs: KLU's METIS order over the particles, the reduced and krylov solvers.
   const auto times = test::frame_times(1.0, 0.02);
   const auto ref = reference(kDoubleL, kDoubleTheta, times);
-  for (LinearSolverKind ls : {LinearSolverKind::klu, LinearSolverKind::reduced, LinearSolverKind::krylov}) {
+  for (LinearSolverKind ls : every_linear_solver()) {
     Chain c(kDoubleL, kDoubleTheta);
     IdaOptions o;
     o.rtol = o.atol_q = o.atol_v = 1e-9;
@@ -204,7 +214,7 @@ TEST(Integrators, StaticsFindsTheHangingDoublePendulumAndItsTensions) {
   // lambda_2 = m g / L2, particle 1 lambda_1 = 2 m g / L1 (link tensions over their lengths).
   // Springs anchored at the hanging positions (no force there, so the tensions do not change)
   // make the stiffness regular: without them it is zero, and so is the reduced solver's block.
-  for (LinearSolverKind ls : {LinearSolverKind::klu, LinearSolverKind::reduced, LinearSolverKind::krylov}) {
+  for (LinearSolverKind ls : every_linear_solver()) {
     Chain c(kDoubleL, {0.3, -0.2});
     c.anchor = Eigen::Vector4d(0, -kDoubleL[0], 0, -kDoubleL[0] - kDoubleL[1]);
     c.k_anchor = 10.0;
@@ -233,7 +243,7 @@ TEST(Integrators, BackwardEulerConvergesAtFirstOrderWithEveryLinearSolver) {
   // it was an absolute 1e-8 m with KLU's reused factorisation: worse at 1e-5 than at 1e-4).
   const std::vector<double> times = {0.0, 0.1, 0.2, 0.3, 0.4, 0.5};
   const auto ref = reference({1.0}, {1.0}, times);
-  for (LinearSolverKind ls : {LinearSolverKind::klu, LinearSolverKind::reduced, LinearSolverKind::krylov}) {
+  for (LinearSolverKind ls : every_linear_solver()) {
     std::vector<double> errors;
     for (double h : {1e-2, 1e-3, 1e-4, 1e-5}) {
       Chain c({1.0}, {1.0});

@@ -12,7 +12,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-dev python3-numpy python3-h5py python3-matplotlib python3-meshio
   pybind11-dev python3-pytest
-  libopenmpi-dev openmpi-bin
+  libopenmpi-dev openmpi-bin libhypre-dev
 )
 missing=()
 for p in "${packages[@]}"; do

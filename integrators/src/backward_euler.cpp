@@ -32,9 +32,7 @@ struct BackwardEuler::Impl {
       : sys(s), opt(o), n((check_system(s), s.num_dofs())), m(s.num_constraints()),
         use_kkt(o.linear_solver == LinearSolverKind::klu || m > o.schur_max_constraints) {
     if (!use_kkt)
-      S = std::make_unique<BorderedSolver>(s.pattern(), s.constraint_rows(), o.linear_solver == LinearSolverKind::krylov
-                                                                               ? SymmetricSolverKind::pcg
-                                                                               : SymmetricSolverKind::cholmod);
+      S = std::make_unique<BorderedSolver>(s.pattern(), s.constraint_rows(), symmetric_solver_of(o.linear_solver));
     if (use_kkt) {
       layout = std::make_unique<KktLayout>(s.pattern(), s.constraint_rows());
       kkt = std::make_unique<KktFactor>(*layout, s.pattern(), s.dofs_per_group(), s.constraint_rows());

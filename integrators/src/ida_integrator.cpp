@@ -42,7 +42,7 @@ struct IdaIntegrator::Impl {
       // CG's residual below what IDA's Newton test can see: 1e-6 rtol, at most 1e-12
       // (docs/decisions.md).
       reduced = std::make_unique<ReducedSolver>(
-          ggl, opt.linear_solver == LinearSolverKind::krylov ? SymmetricSolverKind::pcg : SymmetricSolverKind::cholmod,
+          ggl, symmetric_solver_of(opt.linear_solver),
           std::min(1e-12, 1e-6 * opt.rtol));
     else if (opt.ordering == KluOrdering::metis) {
       const auto t0 = Clock::now();

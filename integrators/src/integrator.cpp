@@ -1,5 +1,7 @@
 #include "isochor/integrator.hpp"
 
+#include "isochor/sparse_factor.hpp"
+
 namespace isochor {
 
 const char* to_string(LinearSolverKind k) {
@@ -7,8 +9,15 @@ const char* to_string(LinearSolverKind k) {
     case LinearSolverKind::klu: return "klu";
     case LinearSolverKind::reduced: return "reduced";
     case LinearSolverKind::krylov: return "krylov";
+    case LinearSolverKind::amg: return "amg";
   }
   return "?";
+}
+
+SymmetricSolverKind symmetric_solver_of(LinearSolverKind k) {
+  return k == LinearSolverKind::krylov ? SymmetricSolverKind::pcg
+         : k == LinearSolverKind::amg  ? SymmetricSolverKind::amg
+                                       : SymmetricSolverKind::cholmod;
 }
 
 }  // namespace isochor

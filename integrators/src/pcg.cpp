@@ -161,6 +161,7 @@ class BlockJacobiPcg : public SymmetricSolver {
 std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, SymmetricSolverKind kind, double tol) {
   switch (kind) {
     case SymmetricSolverKind::pcg: return std::make_unique<BlockJacobiPcg>(pattern, tol);
+    case SymmetricSolverKind::amg: return make_amg_solver(pattern, tol);
     case SymmetricSolverKind::cholmod: return std::make_unique<SymmetricFactor>(pattern);
   }
   return nullptr;

@@ -47,7 +47,7 @@ struct ReducedSolver::Impl {
     return use_direct;
   }
   Impl(const GglForm& f, SymmetricSolverKind kind, double pcg_tol)
-      : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind, pcg_tol)), fallback(kind == SymmetricSolverKind::pcg) {
+      : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind, pcg_tol)), fallback(kind != SymmetricSolverKind::cholmod) {
     Sx.resize(f.system().pattern().nnz());
     Vx.resize(Sx.size()), Qx.resize(Sx.size()), Ax.resize(Sx.size());
     Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);

@@ -44,9 +44,7 @@ struct StaticSolver::Impl {
     f.resize(n);
     g.resize(m);
     if (opt.linear_solver != LinearSolverKind::klu)
-      bordered = std::make_unique<BorderedSolver>(S, sys.constraint_rows(), opt.linear_solver == LinearSolverKind::krylov
-                                                                               ? SymmetricSolverKind::pcg
-                                                                               : SymmetricSolverKind::cholmod);
+      bordered = std::make_unique<BorderedSolver>(S, sys.constraint_rows(), symmetric_solver_of(opt.linear_solver));
   }
 
   int residual(N_Vector u, N_Vector fv) {

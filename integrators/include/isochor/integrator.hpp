@@ -14,12 +14,16 @@ namespace isochor {
 // How the Newton systems are solved (docs/scenes.md, integrator.linear_solver):
 //   klu      the whole matrix (GGL or KKT) by KLU in a node-grouped METIS order;
 //   reduced  the n x n effective stiffness by CHOLMOD, the constraint borders by a Schur complement;
-//   krylov   the same reduction with block-Jacobi PCG on the effective stiffness.
-enum class LinearSolverKind { klu, reduced, krylov };
+//   krylov   the same reduction with block-Jacobi PCG on the effective stiffness;
+//   amg      the same reduction with AMG-preconditioned CG (hypre's BoomerAMG) on it.
+enum class LinearSolverKind { klu, reduced, krylov, amg };
 // KLU's fill-reducing ordering (klu only).
 enum class KluOrdering { metis, colamd, amd };
 
 const char* to_string(LinearSolverKind k);
+// The solver of the effective stiffness that a reduced kind uses (sparse_factor.hpp).
+enum class SymmetricSolverKind;
+SymmetricSolverKind symmetric_solver_of(LinearSolverKind k);
 
 class Integrator {
  public:

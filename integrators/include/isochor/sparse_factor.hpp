@@ -31,9 +31,14 @@ class SymmetricSolver {
 // cholmod: SymmetricFactor; pcg: BlockJacobiPcg with relative residual tolerance `tol` (the GGL
 // residual of a reduced solve is ~1e6 times it, so 1e-12 leaves Newton an error of ~1e-6, far
 // below its own contraction).
-enum class SymmetricSolverKind { cholmod, pcg };
+// amg: conjugate gradients preconditioned by one V-cycle of hypre's BoomerAMG (nodal coarsening,
+// symmetric Gauss-Seidel), same tolerance; only where isochor was built with hypre
+// (amg_available()).
+enum class SymmetricSolverKind { cholmod, pcg, amg };
 std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, SymmetricSolverKind kind,
                                                        double tol = 1e-12);
+bool amg_available();
+std::unique_ptr<SymmetricSolver> make_amg_solver(const SparsePattern& pattern, double tol);
 
 class SymmetricFactor : public SymmetricSolver {
  public:

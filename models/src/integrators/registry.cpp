@@ -1,3 +1,4 @@
+#include "isochor/sparse_factor.hpp"
 #include "entries.hpp"
 
 #include "isochor/error.hpp"
@@ -37,10 +38,14 @@ long parse_max_steps(const Section& in) { return in.integer("max_steps", 1000000
 double parse_dt(const Section& in) { return in.number("dt", 1e-3, Range::positive()); }
 
 LinearSolverKind parse_linear_solver(const Section& in, LinearSolverKind automatic) {
-  const std::string s = in.string("linear_solver", "auto", {"auto", "klu", "reduced", "krylov"});
+  const std::string s = in.string("linear_solver", "auto", {"auto", "klu", "reduced", "krylov", "amg"});
+  if (s == "amg" && !amg_available())
+    in.fail("linear_solver", "\"amg\" needs isochor built with hypre and MPI (Debian: apt-get install libhypre-dev "
+                             "libopenmpi-dev, then rebuild)");
   return s == "klu" ? LinearSolverKind::klu
          : s == "reduced" ? LinearSolverKind::reduced
          : s == "krylov"  ? LinearSolverKind::krylov
+         : s == "amg"     ? LinearSolverKind::amg
                           : automatic;
 }
 
