@@ -119,9 +119,13 @@ Outcome run_case(const Study& s, const StudyCase& c, const std::string& exe) {
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   std::vector<std::string> env_s;
+  // A case is its own program, not part of an MPI job that `isochor study --mpi` runs in: it
+  // gets none of mpirun's variables (one that initialises MPI itself, for linear_solver = "amg",
+  // would otherwise try to join the job).
   for (char** e = environ; *e; ++e) {
     const std::string v = *e;
-    if (v.rfind("OMP_NUM_THREADS=", 0) && v.rfind("OPENBLAS_NUM_THREADS=", 0)) env_s.push_back(v);
+    const bool mpi = v.rfind("OMPI_", 0) == 0 || v.rfind("PMIX_", 0) == 0 || v.rfind("PMI_", 0) == 0;
+    if (!mpi && v.rfind("OMP_NUM_THREADS=", 0) && v.rfind("OPENBLAS_NUM_THREADS=", 0)) env_s.push_back(v);
   }
   env_s.push_back("OMP_NUM_THREADS=1");
   env_s.push_back("OPENBLAS_NUM_THREADS=1");
