@@ -5,6 +5,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <thread>
 
 #include "isochor/error.hpp"
 #include "isochor/interrupt.hpp"
@@ -99,24 +103,85 @@ std::string shell_quoted(const std::string& a) {
 
 int study_report(const std::string& dir);
 
-// `mpirun -n N isochor study STUDY --mpi`: rank r runs cases r, r + N, ... one at a time (each in
-// its own process, as the local executor), skipping those done; rank 0 then writes the results
-// and the report.
+// `mpirun -n N isochor study STUDY --mpi`: the cases form one queue, handed out in order (the
+// reference first) by rank 0 to whichever rank asks next, as the local executor's threads take
+// them; each case runs in its own process. Rank 0 then writes the results and the report. Waits
+// poll with a sleep, so that a rank waiting for work or for the others takes no core from those
+// running cases (OpenMPI's blocking calls spin).
 int study_mpi(const Study& s, const std::string& exe, const std::string& study_path) {
 #ifdef ISOCHOR_MPI
-  MPI_Init(nullptr, nullptr);
+  int provided = 0;
+  MPI_Init_thread(nullptr, nullptr, MPI_THREAD_SERIALIZED, &provided);
   int rank = 0, ranks = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  auto wait = [](MPI_Request& r, MPI_Status* st) {
+    for (int done = 0;;) {
+      MPI_Test(&r, &done, st);
+      if (done) return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  };
+  if (provided < MPI_THREAD_SERIALIZED && ranks > 1) {
+    if (rank == 0) std::fprintf(stderr, "isochor: study --mpi: the MPI library offers no MPI_THREAD_SERIALIZED\n");
+    MPI_Finalize();
+    return 1;
+  }
   if (rank == 0)
     std::fprintf(stderr, "%s: %zu cases over %d MPI ranks, into %s\n", study_path.c_str(), s.cases.size(), ranks,
                  s.output.c_str());
+  constexpr int kAsk = 1, kGive = 2;
+  const int n = static_cast<int>(s.cases.size());
+  std::atomic<int> counter{0};
+  std::thread server;
+  std::function<int()> next;
+  if (rank == 0) {
+    // The queue: rank 0's own cases from its main thread, the other ranks' through this thread
+    // (the only one of rank 0 that calls MPI until it ends).
+    server = std::thread([&] {
+      for (int finished = 0; finished < ranks - 1;) {
+        int ask = 0;
+        MPI_Request r;
+        MPI_Status st;
+        MPI_Irecv(&ask, 1, MPI_INT, MPI_ANY_SOURCE, kAsk, MPI_COMM_WORLD, &r);
+        wait(r, &st);
+        int i = counter++;
+        if (i >= n) {
+          i = -1;
+          ++finished;
+        }
+        MPI_Send(&i, 1, MPI_INT, st.MPI_SOURCE, kGive, MPI_COMM_WORLD);
+      }
+    });
+    next = [&] {
+      const int i = counter++;
+      return i < n ? i : -1;
+    };
+  } else {
+    next = [&] {
+      int ask = 0, i = -1;
+      MPI_Send(&ask, 1, MPI_INT, 0, kAsk, MPI_COMM_WORLD);
+      MPI_Request r;
+      MPI_Irecv(&i, 1, MPI_INT, 0, kGive, MPI_COMM_WORLD, &r);
+      wait(r, MPI_STATUS_IGNORE);
+      return i;
+    };
+  }
   int failed = 0;
   try {
-    failed = run_study_share(s, exe, rank, ranks, true);
+    failed = run_study_queue(s, exe, next, true);
   } catch (const Error& e) {
     std::fprintf(stderr, "isochor (rank %d): %s\n", rank, e.what());
     failed = -1;
+    if (rank != 0)
+      while (next() >= 0) {  // take the rest of the queue without running it, so rank 0 can end
+      }
+  }
+  if (rank == 0) server.join();
+  {
+    MPI_Request r;
+    MPI_Ibarrier(MPI_COMM_WORLD, &r);
+    wait(r, MPI_STATUS_IGNORE);
   }
   int all = 0, error = failed < 0 ? 1 : 0, errors = 0;
   MPI_Reduce(&failed, &all, 1, MPI_INT, MPI_SUM, 0, MPI_COMM_WORLD);

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <functional>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -222,11 +223,15 @@ int run_study_case(const Study& s, const std::string& label, const std::string& 
   throw Error(s.file + ": no case " + label + " (`isochor study " + s.file + " --list` lists them)");
 }
 
-int run_study_share(const Study& s, const std::string& exe, int rank, int ranks, bool progress) {
-  std::vector<std::size_t> mine;
-  for (std::size_t i = static_cast<std::size_t>(rank); i < s.cases.size(); i += static_cast<std::size_t>(ranks))
-    mine.push_back(i);
-  return run_cases(s, mine, exe, true, progress, 1);
+int run_study_queue(const Study& s, const std::string& exe, const std::function<int()>& next_case, bool progress) {
+  std::filesystem::create_directories(s.output / "cases");
+  save_case_list(s);
+  int failed = 0;
+  for (int i = next_case(); i >= 0; i = next_case()) {
+    if (i >= static_cast<int>(s.cases.size())) throw Error(s.file + ": case " + std::to_string(i) + " does not exist");
+    failed += run_cases(s, {static_cast<std::size_t>(i)}, exe, true, progress, 1);
+  }
+  return failed;
 }
 
 void save_case_list(const Study& s) {

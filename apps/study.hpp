@@ -6,6 +6,7 @@
 // results.csv; tools/study_report.py turns that into results.h5, charts and report.md.
 #pragma once
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -44,9 +45,9 @@ Study load_case_list(const std::filesystem::path& dir);
 // Runs exactly the case `label` (`isochor study STUDY --case ID`); returns its exit status.
 int run_study_case(const Study& study, const std::string& label, const std::string& exe, bool progress);
 
-// Runs rank `rank`'s share of `ranks` (cases rank, rank + ranks, ...; the reference is case 0),
-// one at a time, skipping cases already done (`isochor study STUDY --mpi`). Returns the number of
-// its cases that failed.
-int run_study_share(const Study& study, const std::string& exe, int rank, int ranks, bool progress);
+// Runs the cases that `next_case` hands out (indices into study.cases, -1: no more), one at a
+// time, skipping cases already done (`isochor study STUDY --mpi`: a queue shared by the ranks).
+// Returns the number of its cases that failed.
+int run_study_queue(const Study& study, const std::string& exe, const std::function<int()>& next_case, bool progress);
 
 }  // namespace isochor
