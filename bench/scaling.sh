@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# One scene's cost against its mesh (issue 18): the damped ball (demos/ball_drop.toml, Rayleigh
+# beta = 1e-4 s) at ~1K, 4.5K, 16K and 64K tets (add 250000 1000000 as arguments for the rest of
+# the curve: hours), through its impact (50 ms: the impact at 30 ms, 20 ms of contact), with
+# linear_solver = krylov and reduced, the two solvers side by side (one thread each), then
+# tools/scaling_report.py: per step, per Newton iteration and per frame wall time, CG iterations
+# per Newton iteration, peak memory, and the fitted exponent of each against the tets, with a
+# log-log chart (docs/results/scaling.md, docs/results/scaling.png).
+#   bench/scaling.sh [BUILD] [TETS ...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build}
+shift || true
+sizes=("${@:-1000 4500 16000 64000}")
+out=out/bench/scaling
+mkdir -p "$out"
+for tets in ${sizes[*]}; do
+  for ls in krylov reduced; do
+    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$build/isochor" run demos/ball_drop.toml -q --overwrite \
+      -o "$out/ball_${tets}_$ls.h5" --set mesh.target_tets=$tets --set integrator.linear_solver=$ls \
+      --set frames.duration=0.05 > "$out/ball_${tets}_$ls.log" 2>&1 &
+  done
+  wait
+  echo "scaling: $tets tets done"
+done
+/usr/bin/python3 tools/scaling_report.py "$out" docs/results
