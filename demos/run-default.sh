@@ -9,6 +9,6 @@ cd "$(dirname "$0")/.."
 /usr/bin/python3 tools/run_report.py out/ball_drop.h5
 "$build/isochor" info out/ball_drop.h5
 # The README's picture (docs/images/ball_drop.png) drawn from this run: the ball at its flattest,
-# coloured by displacement.
+# coloured by its deformation (the best rigid motion taken out).
 "$build/isochor" render out/ball_drop.h5 --frames flattest --out out/ball_drop.png
 echo "picture: out/ball_drop.png"
