@@ -174,7 +174,6 @@ std::string csv_field(std::string s) {
 int run_cases(const Study& s, const std::vector<std::size_t>& which, const std::string& exe, bool resume,
               bool progress, int jobs) {
   std::filesystem::create_directories(s.output / "cases");
-  save_case_list(s);
   std::atomic<std::size_t> next{0};
   std::atomic<int> done{0}, failed{0};
   std::mutex print;
@@ -212,6 +211,7 @@ int run_cases(const Study& s, const std::vector<std::size_t>& which, const std::
 int run_study(const Study& s, const std::string& exe, bool resume, bool progress) {
   std::vector<std::size_t> all(s.cases.size());
   for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  save_case_list(s);
   const int failed = run_cases(s, all, exe, resume, progress, s.jobs);
   write_study_results(s);
   return failed;
@@ -219,7 +219,10 @@ int run_study(const Study& s, const std::string& exe, bool resume, bool progress
 
 int run_study_case(const Study& s, const std::string& label, const std::string& exe, bool progress) {
   for (std::size_t i = 0; i < s.cases.size(); ++i)
-    if (s.cases[i].label == label) return run_cases(s, {i}, exe, false, progress, 1) == 0 ? 0 : 1;
+    if (s.cases[i].label == label) {
+      save_case_list(s);
+      return run_cases(s, {i}, exe, false, progress, 1) == 0 ? 0 : 1;
+    }
   throw Error(s.file + ": no case " + label + " (`isochor study " + s.file + " --list` lists them)");
 }
 

@@ -33,7 +33,7 @@ void ensure_mpi() {
 
 class AmgPcg : public SymmetricSolver {
  public:
-  AmgPcg(const SparsePattern& p, double tol) : p_(p), tol_(tol), n_(static_cast<HYPRE_BigInt>(p.n)) {
+  AmgPcg(const SparsePattern& p, double tol) : tol_(tol), n_(static_cast<HYPRE_BigInt>(p.n)) {
     ensure_mpi();
     // S is symmetric with both triangles stored: column c of the pattern is row c.
     rows_.resize(static_cast<std::size_t>(p.n));
@@ -127,7 +127,6 @@ class AmgPcg : public SymmetricSolver {
     if (amg_) HYPRE_BoomerAMGDestroy(amg_);
     pcg_ = amg_ = nullptr;
   }
-  const SparsePattern& p_;
   double tol_;
   HYPRE_BigInt n_;
   std::vector<HYPRE_BigInt> rows_, cols_, index_;
