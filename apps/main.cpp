@@ -340,7 +340,11 @@ int main(int argc, char** argv) {
                   scene_path.c_str(), r.frames, s.steps, s.newton_iterations, s.jacobian_evals, s.wall_seconds,
                   s.assembly_seconds, s.factor_seconds, s.solve_seconds);
       if (sc.skeleton) std::printf(", Simbody %.2f", r.simbody_seconds);
-      std::printf(")\nwrote %s\n", r.output.c_str());
+      std::printf(")");
+      if (s.line_search_cuts || s.regularisations || s.step_halvings)
+        std::printf("; line search cut %ld updates, %ld matrices shifted, %ld steps halved", s.line_search_cuts,
+                    s.regularisations, s.step_halvings);
+      std::printf("\nwrote %s\n", r.output.c_str());
       return 0;
     }
     if (study->parsed()) {

@@ -38,6 +38,9 @@ void write_totals(OutputWriter& w, const RunStats& s) {
   w.set_stat("symbolic_seconds", s.symbolic_seconds);
   w.set_stat("projection_seconds", s.projection_seconds);
   w.set_stat("linear_iterations", static_cast<double>(s.linear_iterations));
+  w.set_stat("line_search_cuts", static_cast<double>(s.line_search_cuts));
+  w.set_stat("regularisations", static_cast<double>(s.regularisations));
+  w.set_stat("step_halvings", static_cast<double>(s.step_halvings));
   // Peak resident memory of the whole process (getrusage), for the linear-solver benchmarks.
   w.set_stat("peak_memory_mb", peak_memory_mb());
 }

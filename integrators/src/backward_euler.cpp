@@ -4,6 +4,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 
 #include "isochor/fixed_step.hpp"
 #include "isochor/initial_state.hpp"
@@ -31,6 +33,8 @@ struct BackwardEuler::Impl {
   Impl(ConstrainedSystem& s, BackwardEulerOptions o)
       : sys(s), opt(o), n((check_system(s), s.num_dofs())), m(s.num_constraints()),
         use_kkt(o.linear_solver == LinearSolverKind::klu || m > o.schur_max_constraints) {
+    if (o.project_hessian && !s.set_hessian_projection(true))
+      throw std::invalid_argument("integrator.hessian = \"projected\": this model has no element Hessians to project");
     if (!use_kkt)
       S = std::make_unique<BorderedSolver>(s.pattern(), s.constraint_rows(), symmetric_solver_of(o.linear_solver));
     if (use_kkt) {
@@ -52,8 +56,12 @@ struct BackwardEuler::Impl {
   bool refresh = true;    // factor the next step matrix afresh
   VectorXd v_previous;    // the velocity at the start of the previous step
   bool have_previous = false;
+  // The step as a minimisation: on when asked and the system has a potential (run() decides).
+  bool line_search = false;
+  std::vector<double> Dbar;  // the damping matrix -df/dv of the last fresh Jacobian
+  VectorXd nu;               // the l1 merit's weights, per constraint (grow within a step)
 
-  // One step from (qn, vn) at t to t + h: q, v, lambda on return. False with a reason on failure.
+  // One step from (qn, vn) at t to t1: q, v, lambda on return. False with a reason on failure.
   // Newton with the step matrix factored only when needed: a factorisation is reused across
   // iterations and steps while the iterations contract well (rate below 1/4); a slow or failing
   // iteration refreshes it, and a step that fails with a reused factorisation is redone with
@@ -61,17 +69,54 @@ struct BackwardEuler::Impl {
   bool step(double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v, VectorXd& lambda,
             std::string& reason) {
     const VectorXd lambda0 = lambda;
-    bool ok = step_once(t1, qn, vn, q, v, lambda, reason, false);
+    const double h = t1 - t;
+    bool ok = step_once(t1, h, qn, vn, q, v, lambda, reason, false);
     if (!ok && !opt.semi_implicit) {
       lambda = lambda0;
       refresh = true;
       have_previous = false;
-      ok = step_once(t1, qn, vn, q, v, lambda, reason, true);
+      ok = step_once(t1, h, qn, vn, q, v, lambda, reason, true);
     }
     v_previous = vn;
     have_previous = true;
     return ok;
   }
+
+  // A step that fails is retried as two half steps, each of which may be halved again, up to
+  // opt.substeps_on_failure levels.
+  bool advance(double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v, VectorXd& lambda,
+               std::string& reason, int depth = 0) {
+    const VectorXd lambda0 = lambda;
+    if (step(t, t1, qn, vn, q, v, lambda, reason)) return true;
+    if (depth >= opt.substeps_on_failure) {
+      if (depth > 0) reason += " (after " + std::to_string(depth) + " halvings of the step)";
+      return false;
+    }
+    stats.step_halvings++;
+    lambda = lambda0;
+    have_previous = false;
+    VectorXd qm, vm;
+    const double tm = 0.5 * (t + t1);
+    return advance(t, tm, qn, vn, qm, vm, lambda, reason, depth + 1) &&
+           advance(tm, t1, qm, vm, q, v, lambda, reason, depth + 1);
+  }
+
+  // The incremental potential without its constraint term, at q with V = V(q) (Impl's comment in
+  // backward_euler.hpp): inertia, potential, and the damping quadratic with the matrix Dbar.
+  double incremental_potential(double h, double V, const VectorXd& q, const VectorXd& qn, const VectorXd& qt) const {
+    const VectorXd& M = sys.mass();
+    double phi = 0.5 * (q - qt).cwiseAbs2().dot(M) / (h * h) + V;
+    if (!Dbar.empty()) {
+      const SparsePattern& p = sys.pattern();
+      const VectorXd u = q - qn;
+      double d = 0.0;
+      for (Index c = 0; c < n; ++c)
+        for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k) d += u[p.row_ind[k]] * Dbar[k] * u[c];
+      phi += 0.5 * d / h;
+    }
+    return phi;
+  }
+  double l1(const VectorXd& g) const { return m ? nu.dot(g.cwiseAbs()) : 0.0; }
 
   // Newton's convergence test, as IDA's: with the contraction rate r of the iterations since the
   // last factorisation (r^m = |dq_m| / |dq_0|), the error left after iteration m is about
@@ -79,31 +124,37 @@ struct BackwardEuler::Impl {
   // displacement |q - q_n|_inf (so that the velocity (q - q_n) / h is as accurate at every h)
   // plus newton_atol. The factor ss = r / (1 - r) carries over between steps and is reset to a
   // cautious 20 by a factorisation; a reused matrix with r > 0.9 fails the attempt (step()
-  // redoes it with fresh matrices).
+  // redoes it with fresh matrices). An iteration whose update the line search cut is never the
+  // last, and the next one factors afresh.
   double ss = 20.0;
 
-  bool step_once(double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v, VectorXd& lambda,
-                 std::string& reason, bool always_fresh) {
-    const double h = opt.dt;
+  bool step_once(double t1, double h, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v,
+                 VectorXd& lambda, std::string& reason, bool always_fresh) {
     const VectorXd& M = sys.mass();
+    const VectorXd qt = qn + h * vn;  // where inertia alone would carry the nodes
     // Predictor: the velocity extrapolated linearly from the last two steps (the first step and
     // the semi-implicit variant, whose single iteration starts from it, use q_n + h v_n).
     if (have_previous && !opt.semi_implicit) q = qn + h * (2 * vn - v_previous);
-    else q = qn + h * vn;
-    VectorXd f(n), R1(n), R2(m), g(m), dq(n), dl(m), rhs(n);
+    else q = qt;
+    VectorXd f(n), R1(n), R0, R2(m), g(m), dq(n), dl(m), rhs(n), qtrial, gtrial(m);
     VectorXd kr(use_kkt ? n + m : 0);
     const int iterations = opt.semi_implicit ? 1 : opt.max_newton;
     double first = 0;              // |dq| of the first iteration since the last factorisation
     int since = 0;                 // iterations since then
     bool fresh_this_step = false;  // a factorisation of this step's matrix
+    if (line_search) nu.setZero(m);
+    double Vq = std::numeric_limits<double>::quiet_NaN();  // V(q), when known
     for (int it = 0; it < iterations; ++it) {
       const auto ta = Clock::now();
       v = (q - qn) / h;
-      const bool fresh = always_fresh || refresh || !factored || opt.semi_implicit;
-      std::fill(K.begin(), K.end(), 0.0);
-      std::fill(D.begin(), D.end(), 0.0);
+      bool fresh = always_fresh || refresh || !factored || opt.semi_implicit;
+      if (fresh) {
+        std::fill(K.begin(), K.end(), 0.0);
+        std::fill(D.begin(), D.end(), 0.0);
+      }
       sys.force_and_jacobians(t1, q, v, f, fresh ? K.data() : nullptr, fresh ? D.data() : nullptr);
-      R1 = M.cwiseProduct(q - qn - h * vn) / (h * h) - f;
+      R1 = M.cwiseProduct(q - qt) / (h * h) - f;
+      if (line_search) R0 = R1;  // the gradient of the incremental potential (with D at q)
       add_constraint_terms(sys, t1, q, lambda, G, g, R1.data());
       if (m) R2 = g;
       if (!R1.allFinite()) {
@@ -114,60 +165,126 @@ struct BackwardEuler::Impl {
         if (m) sys.add_constraint_hessian(t1, q, lambda, 1.0, K.data());
         for (std::size_t k = 0; k < Sv.size(); ++k) Sv[k] = K[k] + D[k] / h;
         for (Index i = 0; i < n; ++i) Sv[diag[i]] += M[i] / (h * h);
+        if (line_search) {
+          if (std::any_of(D.begin(), D.end(), [](double d) { return d != 0.0; })) Dbar = D;
+          else Dbar.clear();
+        }
       }
       stats.assembly_seconds += seconds_since(ta);
-      if (fresh) {
-        const auto tf = Clock::now();
-        bool ok;
+      // Factor (when fresh) and solve; with the line search, a matrix that cannot be factored or
+      // a direction that does not descend is shifted by more inertia, shift M / h^2.
+      double shift = 0.0, slope = 0.0;
+      bool redo = false;  // a reused matrix gave no descent: iterate again with a fresh one
+      for (;;) {
+        if (fresh) {
+          const auto tf = Clock::now();
+          bool ok;
+          if (use_kkt) {
+            layout->fill(Sv.data(), G, kv.data());
+            ok = kkt->factor(kv.data());
+          } else {
+            ok = S->factor(Sv.data());
+            stats.symbolic_seconds = S->symmetric().analyse_seconds();
+          }
+          stats.factor_seconds += seconds_since(tf);
+          stats.jacobian_evals++;
+          stats.fresh_factorisations++;
+          factored = ok;
+          refresh = false;
+          fresh_this_step = true;
+          ss = 20.0;
+          if (!ok) {
+            if (line_search && add_shift(shift, h)) continue;
+            reason = "the step matrix is singular";
+            return false;
+          }
+        }
+        const auto ts = Clock::now();
+        bool solved = true;
         if (use_kkt) {
-          layout->fill(Sv.data(), G, kv.data());
-          ok = kkt->factor(kv.data());
+          kr << -R1, -R2;
+          kkt->solve(kr.data());
+          dq = kr.head(n);
+          dl = kr.tail(m);
+          solved = kr.allFinite();
         } else {
-          ok = S->factor(Sv.data());
-          stats.symbolic_seconds = S->symmetric().analyse_seconds();
+          // The current borders with the (possibly reused) factor of the step matrix.
+          rhs = -R1;
+          const VectorXd r2 = -R2;
+          solved = S->set_borders(G);
+          solved = S->solve(rhs.data(), r2.data(), dq.data(), dl.data()) && solved;
+          stats.linear_iterations = S->symmetric().iterations();
         }
-        stats.factor_seconds += seconds_since(tf);
-        stats.jacobian_evals++;
-        stats.fresh_factorisations++;
-        factored = ok;
-        refresh = false;
-        fresh_this_step = true;
-        ss = 20.0;
-        if (!ok) {
-          reason = "the step matrix is singular";
-          return false;
-        }
-      }
-      const auto ts = Clock::now();
-      if (use_kkt) {
-        kr << -R1, -R2;
-        kkt->solve(kr.data());
-        dq = kr.head(n);
-        lambda += kr.tail(m);
-      } else {
-        // The current borders with the (possibly reused) factor of the step matrix.
-        rhs = -R1;
-        const VectorXd r2 = -R2;
-        bool solved = S->set_borders(G);
-        solved = S->solve(rhs.data(), r2.data(), dq.data(), dl.data()) && solved;
-        if (m) lambda += dl;
-        stats.linear_iterations = S->symmetric().iterations();
-        if (!solved) {
-          stats.solve_seconds += seconds_since(ts);
+        stats.solve_seconds += seconds_since(ts);
+        if (!solved && !line_search) {
           reason = "the linear solve failed (PCG did not converge, or the step matrix is indefinite)";
           return false;
         }
+        if (!line_search) break;
+        if (solved) {
+          // The l1 merit's weights exceed the new multipliers, so that a Newton direction of a
+          // positive definite matrix descends; its slope along dq.
+          for (Index j = 0; j < m; ++j) nu[j] = std::max(nu[j], 2.0 * std::abs(lambda[j] + dl[j]));
+          slope = R0.dot(dq) - l1(g);
+          if (slope < 0) break;
+        }
+        if (!fresh) {  // a reused matrix: try a fresh one before shifting
+          refresh = true;
+          redo = true;
+          break;
+        }
+        if (!add_shift(shift, h)) {
+          reason = solved ? "Newton's direction does not descend the merit function even with the inertia scaled by 1e6"
+                          : "the linear solve failed (PCG did not converge, or the step matrix is indefinite)";
+          return false;
+        }
       }
-      stats.solve_seconds += seconds_since(ts);
-      q += dq;
+      if (redo) continue;
+      double alpha = 1.0;
+      const double size = dq.cwiseAbs().maxCoeff();
+      const double tol = opt.newton_tol * (q - qn).cwiseAbs().maxCoeff() + opt.newton_atol;
+      if (line_search && size > 100.0 * tol) {
+        // Backtracking (Armijo, halving) on the l1 merit; rounding in the merit's value is allowed.
+        if (!std::isfinite(Vq) && !sys.potential(t1, q, Vq)) Vq = std::numeric_limits<double>::infinity();
+        const double phi_q = incremental_potential(h, Vq, q, qn, qt);
+        const double phi0 = phi_q + l1(g);
+        const double noise = 1e-13 * (std::abs(phi_q) + std::abs(Vq) + l1(g));
+        for (;;) {
+          qtrial = q + alpha * dq;
+          double Vt = std::numeric_limits<double>::quiet_NaN();
+          sys.potential(t1, qtrial, Vt);
+          double phi = std::numeric_limits<double>::infinity();
+          if (std::isfinite(Vt)) {
+            if (m) sys.constraint(t1, qtrial, gtrial);
+            phi = incremental_potential(h, Vt, qtrial, qn, qt) + l1(gtrial);
+          }
+          if (std::isfinite(phi) && phi <= phi0 + 1e-4 * alpha * slope + noise) {
+            Vq = Vt;
+            if (opt.on_line_search) opt.on_line_search(phi0, phi, alpha);
+            break;
+          }
+          alpha *= 0.5;
+          if (alpha < 1e-10) {
+            reason = "the line search found no decrease of the merit function along Newton's direction";
+            return false;
+          }
+        }
+        if (alpha < 1.0) {
+          stats.line_search_cuts++;
+          refresh = true;
+        }
+      } else {
+        Vq = std::numeric_limits<double>::quiet_NaN();
+      }
+      q += alpha * dq;
+      if (m) lambda += alpha * dl;
       stats.newton_iterations++;
       if (!q.allFinite()) {
         reason = "Newton produced a non-finite state";
         return false;
       }
       if (opt.semi_implicit) break;
-      const double size = dq.cwiseAbs().maxCoeff();
-      const double tol = opt.newton_tol * (q - qn).cwiseAbs().maxCoeff() + opt.newton_atol;
+      if (alpha < 1.0) continue;  // not converged; the next iteration factors afresh
       if (fresh || it == 0) {  // the rate is measured from the last factorisation on
         first = size;
         since = 0;
@@ -196,6 +313,18 @@ struct BackwardEuler::Impl {
     stats.newton_failures++;
     return false;
   }
+
+  // Adds inertia to the step matrix Sv: shift (a multiple of M / h^2 on top of the one there)
+  // goes 0 -> 1 -> 10 -> ... -> 1e6. False once it is used up.
+  bool add_shift(double& shift, double h) {
+    const double next = shift == 0.0 ? 1.0 : 10.0 * shift;
+    if (next > 1e6) return false;
+    const VectorXd& M = sys.mass();
+    for (Index i = 0; i < n; ++i) Sv[diag[i]] += (next - shift) * M[i] / (h * h);
+    shift = next;
+    stats.regularisations++;
+    return true;
+  }
 };
 
 BackwardEuler::BackwardEuler(ConstrainedSystem& system, BackwardEulerOptions options)
@@ -207,9 +336,11 @@ RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
   const double h = s.opt.dt;
   VectorXd q, v, a, lambda;
   consistent_initial_state(s.sys, times.front(), q, v, a, lambda);
+  double V0;
+  s.line_search = s.opt.line_search && !s.opt.semi_implicit && s.sys.potential(times.front(), q, V0);
   auto step = [&](double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q1, VectorXd& v1, VectorXd& l1,
                   std::string& reason) {
-    if (!s.step(t, t1, qn, vn, q1, v1, l1, reason)) return false;
+    if (!s.advance(t, t1, qn, vn, q1, v1, l1, reason)) return false;
     if (s.opt.rescale_volume && !s.sys.rescale_volume(t1, q1)) {
       reason = "this model has no volume rescaling";
       return false;

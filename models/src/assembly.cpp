@@ -1,5 +1,6 @@
 #include "isochor/assembly.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -214,6 +215,17 @@ void scatter(const Eigen::Matrix<double, N, N>& H, const Index* slots, double sc
     }
 }
 
+// H := its projection onto the positive semi-definite matrices (the nearest in the Frobenius
+// norm): negative eigenvalues set to zero. A matrix already semi-definite is left as it is.
+template <int N>
+void project_psd(Eigen::Matrix<double, N, N>& H) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eig(H);
+  const auto& l = eig.eigenvalues();
+  if (l.minCoeff() >= 0) return;
+  const auto& V = eig.eigenvectors();
+  H = V * l.cwiseMax(0.0).asDiagonal() * V.transpose();
+}
+
 // One element's share of an ElementPass, for elements of N nodes. eval(g, H, d, Hd) computes
 // the energy and, when asked, its gradient g, Hessian H and H d.
 template <int N, class Nodes, class Eval>
@@ -228,6 +240,7 @@ double element_pass(const ElementPass& p, const Nodes& nodes, const Index* slots
   const double E = eval(p.grad ? &g : nullptr, hess ? &H : nullptr, p.Kv ? &ve : nullptr, p.Kv ? &Hv : nullptr);
   if (p.grad)
     for (int k = 0; k < N; ++k) p.grad->template segment<3>(3 * nodes[k]) += g.template segment<3>(3 * k);
+  if (hess && p.project) project_psd(H);
   if (p.values) scatter<D>(H, slots, p.scale, p.values, p.scale2, p.values2);
   else if (p.values2) scatter<D>(H, slots, p.scale2, p.values2, 0.0, nullptr);
   if (p.Kv)
@@ -264,8 +277,9 @@ double ElasticAssembly::gradient(const Points& x, Eigen::VectorXd& grad) const {
 }
 
 void ElasticAssembly::add_hessian(const Points& x, double scale, double* values, double scale2,
-                                  double* values2) const {
+                                  double* values2, bool project) const {
   ElementPass p;
+  p.project = project;
   p.values = values;
   p.scale = scale;
   p.values2 = values2;

@@ -104,11 +104,11 @@ void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd
   // -df/dv = alpha M + beta K: the element Hessians of K are computed once for both outputs.
   double* damped = neg_dfdv && damping_.beta != 0 ? neg_dfdv : nullptr;
   if (neg_dfdq) {
-    elastic_->add_hessian(x_, 1.0, neg_dfdq, damping_.beta, damped);
+    elastic_->add_hessian(x_, 1.0, neg_dfdq, damping_.beta, damped, project_hessian_);
     external_->add_hessian(x_, 1.0, neg_dfdq);
     pressure_loads_->add_jacobian(x_, neg_dfdq);
   } else if (damped) {
-    elastic_->add_hessian(x_, damping_.beta, damped);
+    elastic_->add_hessian(x_, damping_.beta, damped, 0.0, nullptr, project_hessian_);
   }
   external_->add_damping_jacobians(x_, xdot_, neg_dfdq, neg_dfdv);
   if (neg_dfdv && damping_.alpha != 0) RayleighDamping{damping_.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
@@ -122,6 +122,7 @@ void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd
   grad_.setZero(3 * x_.cols());
   p.grad = &grad_;
   p.values = neg_dfdq;
+  p.project = project_hessian_;
   if (neg_dfdv && damping_.beta != 0) {
     p.values2 = neg_dfdv;
     p.scale2 = damping_.beta;
@@ -191,6 +192,13 @@ void MeshSystem::constraint_velocity_jacobian(double t, const VectorXd& q, const
   set_state(t, q, v);
   rows.resize(num_constraints());
   for (std::size_t s = 0; s < sets_.size(); ++s) sets_[s]->hessian_times(x_, xdot_, rows.data() + offset_[s]);
+}
+
+bool MeshSystem::potential(double t, const VectorXd& q, double& V) {
+  if (!pressure_loads_->empty()) return false;  // follower loads have no potential
+  set_positions(t, q);
+  V = elastic_->energy(x_) + external_->energy(x_);
+  return true;
 }
 
 std::array<double, 3> MeshSystem::energies() const {

@@ -6,7 +6,20 @@
 // on its estimated error (contraction rate r: r / (1 - r) |dq|) relative to the step's
 // displacement. "Semi-implicit": exactly one Newton iteration per step, from q = q_n + h v_n,
 // with a fresh matrix. Step k ends at t0 + k h.
+//
+// As an optimisation (line_search, the default where the system has a potential): the step
+// minimises the incremental potential
+//   Phi(q) = |q - q_n - h v_n|^2_M / (2 h^2) + V(q) + (q - q_n)^T D (q - q_n) / (2 h)
+// subject to g(q, t) = 0 (D the damping matrix -df/dv of the last fresh Jacobian; for
+// mass-proportional damping Phi is exact, for stiffness-proportional damping its gradient equals
+// the residual where D was assembled). Each Newton direction is cut back (Armijo) until the exact
+// l1 merit Phi + sum_j nu_j |g_j| (nu_j > |lambda_j|) decreases; a direction that does not
+// descend, or a matrix that cannot be factored, is retried with the inertia term M / h^2 of the
+// matrix scaled up (a Levenberg-Marquardt shift in the mass metric). project_hessian fills the
+// matrix with every element's Hessian projected to be positive semi-definite (the residual stays
+// exact). A failed step may be retried as two half steps, up to substeps_on_failure times.
 #pragma once
+#include <functional>
 #include <memory>
 
 #include "isochor/constrained_system.hpp"
@@ -31,6 +44,15 @@ struct BackwardEulerOptions {
   // "reduced" (the above), "klu" (KLU on the KKT matrix always), "krylov" (block-Jacobi PCG
   // instead of CHOLMOD on the step matrix; the KKT path above schur_max_constraints stays KLU).
   LinearSolverKind linear_solver = LinearSolverKind::reduced;
+  // The step as a minimisation (above); off: plain Newton on the KKT system.
+  bool line_search = true;
+  bool project_hessian = false;
+  // A failed step is retried as two half steps, each of which may be halved again, up to this
+  // many levels (0: a failed step stops the run).
+  int substeps_on_failure = 0;
+  // Called after each line search with the merit at the iterate and at the point accepted
+  // (same weights), and the step length taken: for tests and diagnostics.
+  std::function<void(double before, double after, double alpha)> on_line_search;
 };
 
 class BackwardEuler : public Integrator {

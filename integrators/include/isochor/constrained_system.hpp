@@ -68,6 +68,15 @@ class ConstrainedSystem {
   // every point the constraint depends on, driven ones included.
   virtual void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
                                             std::vector<std::vector<double>>& rows) = 0;
+  // The potential energy V(q) at time t whose gradient is minus the conservative forces
+  // (elasticity, gravity, dead loads, contact), for the merit function of backward Euler's line
+  // search. False if the system has none (a follower load has no potential); a non-finite V (an
+  // element where its energy is not defined) is returned as it is.
+  virtual bool potential(double /*t*/, const VectorXd& /*q*/, double& /*V*/) { return false; }
+  // Fill force Jacobians with every element's Hessian projected onto the positive semi-definite
+  // matrices (negative eigenvalues set to zero), the residual unchanged. False if the system
+  // cannot (then the request is refused).
+  virtual bool set_hessian_projection(bool /*on*/) { return false; }
   // Naive volume rescaling (the CNH paper's section 8.3 baseline): moves q so that the body's
   // total volume is its rest volume again, by scaling about the centre of mass. Returns false if
   // the model has no such operation.

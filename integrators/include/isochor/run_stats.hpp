@@ -20,6 +20,10 @@ struct RunStats {
   long linear_fallbacks = 0;    // krylov: setups solved by CHOLMOD after PCG failed
   double symbolic_seconds = 0;  // of factor_seconds: ordering and symbolic analysis
   double projection_seconds = 0;  // IDA: projecting interpolated frames onto the constraints
+  // Backward Euler as an optimisation: Newton iterations whose step the line search cut,
+  // matrices shifted because they could not be factored or gave no descent, and steps
+  // retried as half steps after a failure.
+  long line_search_cuts = 0, regularisations = 0, step_halvings = 0;
   struct FrameSample {
     long steps, newton_iterations, error_test_failures, newton_failures, jacobian_evals;
     int order;

@@ -84,6 +84,9 @@ struct ElementPass {
   const Eigen::VectorXd* v = nullptr;
   double v_scale = 0.0;
   Eigen::VectorXd* Kv = nullptr;
+  // values and values2 get each element's Hessian projected onto the positive semi-definite
+  // matrices (its negative eigenvalues set to zero); grad and Kv stay exact.
+  bool project = false;
 };
 
 class ElasticAssembly {
@@ -102,7 +105,7 @@ class ElasticAssembly {
   // values[slot] += scale * Hessian over the free dofs (values sized pattern().nnz()); with
   // values2, also values2[slot] += scale2 * Hessian from the same element Hessians.
   void add_hessian(const Points& x, double scale, double* values, double scale2 = 0.0,
-                   double* values2 = nullptr) const;
+                   double* values2 = nullptr, bool project = false) const;
   // out += scale * K(x) v over all nodes (Rayleigh damping; v of every node, 3 N).
   void add_hessian_times(const Points& x, const Eigen::VectorXd& v, double scale, Eigen::VectorXd& out) const;
   // Per-tet pressure of the material, -tr(sigma)/3 (for CNH: -lambda U'(J) plus the deviatoric

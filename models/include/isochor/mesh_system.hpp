@@ -45,6 +45,11 @@ class MeshSystem : public SceneSystem {
   std::vector<double> breakpoints() const override { return scene_.breakpoints(); }
   double force_scale() const override { return force_scale_; }
   bool rescale_volume(double t, VectorXd& q) override;
+  bool potential(double t, const VectorXd& q, double& V) override;
+  bool set_hessian_projection(bool on) override {
+    project_hessian_ = on;
+    return true;
+  }
   double constraint_scale(int j) const override { return row_scale_[j]; }
 
   // Positions and velocities of every node (3 N) for a state of the unknowns at time t
@@ -82,6 +87,7 @@ class MeshSystem : public SceneSystem {
   void add_constraints(std::unique_ptr<ConstraintSet> set);
   Eigen::VectorXd node_mass_, dof_mass_;
   double force_scale_ = 1.0;
+  bool project_hessian_ = false;
   // State cache: positions and velocities of every node.
   Points x_;
   Eigen::VectorXd xdot_, grad_, kv_;
