@@ -268,7 +268,7 @@ TEST(IdaRun, FixedBottomCubeStartsAtTightTolerances) {
   // and the run failed at t = 0 (IDA_CONV_FAIL) on 8^3 cells; with the first step set from the
   // position tolerance it runs, and the global volume holds at every frame.
   const auto dir = test::temp_dir();
-  Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/cube_gravity.toml",
+  Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/cube_collapse.toml",
                         {"mesh.cells=8", "frames.duration=0.01", "frames.rate=500.0", "integrator.rtol=1e-7", "integrator.atol=1e-10"});
   const RunSummary r = run_scene(sc, (dir / "cube.h5").string(), false);
   EXPECT_EQ(r.frames, 6);

@@ -4,6 +4,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 
@@ -58,7 +60,16 @@ struct BackwardEuler::Impl {
   bool have_previous = false;
   // The step as a minimisation: on when asked and the system has a potential (run() decides).
   bool line_search = false;
-  std::vector<double> Dbar;  // the damping matrix -df/dv of the last fresh Jacobian
+  // Which merit the line search uses, decided at a step's first line search and kept for the
+  // step: the incremental potential (the scene's forces are a potential: no damping in the last
+  // fresh Jacobian) or, where damping acts, the residual's weighted square norm (psi, below).
+  bool damped = false;       // the last fresh Jacobian had damping (-df/dv != 0)
+  int merit_kind = -1;       // this step: -1 undecided, 0 energy, 1 residual
+  VectorXd cw;               // psi's weights of the constraint rows, for this step
+  // ISOCHOR_TRACE_NEWTON=T: one line per Newton iteration of every step ending after time T, on
+  // stderr (docs/scenes.md, diagnosing a step that fails).
+  const double trace_from = std::getenv("ISOCHOR_TRACE_NEWTON") ? std::atof(std::getenv("ISOCHOR_TRACE_NEWTON"))
+                                                                : std::numeric_limits<double>::infinity();
   VectorXd nu;               // the l1 merit's weights, per constraint (grow within a step)
 
   // One step from (qn, vn) at t to t1: q, v, lambda on return. False with a reason on failure.
@@ -102,19 +113,23 @@ struct BackwardEuler::Impl {
   }
 
   // The incremental potential without its constraint term, at q with V = V(q) (Impl's comment in
-  // backward_euler.hpp): inertia, potential, and the damping quadratic with the matrix Dbar.
-  double incremental_potential(double h, double V, const VectorXd& q, const VectorXd& qn, const VectorXd& qt) const {
-    const VectorXd& M = sys.mass();
-    double phi = 0.5 * (q - qt).cwiseAbs2().dot(M) / (h * h) + V;
-    if (!Dbar.empty()) {
-      const SparsePattern& p = sys.pattern();
-      const VectorXd u = q - qn;
-      double d = 0.0;
-      for (Index c = 0; c < n; ++c)
-        for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k) d += u[p.row_ind[k]] * Dbar[k] * u[c];
-      phi += 0.5 * d / h;
-    }
-    return phi;
+  // backward_euler.hpp), for a scene without damping: inertia and potential.
+  double incremental_potential(double h, double V, const VectorXd& q, const VectorXd& qt) const {
+    return 0.5 * (q - qt).cwiseAbs2().dot(sys.mass()) / (h * h) + V;
+  }
+  // The residual merit psi = |R1|^2 / 2 + sum_j (cw_j g_j)^2 / 2 at (x, lam), R1 the force residual
+  // (N) and cw_j = (mean diagonal of the step matrix) / |G_j| turning a volume error into a force:
+  // along a Newton direction of the exact Jacobian its slope is -2 psi. r, gx: R1 and g there.
+  double residual_merit(double t1, double h, const VectorXd& x, const VectorXd& lam, const VectorXd& qn,
+                        const VectorXd& qt, VectorXd& f, VectorXd& r, VectorXd& gx) {
+    const VectorXd vx = (x - qn) / h;
+    sys.force(t1, x, vx, f);
+    r = sys.mass().cwiseProduct(x - qt) / (h * h) - f;
+    add_constraint_terms(sys, t1, x, lam, G, gx, r.data());
+    return psi_of(r, gx);
+  }
+  double psi_of(const VectorXd& r, const VectorXd& gx) const {
+    return 0.5 * r.squaredNorm() + (m ? 0.5 * cw.cwiseProduct(gx).squaredNorm() : 0.0);
   }
   double l1(const VectorXd& g) const { return m ? nu.dot(g.cwiseAbs()) : 0.0; }
 
@@ -134,8 +149,22 @@ struct BackwardEuler::Impl {
     const VectorXd qt = qn + h * vn;  // where inertia alone would carry the nodes
     // Predictor: the velocity extrapolated linearly from the last two steps (the first step and
     // the semi-implicit variant, whose single iteration starts from it, use q_n + h v_n).
+    // With the line search, the extrapolation is kept only where its merit (the multipliers of the
+    // last step weighing the constraints) is below that of q_n + h v_n: at large steps in an
+    // oscillating body the extrapolated velocity can overshoot by far.
     if (have_previous && !opt.semi_implicit) q = qn + h * (2 * vn - v_previous);
     else q = qt;
+    if (line_search && have_previous && !opt.semi_implicit && !damped) {
+      const VectorXd w = 2.0 * lambda.cwiseAbs();
+      auto merit = [&](const VectorXd& x) {
+        double V;
+        if (!sys.potential(t1, x, V) || !std::isfinite(V)) return std::numeric_limits<double>::infinity();
+        VectorXd gx(m);
+        if (m) sys.constraint(t1, x, gx);
+        return incremental_potential(h, V, x, qt) + (m ? w.dot(gx.cwiseAbs()) : 0.0);
+      };
+      if (!(merit(q) <= merit(qt))) q = qt;
+    }
     VectorXd f(n), R1(n), R0, R2(m), g(m), dq(n), dl(m), rhs(n), qtrial, gtrial(m);
     VectorXd kr(use_kkt ? n + m : 0);
     const int iterations = opt.semi_implicit ? 1 : opt.max_newton;
@@ -143,6 +172,7 @@ struct BackwardEuler::Impl {
     int since = 0;                 // iterations since then
     bool fresh_this_step = false;  // a factorisation of this step's matrix
     if (line_search) nu.setZero(m);
+    merit_kind = -1;
     double Vq = std::numeric_limits<double>::quiet_NaN();  // V(q), when known
     for (int it = 0; it < iterations; ++it) {
       const auto ta = Clock::now();
@@ -165,10 +195,7 @@ struct BackwardEuler::Impl {
         if (m) sys.add_constraint_hessian(t1, q, lambda, 1.0, K.data());
         for (std::size_t k = 0; k < Sv.size(); ++k) Sv[k] = K[k] + D[k] / h;
         for (Index i = 0; i < n; ++i) Sv[diag[i]] += M[i] / (h * h);
-        if (line_search) {
-          if (std::any_of(D.begin(), D.end(), [](double d) { return d != 0.0; })) Dbar = D;
-          else Dbar.clear();
-        }
+        damped = std::any_of(D.begin(), D.end(), [](double d) { return d != 0.0; });
       }
       stats.assembly_seconds += seconds_since(ta);
       // Factor (when fresh) and solve; with the line search, a matrix that cannot be factored or
@@ -221,6 +248,23 @@ struct BackwardEuler::Impl {
           return false;
         }
         if (!line_search) break;
+        if (merit_kind < 0) {
+          merit_kind = damped ? 1 : 0;
+          if (merit_kind == 1 && m) {  // psi's weights: a volume error as a force
+            double s = 0.0;
+            for (Index i = 0; i < n; ++i) s += std::abs(Sv[diag[i]]);
+            s /= static_cast<double>(n);
+            cw.resize(m);
+            for (Index j = 0; j < m; ++j) {
+              const double gn = Eigen::Map<const VectorXd>(G[j].data(), static_cast<Index>(G[j].size())).norm();
+              cw[j] = gn > 0 ? s / gn : 0.0;
+            }
+          }
+        }
+        if (solved && merit_kind == 1) {
+          slope = -2.0 * psi_of(R1, g);  // Newton's direction with the exact Jacobian
+          break;
+        }
         if (solved) {
           // The l1 merit's weights exceed the new multipliers, so that a Newton direction of a
           // positive definite matrix descends; its slope along dq.
@@ -244,30 +288,47 @@ struct BackwardEuler::Impl {
       const double size = dq.cwiseAbs().maxCoeff();
       const double tol = opt.newton_tol * (q - qn).cwiseAbs().maxCoeff() + opt.newton_atol;
       if (line_search && size > 100.0 * tol) {
-        // Backtracking (Armijo, halving) on the l1 merit; rounding in the merit's value is allowed.
-        if (!std::isfinite(Vq) && !sys.potential(t1, q, Vq)) Vq = std::numeric_limits<double>::infinity();
-        const double phi_q = incremental_potential(h, Vq, q, qn, qt);
-        const double phi0 = phi_q + l1(g);
-        const double noise = 1e-13 * (std::abs(phi_q) + std::abs(Vq) + l1(g));
-        for (;;) {
+        // Backtracking (Armijo, halving) on the step's merit; rounding in its value is allowed. A
+        // search that fails with a reused matrix is redone with a fresh one.
+        double merit0, noise;
+        if (merit_kind == 0) {
+          if (!std::isfinite(Vq) && !sys.potential(t1, q, Vq)) Vq = std::numeric_limits<double>::infinity();
+          const double phi_q = incremental_potential(h, Vq, q, qt);
+          merit0 = phi_q + l1(g);
+          noise = 1e-13 * (std::abs(phi_q) + std::abs(Vq) + l1(g));
+        } else {
+          merit0 = psi_of(R1, g);
+          noise = 0.0;
+        }
+        bool found = false;
+        for (; alpha >= 1e-10; alpha *= 0.5) {
           qtrial = q + alpha * dq;
-          double Vt = std::numeric_limits<double>::quiet_NaN();
-          sys.potential(t1, qtrial, Vt);
-          double phi = std::numeric_limits<double>::infinity();
-          if (std::isfinite(Vt)) {
-            if (m) sys.constraint(t1, qtrial, gtrial);
-            phi = incremental_potential(h, Vt, qtrial, qn, qt) + l1(gtrial);
+          double merit = std::numeric_limits<double>::infinity(), Vt = std::numeric_limits<double>::quiet_NaN();
+          if (merit_kind == 0) {
+            sys.potential(t1, qtrial, Vt);
+            if (std::isfinite(Vt)) {
+              if (m) sys.constraint(t1, qtrial, gtrial);
+              merit = incremental_potential(h, Vt, qtrial, qt) + l1(gtrial);
+            }
+          } else {
+            VectorXd rt;
+            merit = residual_merit(t1, h, qtrial, lambda + alpha * dl, qn, qt, f, rt, gtrial);
           }
-          if (std::isfinite(phi) && phi <= phi0 + 1e-4 * alpha * slope + noise) {
+          if (std::isfinite(merit) && merit <= merit0 + 1e-4 * alpha * slope + noise) {
             Vq = Vt;
-            if (opt.on_line_search) opt.on_line_search(phi0, phi, alpha);
+            if (opt.on_line_search) opt.on_line_search(merit0, merit, alpha);
+            found = true;
             break;
           }
-          alpha *= 0.5;
-          if (alpha < 1e-10) {
-            reason = "the line search found no decrease of the merit function along Newton's direction";
-            return false;
+        }
+        if (!found) {
+          if (!fresh) {
+            refresh = true;
+            Vq = std::numeric_limits<double>::quiet_NaN();
+            continue;
           }
+          reason = "the line search found no decrease of the merit function along Newton's direction";
+          return false;
         }
         if (alpha < 1.0) {
           stats.line_search_cuts++;
@@ -276,6 +337,9 @@ struct BackwardEuler::Impl {
       } else {
         Vq = std::numeric_limits<double>::quiet_NaN();
       }
+      if (trace_from <= t1)
+        std::fprintf(stderr, "newton t=%.9g it=%d fresh=%d shift=%g |dq|=%.3e tol=%.3e alpha=%g slope=%.3e |R|=%.3e\n", t1,
+                     it, static_cast<int>(fresh), shift, size, tol, alpha, slope, R1.norm());
       q += alpha * dq;
       if (m) lambda += alpha * dl;
       stats.newton_iterations++;
