@@ -414,7 +414,15 @@ RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
   auto sample = [&]() {
     return RunStats::FrameSample{s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 1, h};
   };
-  run_fixed_steps(times, h, s.opt.max_steps, q, v, lambda, step, s.stats, sample, on_frame);
+  // Frames between steps: the interpolation projected back onto the constraints (as IDA's frames).
+  FrameCorrection between;
+  if (s.m > 0)
+    between = [&](double t, VectorXd& qf, VectorXd& vf) {
+      const auto tp = Clock::now();
+      project_state(s.sys, t, qf, vf);
+      s.stats.projection_seconds += seconds_since(tp);
+    };
+  run_fixed_steps(times, h, s.opt.max_steps, q, v, lambda, step, s.stats, sample, on_frame, between);
   return s.stats;
 }
 

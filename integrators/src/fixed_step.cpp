@@ -8,7 +8,8 @@ namespace isochor {
 
 void run_fixed_steps(const std::vector<double>& times, double h, long max_steps, VectorXd q, VectorXd v,
                      VectorXd lambda, const FixedStep& step, RunStats& stats,
-                     const std::function<RunStats::FrameSample()>& sample, const FrameCallback& on_frame) {
+                     const std::function<RunStats::FrameSample()>& sample, const FrameCallback& on_frame,
+                     const FrameCorrection& between) {
   const auto wall0 = Clock::now();
   VectorXd q1, v1, l1 = lambda;
   const double t0 = times.front();
@@ -30,7 +31,8 @@ void run_fixed_steps(const std::vector<double>& times, double h, long max_steps,
     if (++stats.steps > max_steps) throw IntegrationError(t1, "more than " + std::to_string(max_steps) + " steps");
     while (k < times.size() && times[k] <= t1 + 1e-9 * h) {
       const double w = std::clamp((times[k] - t) / h, 0.0, 1.0);
-      const VectorXd qf = (1 - w) * q + w * q1, vf = (1 - w) * v + w * v1;
+      VectorXd qf = (1 - w) * q + w * q1, vf = (1 - w) * v + w * v1;
+      if (between && w > 0.0 && w < 1.0) between(times[k], qf, vf);
       on_frame(static_cast<int>(k), times[k], qf, vf, l1, sample());
       ++k;
     }

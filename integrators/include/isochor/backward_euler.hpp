@@ -61,7 +61,8 @@ class BackwardEuler : public Integrator {
  public:
   BackwardEuler(ConstrainedSystem& system, BackwardEulerOptions options);
   ~BackwardEuler() override;
-  // Steps from frame_times.front(); frames between steps are interpolated linearly. Throws
+  // Steps from frame_times.front(); frames between steps are interpolated linearly and projected
+  // onto the constraints (initial_state.hpp: project_state). Throws
   // IntegrationError (time, reason) after delivering every frame reached.
   RunStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
 

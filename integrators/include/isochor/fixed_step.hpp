@@ -1,6 +1,7 @@
 // The frame loop shared by the fixed-step integrators (backward Euler, XPBD, Hong's mass-spring
 // step): step from frame_times.front() with step h, deliver frames between steps by linear
-// interpolation of (q, v) (exact at step times; multipliers of the step's end), and report a
+// interpolation of (q, v) (exact at step times; multipliers of the step's end; optionally
+// corrected, below), and report a
 // failed step as an IntegrationError at the time it was aiming for. Step k ends at t0 + k h
 // (computed, not accumulated).
 #pragma once
@@ -18,9 +19,13 @@ using FixedStep = std::function<bool(double t, double t1, const VectorXd& q, con
                                      VectorXd& lambda1, std::string& reason)>;
 
 // Runs the loop from the initial state; `stats` gets steps and wall time, and `sample` is called
-// for each frame's statistics (with stats.steps up to date).
+// for each frame's statistics (with stats.steps up to date). `between`, when given, corrects a
+// frame that falls strictly between two steps (t, q, v) after the linear interpolation: backward
+// Euler projects it onto the constraints, which an interpolation does not keep.
+using FrameCorrection = std::function<void(double t, VectorXd& q, VectorXd& v)>;
 void run_fixed_steps(const std::vector<double>& frame_times, double h, long max_steps, VectorXd q, VectorXd v,
                      VectorXd lambda, const FixedStep& step, RunStats& stats,
-                     const std::function<RunStats::FrameSample()>& sample, const FrameCallback& on_frame);
+                     const std::function<RunStats::FrameSample()>& sample, const FrameCallback& on_frame,
+                     const FrameCorrection& between = nullptr);
 
 }  // namespace isochor
