@@ -60,12 +60,14 @@ struct BackwardEuler::Impl {
   bool have_previous = false;
   // The step as a minimisation: on when asked and the system has a potential (run() decides).
   bool line_search = false;
-  // Which merit the line search uses, decided at a step's first line search and kept for the
-  // step: the incremental potential (the scene's forces are a potential: no damping in the last
-  // fresh Jacobian) or, where damping acts, the residual's weighted square norm (psi, below).
-  bool damped = false;       // the last fresh Jacobian had damping (-df/dv != 0)
-  int merit_kind = -1;       // this step: -1 undecided, 0 energy, 1 residual
-  VectorXd cw;               // psi's weights of the constraint rows, for this step
+  // Variational damping (line search in a scene with damping, run() decides): per step the
+  // damping matrix Dn = -df/dv at the step's start (q_n, v_n; time t_n+1), projected to be positive
+  // semi-definite, and fd0, the damping force of the driven nodes' motion there, are frozen; the
+  // system's own damping is off, and the step's forces are f(q) - Dn (q - q_n) / h + fd0: the
+  // gradient of Phi + (q - q_n)^T Dn (q - q_n) / (2 h) - fd0 . (q - q_n), exact for the merit.
+  bool variational = false;
+  std::vector<double> Dn;
+  VectorXd fd0;
   // ISOCHOR_TRACE_NEWTON=T: one line per Newton iteration of every step ending after time T, on
   // stderr (docs/scenes.md, diagnosing a step that fails).
   const double trace_from = std::getenv("ISOCHOR_TRACE_NEWTON") ? std::atof(std::getenv("ISOCHOR_TRACE_NEWTON"))
@@ -117,19 +119,18 @@ struct BackwardEuler::Impl {
   double incremental_potential(double h, double V, const VectorXd& q, const VectorXd& qt) const {
     return 0.5 * (q - qt).cwiseAbs2().dot(sys.mass()) / (h * h) + V;
   }
-  // The residual merit psi = |R1|^2 / 2 + sum_j (cw_j g_j)^2 / 2 at (x, lam), R1 the force residual
-  // (N) and cw_j = (mean diagonal of the step matrix) / |G_j| turning a volume error into a force:
-  // along a Newton direction of the exact Jacobian its slope is -2 psi. r, gx: R1 and g there.
-  double residual_merit(double t1, double h, const VectorXd& x, const VectorXd& lam, const VectorXd& qn,
-                        const VectorXd& qt, VectorXd& f, VectorXd& r, VectorXd& gx) {
-    const VectorXd vx = (x - qn) / h;
-    sys.force(t1, x, vx, f);
-    r = sys.mass().cwiseProduct(x - qt) / (h * h) - f;
-    add_constraint_terms(sys, t1, x, lam, G, gx, r.data());
-    return psi_of(r, gx);
+  // y = A x for values A in the (symmetric, both triangles) pattern.
+  VectorXd pattern_times(const std::vector<double>& A, const VectorXd& x) const {
+    const SparsePattern& p = sys.pattern();
+    VectorXd y = VectorXd::Zero(n);
+    for (Index c = 0; c < n; ++c)
+      for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k) y[p.row_ind[k]] += A[k] * x[c];
+    return y;
   }
-  double psi_of(const VectorXd& r, const VectorXd& gx) const {
-    return 0.5 * r.squaredNorm() + (m ? 0.5 * cw.cwiseProduct(gx).squaredNorm() : 0.0);
+  // The frozen damping's share of the incremental potential (variational damping).
+  double damping_potential(double h, const VectorXd& q, const VectorXd& qn) const {
+    const VectorXd u = q - qn;
+    return 0.5 * u.dot(pattern_times(Dn, u)) / h - fd0.dot(u);
   }
   double l1(const VectorXd& g) const { return m ? nu.dot(g.cwiseAbs()) : 0.0; }
 
@@ -154,16 +155,40 @@ struct BackwardEuler::Impl {
     // oscillating body the extrapolated velocity can overshoot by far.
     if (have_previous && !opt.semi_implicit) q = qn + h * (2 * vn - v_previous);
     else q = qt;
-    if (line_search && have_previous && !opt.semi_implicit && !damped) {
+    if (line_search && have_previous && !opt.semi_implicit) {
       const VectorXd w = 2.0 * lambda.cwiseAbs();
       auto merit = [&](const VectorXd& x) {
         double V;
         if (!sys.potential(t1, x, V) || !std::isfinite(V)) return std::numeric_limits<double>::infinity();
         VectorXd gx(m);
         if (m) sys.constraint(t1, x, gx);
-        return incremental_potential(h, V, x, qt) + (m ? w.dot(gx.cwiseAbs()) : 0.0);
+        return incremental_potential(h, V, x, qt) + (variational ? damping_potential(h, x, qn) : 0.0) +
+               (m ? w.dot(gx.cwiseAbs()) : 0.0);
       };
       if (!(merit(q) <= merit(qt))) q = qt;
+    }
+    // Variational damping: freeze Dn and fd0 at the step's start (q_n, v_n: the same whatever the
+    // predictor, so a resumed run repeats the steps); the system's damping stays off until the
+    // step returns.
+    struct DampingOff {
+      ConstrainedSystem* sys = nullptr;
+      ~DampingOff() {
+        if (sys) sys->set_damping_forces(true);
+      }
+    } damping_off;
+    if (variational) {
+      sys.set_damping_forces(true);
+      std::fill(Dn.begin(), Dn.end(), 0.0);
+      sys.set_hessian_projection(true);
+      sys.add_force_jacobians(t1, qn, vn, nullptr, Dn.data());
+      sys.set_hessian_projection(opt.project_hessian);
+      const VectorXd still = VectorXd::Zero(n);
+      VectorXd fa, fb;
+      sys.force(t1, qn, still, fa);
+      sys.set_damping_forces(false);
+      damping_off.sys = &sys;
+      sys.force(t1, qn, still, fb);
+      fd0 = fa - fb;
     }
     VectorXd f(n), R1(n), R0, R2(m), g(m), dq(n), dl(m), rhs(n), qtrial, gtrial(m);
     VectorXd kr(use_kkt ? n + m : 0);
@@ -172,7 +197,6 @@ struct BackwardEuler::Impl {
     int since = 0;                 // iterations since then
     bool fresh_this_step = false;  // a factorisation of this step's matrix
     if (line_search) nu.setZero(m);
-    merit_kind = -1;
     double Vq = std::numeric_limits<double>::quiet_NaN();  // V(q), when known
     for (int it = 0; it < iterations; ++it) {
       const auto ta = Clock::now();
@@ -184,6 +208,7 @@ struct BackwardEuler::Impl {
       }
       sys.force_and_jacobians(t1, q, v, f, fresh ? K.data() : nullptr, fresh ? D.data() : nullptr);
       R1 = M.cwiseProduct(q - qt) / (h * h) - f;
+      if (variational) R1 += pattern_times(Dn, q - qn) / h - fd0;
       if (line_search) R0 = R1;  // the gradient of the incremental potential (with D at q)
       add_constraint_terms(sys, t1, q, lambda, G, g, R1.data());
       if (m) R2 = g;
@@ -193,9 +218,9 @@ struct BackwardEuler::Impl {
       }
       if (fresh) {
         if (m) sys.add_constraint_hessian(t1, q, lambda, 1.0, K.data());
-        for (std::size_t k = 0; k < Sv.size(); ++k) Sv[k] = K[k] + D[k] / h;
+        const std::vector<double>& Dm = variational ? Dn : D;
+        for (std::size_t k = 0; k < Sv.size(); ++k) Sv[k] = K[k] + Dm[k] / h;
         for (Index i = 0; i < n; ++i) Sv[diag[i]] += M[i] / (h * h);
-        damped = std::any_of(D.begin(), D.end(), [](double d) { return d != 0.0; });
       }
       stats.assembly_seconds += seconds_since(ta);
       // Factor (when fresh) and solve; with the line search, a matrix that cannot be factored or
@@ -248,23 +273,6 @@ struct BackwardEuler::Impl {
           return false;
         }
         if (!line_search) break;
-        if (merit_kind < 0) {
-          merit_kind = damped ? 1 : 0;
-          if (merit_kind == 1 && m) {  // psi's weights: a volume error as a force
-            double s = 0.0;
-            for (Index i = 0; i < n; ++i) s += std::abs(Sv[diag[i]]);
-            s /= static_cast<double>(n);
-            cw.resize(m);
-            for (Index j = 0; j < m; ++j) {
-              const double gn = Eigen::Map<const VectorXd>(G[j].data(), static_cast<Index>(G[j].size())).norm();
-              cw[j] = gn > 0 ? s / gn : 0.0;
-            }
-          }
-        }
-        if (solved && merit_kind == 1) {
-          slope = -2.0 * psi_of(R1, g);  // Newton's direction with the exact Jacobian
-          break;
-        }
         if (solved) {
           // The l1 merit's weights exceed the new multipliers, so that a Newton direction of a
           // positive definite matrix descends; its slope along dq.
@@ -290,29 +298,19 @@ struct BackwardEuler::Impl {
       if (line_search && size > 100.0 * tol) {
         // Backtracking (Armijo, halving) on the step's merit; rounding in its value is allowed. A
         // search that fails with a reused matrix is redone with a fresh one.
-        double merit0, noise;
-        if (merit_kind == 0) {
-          if (!std::isfinite(Vq) && !sys.potential(t1, q, Vq)) Vq = std::numeric_limits<double>::infinity();
-          const double phi_q = incremental_potential(h, Vq, q, qt);
-          merit0 = phi_q + l1(g);
-          noise = 1e-13 * (std::abs(phi_q) + std::abs(Vq) + l1(g));
-        } else {
-          merit0 = psi_of(R1, g);
-          noise = 0.0;
-        }
+        if (!std::isfinite(Vq) && !sys.potential(t1, q, Vq)) Vq = std::numeric_limits<double>::infinity();
+        const double phi_q = incremental_potential(h, Vq, q, qt) + (variational ? damping_potential(h, q, qn) : 0.0);
+        const double merit0 = phi_q + l1(g);
+        const double noise = 1e-13 * (std::abs(phi_q) + std::abs(Vq) + l1(g));
         bool found = false;
         for (; alpha >= 1e-10; alpha *= 0.5) {
           qtrial = q + alpha * dq;
           double merit = std::numeric_limits<double>::infinity(), Vt = std::numeric_limits<double>::quiet_NaN();
-          if (merit_kind == 0) {
-            sys.potential(t1, qtrial, Vt);
-            if (std::isfinite(Vt)) {
-              if (m) sys.constraint(t1, qtrial, gtrial);
-              merit = incremental_potential(h, Vt, qtrial, qt) + l1(gtrial);
-            }
-          } else {
-            VectorXd rt;
-            merit = residual_merit(t1, h, qtrial, lambda + alpha * dl, qn, qt, f, rt, gtrial);
+          sys.potential(t1, qtrial, Vt);
+          if (std::isfinite(Vt)) {
+            if (m) sys.constraint(t1, qtrial, gtrial);
+            merit = incremental_potential(h, Vt, qtrial, qt) + (variational ? damping_potential(h, qtrial, qn) : 0.0) +
+                    l1(gtrial);
           }
           if (std::isfinite(merit) && merit <= merit0 + 1e-4 * alpha * slope + noise) {
             Vq = Vt;
@@ -401,7 +399,12 @@ RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
   VectorXd q, v, a, lambda;
   consistent_initial_state(s.sys, times.front(), q, v, a, lambda);
   double V0;
-  s.line_search = s.opt.line_search && !s.opt.semi_implicit && s.sys.potential(times.front(), q, V0);
+  // The line search needs a potential, and where the scene damps, the switch that freezes the
+  // damping per step (without it: plain Newton).
+  s.line_search = s.opt.line_search && !s.opt.semi_implicit && s.sys.potential(times.front(), q, V0) &&
+                  (!s.sys.has_damping() || s.sys.set_damping_forces(true));
+  s.variational = s.line_search && s.sys.has_damping();
+  if (s.variational) s.Dn.assign(s.sys.pattern().nnz(), 0.0);
   auto step = [&](double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q1, VectorXd& v1, VectorXd& l1,
                   std::string& reason) {
     if (!s.advance(t, t1, qn, vn, q1, v1, l1, reason)) return false;

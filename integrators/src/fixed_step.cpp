@@ -30,7 +30,10 @@ void run_fixed_steps(const std::vector<double>& times, double h, long max_steps,
     }
     if (++stats.steps > max_steps) throw IntegrationError(t1, "more than " + std::to_string(max_steps) + " steps");
     while (k < times.size() && times[k] <= t1 + 1e-9 * h) {
-      const double w = std::clamp((times[k] - t) / h, 0.0, 1.0);
+      // A frame within rounding of a step's end (or start) is that step's state, not a blend.
+      double w = std::clamp((times[k] - t) / h, 0.0, 1.0);
+      if (w > 1.0 - 1e-9) w = 1.0;
+      if (w < 1e-9) w = 0.0;
       VectorXd qf = (1 - w) * q + w * q1, vf = (1 - w) * v + w * v1;
       if (between && w > 0.0 && w < 1.0) between(times[k], qf, vf);
       on_frame(static_cast<int>(k), times[k], qf, vf, l1, sample());

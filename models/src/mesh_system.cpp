@@ -102,16 +102,17 @@ void MeshSystem::force(double t, const VectorXd& q, const VectorXd& v, VectorXd&
 void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq, double* neg_dfdv) {
   set_state(t, q, v);
   // -df/dv = alpha M + beta K: the element Hessians of K are computed once for both outputs.
-  double* damped = neg_dfdv && damping_.beta != 0 ? neg_dfdv : nullptr;
+  const RayleighDamping damping = damping_on_ ? damping_ : RayleighDamping{};
+  double* damped = neg_dfdv && damping.beta != 0 ? neg_dfdv : nullptr;
   if (neg_dfdq) {
-    elastic_->add_hessian(x_, 1.0, neg_dfdq, damping_.beta, damped, project_hessian_);
+    elastic_->add_hessian(x_, 1.0, neg_dfdq, damping.beta, damped, project_hessian_);
     external_->add_hessian(x_, 1.0, neg_dfdq);
     pressure_loads_->add_jacobian(x_, neg_dfdq);
   } else if (damped) {
-    elastic_->add_hessian(x_, damping_.beta, damped, 0.0, nullptr, project_hessian_);
+    elastic_->add_hessian(x_, damping.beta, damped, 0.0, nullptr, project_hessian_);
   }
-  external_->add_damping_jacobians(x_, xdot_, neg_dfdq, neg_dfdv);
-  if (neg_dfdv && damping_.alpha != 0) RayleighDamping{damping_.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
+  if (damping_on_) external_->add_damping_jacobians(x_, xdot_, neg_dfdq, neg_dfdv);
+  if (neg_dfdv && damping.alpha != 0) RayleighDamping{damping.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
 }
 
 void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd& v, VectorXd& f, double* neg_dfdq,
@@ -123,30 +124,33 @@ void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd
   p.grad = &grad_;
   p.values = neg_dfdq;
   p.project = project_hessian_;
-  if (neg_dfdv && damping_.beta != 0) {
+  const RayleighDamping damping = damping_on_ ? damping_ : RayleighDamping{};
+  if (neg_dfdv && damping.beta != 0) {
     p.values2 = neg_dfdv;
-    p.scale2 = damping_.beta;
+    p.scale2 = damping.beta;
   }
-  if (damping_.beta != 0) {
+  if (damping.beta != 0) {
     kv_.setZero(3 * x_.cols());
     p.v = &xdot_;
-    p.v_scale = damping_.beta;
+    p.v_scale = damping.beta;
     p.Kv = &kv_;
   }
   elastic_->evaluate(x_, p);
   external_->add_gradient(x_, grad_);
   if (neg_dfdq) external_->add_hessian(x_, 1.0, neg_dfdq);
-  external_->add_damping(x_, xdot_, grad_);
-  external_->add_damping_jacobians(x_, xdot_, neg_dfdq, neg_dfdv);
+  if (damping_on_) {
+    external_->add_damping(x_, xdot_, grad_);
+    external_->add_damping_jacobians(x_, xdot_, neg_dfdq, neg_dfdv);
+  }
   pressure_loads_->add_gradient(x_, grad_);
   if (neg_dfdq) pressure_loads_->add_jacobian(x_, neg_dfdq);
-  if (damping_.beta != 0) grad_ += kv_;
+  if (damping.beta != 0) grad_ += kv_;
   f.resize(num_dofs());
   for (int k = 0; k < dofs_.num_free(); ++k) {
     const int n = dofs_.free_nodes[k];
-    f.segment<3>(3 * k) = -grad_.segment<3>(3 * n) - damping_.alpha * node_mass_[n] * xdot_.segment<3>(3 * n);
+    f.segment<3>(3 * k) = -grad_.segment<3>(3 * n) - damping.alpha * node_mass_[n] * xdot_.segment<3>(3 * n);
   }
-  if (neg_dfdv && damping_.alpha != 0) RayleighDamping{damping_.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
+  if (neg_dfdv && damping.alpha != 0) RayleighDamping{damping.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
 }
 
 void MeshSystem::loads(Points& out) const {

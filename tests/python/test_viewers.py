@@ -69,8 +69,13 @@ def test_paraview_opens_the_run_with_time_pressure_and_zones(run_with_zones, tmp
     p = subprocess.run([EXE, "paraview", str(run_with_zones), "--out", str(script)], capture_output=True, text=True)
     assert p.returncode == 0, p.stderr
     png = tmp_path / "frame.png"
-    p = subprocess.run(["xvfb-run", "-a", "pvpython", str(script), "--screenshot", str(png), "--frame", "3",
-                        "--size", "600,300"], capture_output=True, text=True, timeout=120)
+    # On a loaded machine pvpython may reach for the X server before Xvfb listens ("bad X server
+    # connection", seen once in a parallel test run): that, and only that, is retried.
+    for attempt in range(3):
+        p = subprocess.run(["xvfb-run", "-a", "pvpython", str(script), "--screenshot", str(png), "--frame", "3",
+                            "--size", "600,300"], capture_output=True, text=True, timeout=120)
+        if p.returncode == 0 or "bad X server connection" not in p.stdout + p.stderr:
+            break
     assert p.returncode == 0, p.stdout + p.stderr
     assert "isochor paraview: 6 time steps (0 .. 0.05 s), arrays ['position', 'pressure', 'zone']" in p.stdout
     import matplotlib.image

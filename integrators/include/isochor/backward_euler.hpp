@@ -7,19 +7,20 @@
 // displacement. "Semi-implicit": exactly one Newton iteration per step, from q = q_n + h v_n,
 // with a fresh matrix. Step k ends at t0 + k h.
 //
-// As an optimisation (line_search, the default where the system has a potential): without
-// damping, the step minimises the incremental potential
-//   Phi(q) = |q - q_n - h v_n|^2_M / (2 h^2) + V(q)
+// As an optimisation (line_search, the default where the system has a potential): the step
+// minimises the incremental potential
+//   Phi(q) = |q - q_n - h v_n|^2_M / (2 h^2) + V(q) [+ (q - q_n)^T Dn (q - q_n) / (2 h) - fd0 . (q - q_n)]
 // subject to g(q, t) = 0, whose stationary points are exactly the steps above. Each Newton
 // direction is cut back (Armijo, halving) until the exact l1 merit Phi + sum_j nu_j |g_j|
 // (nu_j = 2 |lambda_j|) decreases; a direction that does not descend, or a matrix that cannot be
 // factored, is retried with the inertia term M / h^2 of the matrix scaled up (a
-// Levenberg-Marquardt shift in the mass metric). Where damping acts (-df/dv != 0: Rayleigh, the
-// contact planes' damping), the forces are no gradient and the search measures the residual
-// psi = |R|^2 / 2 instead (constraint rows weighted into forces), whose slope along Newton's
-// direction is -2 psi. project_hessian fills the matrix with every element's Hessian projected to
-// be positive semi-definite (the residual stays exact). A failed step may be retried as two half
-// steps, up to substeps_on_failure times.
+// Levenberg-Marquardt shift in the mass metric). Where the scene damps, the damping is made
+// variational: its matrix Dn = -df/dv is frozen per step at the step's start q_n (projected
+// to be positive semi-definite, so that no mode is anti-damped) with fd0 the damping force of the
+// driven nodes' motion there, the bracketed terms; Rayleigh's beta K(q) v, re-evaluated at every
+// iterate, is no gradient, and Newton's Jacobian lacks its dK/dq v term. project_hessian fills
+// the matrix with every element's Hessian projected to be positive semi-definite (the residual
+// stays exact). A failed step may be retried as two half steps, up to substeps_on_failure times.
 #pragma once
 #include <functional>
 #include <memory>

@@ -77,6 +77,12 @@ class ConstrainedSystem {
   // matrices (negative eigenvalues set to zero), the residual unchanged. False if the system
   // cannot (then the request is refused).
   virtual bool set_hessian_projection(bool /*on*/) { return false; }
+  // Whether any force depends on the velocities (damping), and a switch that leaves those forces
+  // out of force(), force_and_jacobians() and add_force_jacobians() (both Jacobians) until it is
+  // turned back on; false if the system has no such switch. Backward Euler's line search freezes
+  // the damping matrix per step with it (backward_euler.hpp).
+  virtual bool has_damping() const { return false; }
+  virtual bool set_damping_forces(bool /*on*/) { return false; }
   // Naive volume rescaling (the CNH paper's section 8.3 baseline): moves q so that the body's
   // total volume is its rest volume again, by scaling about the centre of mass. Returns false if
   // the model has no such operation.

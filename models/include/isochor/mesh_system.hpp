@@ -46,6 +46,11 @@ class MeshSystem : public SceneSystem {
   double force_scale() const override { return force_scale_; }
   bool rescale_volume(double t, VectorXd& q) override;
   bool potential(double t, const VectorXd& q, double& V) override;
+  bool has_damping() const override { return damping_.alpha != 0 || damping_.beta != 0 || external_->damped(); }
+  bool set_damping_forces(bool on) override {
+    damping_on_ = on;
+    return true;
+  }
   bool set_hessian_projection(bool on) override {
     project_hessian_ = on;
     return true;
@@ -88,6 +93,7 @@ class MeshSystem : public SceneSystem {
   Eigen::VectorXd node_mass_, dof_mass_;
   double force_scale_ = 1.0;
   bool project_hessian_ = false;
+  bool damping_on_ = true;  // set_damping_forces
   // State cache: positions and velocities of every node.
   Points x_;
   Eigen::VectorXd xdot_, grad_, kv_;
