@@ -8,7 +8,8 @@ Reads results.csv and the cases' HDF5 files (cases/<label>.h5); writes
   work_precision.png/svg  error against CPU seconds, log-log, one curve per method
   volume_error.png/svg    worst relative zone-volume error against time, every case
   energy.png/svg          total energy against time, every case
-  stability.png/svg       for methods swept over two keys: each cell stable or failed (and why)
+  stability.png/svg       for methods swept over one or two keys: each cell stable, failed (and
+                          why), or ran with more than 10% of its volume lost or gained
   resolution.png/svg      for methods swept over mesh.target_tets: centre height, height/width
   report.md             the charts and the table
 """
@@ -185,7 +186,8 @@ def short_reason(reason):
     at = f"\nat {float(tm.group(1)):.3g} s" if tm else ""
     for key, tag in (("not finite", "inverted /\nexploded"), ("singular", "singular\nmatrix"), ("Newton", "Newton\ndiverged"),
                      ("IDA_CONV_FAIL", "IDA corrector\nfailed"), ("IDA_ERR_FAIL", "IDA error\ntest failed"),
-                     ("steps", "too many\nsteps"), ("PCG", "linear solve\nfailed")):
+                     ("steps", "too many\nsteps"), ("PCG", "linear solve\nfailed"),
+                     ("line search", "no descent\n(line search)")):
         if key in reason:
             return tag + at
     return (reason.split(": ")[-1][:20] or "failed") + at
@@ -193,7 +195,7 @@ def short_reason(reason):
 
 def stability(rows, d):
     methods = [m for m in sorted({r["method"] for r in rows}) if m != "reference"
-               and all(len(r["sweep_pairs"]) == 2 for r in rows if r["method"] == m)]
+               and all(len(r["sweep_pairs"]) in (1, 2) for r in rows if r["method"] == m)]
     if not methods:
         return None
     cols = min(3, len(methods))
@@ -203,18 +205,25 @@ def stability(rows, d):
         ax.set_axis_off()
     for ax, m in zip(axes.flat, methods):
         mine = [r for r in rows if r["method"] == m]
-        kx, ky = mine[0]["sweep_pairs"][0][0], mine[0]["sweep_pairs"][1][0]
+        two = len(mine[0]["sweep_pairs"]) == 2  # one key: a single row
+        kx, ky = mine[0]["sweep_pairs"][0][0], (mine[0]["sweep_pairs"][1][0] if two else "")
         xs = sorted({number(r["sweep_pairs"][0][1]) for r in mine})
-        ys = sorted({number(r["sweep_pairs"][1][1]) for r in mine})
+        ys = sorted({number(r["sweep_pairs"][1][1]) for r in mine}) if two else [0.0]
         for r in mine:
-            i, j = xs.index(number(r["sweep_pairs"][0][1])), ys.index(number(r["sweep_pairs"][1][1]))
+            i, j = xs.index(number(r["sweep_pairs"][0][1])), (ys.index(number(r["sweep_pairs"][1][1])) if two else 0)
             ok = r["status"] == "ok"
-            ax.add_patch(plt.Rectangle((i - 0.5, j - 0.5), 1, 1, color="#7fc97f" if ok else "#f0027f", alpha=0.8))
             vol = number(r["volume_error"])
-            text = (f"ok\nvolume error\n{vol:.1e}" if np.isfinite(vol) else "ok") if ok else short_reason(r["reason"])
+            # A run that ends but has lost or gained a tenth of its volume did not stand either.
+            lost = ok and np.isfinite(vol) and vol > 0.1
+            colour = "#fdc086" if lost else ("#7fc97f" if ok else "#f0027f")
+            ax.add_patch(plt.Rectangle((i - 0.5, j - 0.5), 1, 1, color=colour, alpha=0.8))
+            if ok:
+                text = f"{'ran, volume off' if lost else 'ok'}\nvolume error\n{vol:.1e}" if np.isfinite(vol) else "ok"
+            else:
+                text = short_reason(r["reason"])
             ax.text(i, j, text, ha="center", va="center", fontsize=7)
         ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs])
-        ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys])
+        ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys] if two else [""])
         ax.set_xlim(-0.5, len(xs) - 0.5)
         ax.set_ylim(-0.5, len(ys) - 0.5)
         ax.set_xlabel(kx)
