@@ -18,15 +18,18 @@ using namespace isochor;
 
 namespace {
 
-Scene cube(int cells, double damping_beta = 0.0) {
-  return parse_scene(SceneFile::parse(R"(
+// The Figure 8 cube of edge `size` (m) on its fixed base, CNH with one global zone, as TOML
+// without its [integrator] section.
+std::string cube_toml(int cells, double size, double damping_beta = 0.0) {
+  const std::string a = std::to_string(size), c = std::to_string(size / 2);
+  return R"(
 [damping]
 beta = )" + std::to_string(damping_beta) + R"(
 [mesh]
 shape = "box"
-size = [0.1, 0.1, 0.1]
+size = [)" + a + ", " + a + ", " + a + R"(]
 cells = )" + std::to_string(cells) + R"(
-center = [0.0, 0.0, 0.05]
+center = [0.0, 0.0, )" + c + R"(]
 [material]
 model = "cnh"
 density = 1000.0
@@ -35,9 +38,12 @@ lambda = 100.0
 beta = 1.0
 [[boundary]]
 select = { kind = "set", name = "zmin" }
-[integrator]
-kind = "backward_euler"
-)",
+)";
+}
+
+// The collapsing cube (10 cm) with backward Euler.
+Scene cube(int cells, double damping_beta = 0.0) {
+  return parse_scene(SceneFile::parse(cube_toml(cells, 0.1, damping_beta) + "[integrator]\nkind = \"backward_euler\"\n",
                                       "collapse.toml"));
 }
 
@@ -247,21 +253,7 @@ TEST(OptimisationStep, SettlingCubeAt33msReachesTheStaticEquilibrium) {
   // demos/cube_gravity.toml's regime (1 cm, mu = 100 Pa, rho g H = 0.98 mu) on 6^3 cells: backward
   // Euler at the paper's largest step, 33 ms, settles where KINSOL's statics puts the cube (the
   // same equations without inertia), the global zone exact on the way.
-  const std::string common = R"(
-[mesh]
-shape = "box"
-size = [0.01, 0.01, 0.01]
-cells = 6
-center = [0.0, 0.0, 0.005]
-[material]
-model = "cnh"
-density = 1000.0
-mu = 100.0
-lambda = 100.0
-beta = 1.0
-[[boundary]]
-select = { kind = "set", name = "zmin" }
-)";
+  const std::string common = cube_toml(6, 0.01);
   const Scene dyn = parse_scene(SceneFile::parse(common + "[integrator]\nkind = \"backward_euler\"\n", "settle.toml"));
   BackwardEulerOptions o;
   o.dt = 0.033;
