@@ -15,8 +15,8 @@
 // (nu_j = 2 |lambda_j|) decreases; a direction that does not descend, or a matrix that cannot be
 // factored, is retried with the inertia term M / h^2 of the matrix scaled up (a
 // Levenberg-Marquardt shift in the mass metric). Where the scene damps, the damping is made
-// variational: its matrix Dn = -df/dv is frozen per step at the step's start q_n (projected
-// to be positive semi-definite, so that no mode is anti-damped) with fd0 the damping force of the
+// variational: its matrix Dn = -df/dv is frozen per step at the step's start q_n, with fd0 the
+// damping force of the
 // driven nodes' motion there, the bracketed terms; Rayleigh's beta K(q) v, re-evaluated at every
 // iterate, is no gradient, and Newton's Jacobian lacks its dK/dq v term. project_hessian fills
 // the matrix with every element's Hessian projected to be positive semi-definite (the residual
