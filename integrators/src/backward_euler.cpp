@@ -208,7 +208,7 @@ struct BackwardEuler::Impl {
       sys.force_and_jacobians(t1, q, v, f, fresh ? K.data() : nullptr, fresh ? D.data() : nullptr);
       R1 = M.cwiseProduct(q - qt) / (h * h) - f;
       if (variational) R1 += pattern_times(Dn, q - qn) / h - fd0;
-      if (line_search) R0 = R1;  // the gradient of the incremental potential (with D at q)
+      if (line_search) R0 = R1;  // the gradient of the incremental potential
       add_constraint_terms(sys, t1, q, lambda, G, g, R1.data());
       if (m) R2 = g;
       if (!R1.allFinite()) {
