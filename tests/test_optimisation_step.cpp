@@ -164,6 +164,23 @@ TEST(OptimisationStep, HalvedStepsCarryARunPastAStepThatFails) {
   for (double e : halved.volume_error) EXPECT_LT(e, 1e-10);
 }
 
+TEST(OptimisationStep, AStepThatFailsHalvedTooSaysSo) {
+  // Three Newton iterations cannot take the collapsing cube through 0.25 s, whole or in halves:
+  // the failure names the time of the whole step and says that halving was tried.
+  const Scene sc = cube(2);
+  BackwardEulerOptions o;
+  o.dt = 0.25;
+  o.max_newton = 3;
+  o.substeps_on_failure = 1;
+  const Outcome r = run(sc, o, 0.5);
+  ASSERT_FALSE(r.ok);
+  EXPECT_NE(r.reason.find("integration failed at t = 0.250000 s: Newton did not converge in 3 iterations (also with "
+                          "the step halved once)"),
+            std::string::npos)
+      << r.reason;
+  EXPECT_EQ(r.q.size(), 1u);  // only the start: nothing half-done is delivered as a frame
+}
+
 TEST(OptimisationStep, PotentialIsTheIntegralOfTheConservativeForce) {
   // V(q) by finite differences against -f(q, v = 0) (no damping in this scene): gradient of the
   // merit's potential, with the cube sheared and squashed so that elasticity acts.

@@ -103,7 +103,7 @@ struct BackwardEuler::Impl {
     const VectorXd lambda0 = lambda;
     if (step(t, t1, qn, vn, q, v, lambda, reason)) return true;
     if (depth >= opt.substeps_on_failure) {
-      if (depth > 0) reason += " (after " + std::to_string(depth) + " halvings of the step)";
+      if (depth > 0) reason += " (also with the step halved " + (depth == 1 ? std::string("once") : std::to_string(depth) + " times") + ")";
       return false;
     }
     stats.step_halvings++;

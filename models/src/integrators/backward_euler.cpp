@@ -9,7 +9,6 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
   BackwardEulerOptions& o = spec.backward_euler;
   o.dt = parse_dt(in);
   o.newton_tol = in.number("newton_tol", 1e-6, Range::positive());
-  o.max_newton = static_cast<int>(in.integer("max_newton", 30, 1, 100000));
   o.newton_atol = in.number("newton_atol", 1e-12, Range::positive());
   o.semi_implicit = kind == IntegratorKind::semi_implicit;
   o.max_steps = parse_max_steps(in);
@@ -18,10 +17,14 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
     in.fail("rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
   o.linear_solver = parse_linear_solver(in, LinearSolverKind::reduced);
   o.project_hessian = in.string("hessian", "exact", {"exact", "projected"}) == "projected";
-  if (kind == IntegratorKind::backward_euler) {
-    o.line_search = in.boolean("line_search", true);
-    o.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 0, 0, 30));
-  }
+  if (in.has("hessian") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
+    in.fail("hessian", "is an option of the backward_euler and semi_implicit integrators");
+  // Options of backward Euler's Newton iteration alone (semi-implicit takes one update).
+  o.max_newton = static_cast<int>(in.integer("max_newton", 30, 1, 100000));
+  o.line_search = in.boolean("line_search", true);
+  o.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 0, 0, 30));
+  for (const char* key : {"max_newton", "line_search", "substeps_on_failure"})
+    if (in.has(key) && kind != IntegratorKind::backward_euler) in.fail(key, "is an option of the backward_euler integrator");
 }
 
 std::unique_ptr<Integrator> make_backward_euler(const Scene& scene, SceneSystem& system) {
