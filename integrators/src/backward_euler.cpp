@@ -149,6 +149,27 @@ struct BackwardEuler::Impl {
                  VectorXd& lambda, std::string& reason, bool always_fresh) {
     const VectorXd& M = sys.mass();
     const VectorXd qt = qn + h * vn;  // where inertia alone would carry the nodes
+    // Variational damping: freeze Dn and fd0 at the step's start (q_n, v_n: the same whatever the
+    // predictor, so a resumed run repeats the steps), before the predictor's merit needs them; the
+    // system's damping stays off until the step returns.
+    struct DampingOff {
+      ConstrainedSystem* sys = nullptr;
+      ~DampingOff() {
+        if (sys) sys->set_damping_forces(true);
+      }
+    } damping_off;
+    if (variational) {
+      sys.set_damping_forces(true);
+      std::fill(Dn.begin(), Dn.end(), 0.0);
+      sys.add_force_jacobians(t1, qn, vn, nullptr, Dn.data());
+      const VectorXd still = VectorXd::Zero(n);
+      VectorXd fa, fb;
+      sys.force(t1, qn, still, fa);
+      sys.set_damping_forces(false);
+      damping_off.sys = &sys;
+      sys.force(t1, qn, still, fb);
+      fd0 = fa - fb;
+    }
     // Predictor: the velocity extrapolated linearly from the last two steps (the first step and
     // the semi-implicit variant, whose single iteration starts from it, use q_n + h v_n).
     // With the line search, the extrapolation is kept only where its merit (the multipliers of the
@@ -167,27 +188,6 @@ struct BackwardEuler::Impl {
                (m ? w.dot(gx.cwiseAbs()) : 0.0);
       };
       if (!(merit(q) <= merit(qt))) q = qt;
-    }
-    // Variational damping: freeze Dn and fd0 at the step's start (q_n, v_n: the same whatever the
-    // predictor, so a resumed run repeats the steps); the system's damping stays off until the
-    // step returns.
-    struct DampingOff {
-      ConstrainedSystem* sys = nullptr;
-      ~DampingOff() {
-        if (sys) sys->set_damping_forces(true);
-      }
-    } damping_off;
-    if (variational) {
-      sys.set_damping_forces(true);
-      std::fill(Dn.begin(), Dn.end(), 0.0);
-      sys.add_force_jacobians(t1, qn, vn, nullptr, Dn.data());
-      const VectorXd still = VectorXd::Zero(n);
-      VectorXd fa, fb;
-      sys.force(t1, qn, still, fa);
-      sys.set_damping_forces(false);
-      damping_off.sys = &sys;
-      sys.force(t1, qn, still, fb);
-      fd0 = fa - fb;
     }
     VectorXd f(n), R1(n), R0, R2(m), g(m), dq(n), dl(m), rhs(n), qtrial, gtrial(m);
     VectorXd kr(use_kkt ? n + m : 0);
