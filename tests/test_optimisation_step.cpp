@@ -79,55 +79,55 @@ Outcome run(const Scene& sc, BackwardEulerOptions o, double duration, double fra
 
 }  // namespace
 
-TEST(OptimisationStep, ConvergesWherePlainNewtonFailsAndEveryLineSearchDescends) {
-  const Scene sc = cube(2);
-  BackwardEulerOptions o;
-  o.dt = 0.033;
-  o.line_search = false;
-  const Outcome plain = run(sc, o, 0.5);
-  ASSERT_FALSE(plain.ok) << "plain Newton was expected to fail on this collapse";
-  EXPECT_NE(plain.reason.find("Newton did not converge"), std::string::npos) << plain.reason;
-
-  o.line_search = true;
+namespace {
+// The same scene at step dt with plain Newton and with the line search, counting the line
+// searches, those that cut the update, and those that accepted a rise of the merit (beyond the
+// rounding Armijo's test allows, 1e-13 relative).
+struct Searched {
+  Outcome plain, opt;
   int searches = 0, cut = 0, rose = 0;
+};
+Searched with_and_without_line_search(const Scene& sc, double dt, double duration) {
+  Searched r;
+  BackwardEulerOptions o;
+  o.dt = dt;
+  o.line_search = false;
+  r.plain = run(sc, o, duration);
+  o.line_search = true;
   o.on_line_search = [&](double before, double after, double alpha) {
-    ++searches;
-    cut += alpha < 1.0;
-    // Armijo's sufficient decrease, up to rounding of the merit's value (1e-13 relative).
-    if (after > before + 1e-12 * std::abs(before)) ++rose;
+    ++r.searches;
+    r.cut += alpha < 1.0;
+    if (after > before + 1e-12 * std::abs(before)) ++r.rose;
   };
-  const Outcome opt = run(sc, o, 0.5);
-  ASSERT_TRUE(opt.ok) << opt.reason;
-  EXPECT_EQ(static_cast<int>(opt.q.size()), 16);
-  EXPECT_GT(searches, 0);
-  EXPECT_GT(cut, 0) << "the collapse should need at least one shortened step";
-  EXPECT_EQ(rose, 0) << "a line search accepted a point where the merit rose";
-  EXPECT_EQ(opt.stats.line_search_cuts, cut);
+  r.opt = run(sc, o, duration);
+  return r;
+}
+}  // namespace
+
+TEST(OptimisationStep, ConvergesWherePlainNewtonFailsAndEveryLineSearchDescends) {
+  const Searched r = with_and_without_line_search(cube(2), 0.033, 0.5);
+  ASSERT_FALSE(r.plain.ok) << "plain Newton was expected to fail on this collapse";
+  EXPECT_NE(r.plain.reason.find("Newton did not converge"), std::string::npos) << r.plain.reason;
+  ASSERT_TRUE(r.opt.ok) << r.opt.reason;
+  EXPECT_EQ(static_cast<int>(r.opt.q.size()), 16);
+  EXPECT_GT(r.searches, 0);
+  EXPECT_GT(r.cut, 0) << "the collapse should need at least one shortened step";
+  EXPECT_EQ(r.rose, 0) << "a line search accepted a point where the merit rose";
+  EXPECT_EQ(r.opt.stats.line_search_cuts, r.cut);
   // The zone constraint is exact at every step, line search or not.
-  for (double e : opt.volume_error) EXPECT_LT(e, 1e-10);
+  for (double e : r.opt.volume_error) EXPECT_LT(e, 1e-10);
 }
 
 TEST(OptimisationStep, DampedStepsFreezeTheDampingAndConverge) {
   // Stiffness-proportional damping f = -beta K(q) v is not the gradient of a potential; the step
   // freezes its matrix at the step's start (variational damping), which makes it one.
   // Plain Newton's iterates explode here (non-finite forces at t = 0.132 s).
-  const Scene sc = cube(2, 0.001);
-  BackwardEulerOptions o;
-  o.dt = 0.033;
-  o.line_search = false;
-  const Outcome plain = run(sc, o, 0.5);
-  ASSERT_FALSE(plain.ok) << "plain Newton was expected to fail on this collapse";
-  o.line_search = true;
-  int cut = 0, rose = 0;
-  o.on_line_search = [&](double before, double after, double alpha) {
-    cut += alpha < 1.0;
-    if (after > before + 1e-12 * std::abs(before)) ++rose;
-  };
-  const Outcome opt = run(sc, o, 0.5);
-  ASSERT_TRUE(opt.ok) << opt.reason;
-  EXPECT_GT(cut, 0);
-  EXPECT_EQ(rose, 0);
-  for (double e : opt.volume_error) EXPECT_LT(e, 1e-10);
+  const Searched r = with_and_without_line_search(cube(2, 0.001), 0.033, 0.5);
+  ASSERT_FALSE(r.plain.ok) << "plain Newton was expected to fail on this collapse";
+  ASSERT_TRUE(r.opt.ok) << r.opt.reason;
+  EXPECT_GT(r.cut, 0);
+  EXPECT_EQ(r.rose, 0);
+  for (double e : r.opt.volume_error) EXPECT_LT(e, 1e-10);
 }
 
 TEST(OptimisationStep, LeavesStepsThatNewtonTakesWholeAsTheyWere) {

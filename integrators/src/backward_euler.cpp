@@ -115,23 +115,28 @@ struct BackwardEuler::Impl {
            advance(tm, t1, qm, vm, q, v, lambda, reason, depth + 1);
   }
 
-  // The incremental potential without its constraint term, at q with V = V(q) (Impl's comment in
-  // backward_euler.hpp), for a scene without damping: inertia and potential.
-  double incremental_potential(double h, double V, const VectorXd& q, const VectorXd& qt) const {
-    return 0.5 * (q - qt).cwiseAbs2().dot(sys.mass()) / (h * h) + V;
+  // The incremental potential Phi at x with V = V(x) (backward_euler.hpp): inertia, potential,
+  // and with variational damping the frozen damping's share.
+  double phi(double h, double V, const VectorXd& x, const VectorXd& qn, const VectorXd& qt) const {
+    double p = 0.5 * (x - qt).cwiseAbs2().dot(sys.mass()) / (h * h) + V;
+    if (variational) {
+      const VectorXd u = x - qn;
+      p += 0.5 * u.dot(damping_times(u)) / h - fd0.dot(u);
+    }
+    return p;
   }
-  // y = A x for values A in the (symmetric, both triangles) pattern.
-  VectorXd pattern_times(const std::vector<double>& A, const VectorXd& x) const {
-    const SparsePattern& p = sys.pattern();
+  VectorXd damping_times(const VectorXd& u) const {
     VectorXd y = VectorXd::Zero(n);
-    for (Index c = 0; c < n; ++c)
-      for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k) y[p.row_ind[k]] += A[k] * x[c];
+    sys.pattern().add_product(Dn.data(), u.data(), 1.0, y.data());
     return y;
   }
-  // The frozen damping's share of the incremental potential (variational damping).
-  double damping_potential(double h, const VectorXd& q, const VectorXd& qn) const {
-    const VectorXd u = q - qn;
-    return 0.5 * u.dot(pattern_times(Dn, u)) / h - fd0.dot(u);
+  // Phi + sum_j w_j |g_j| at x, infinite where V is not defined there; V(x) and g(x) on return.
+  double merit_at(double t1, double h, const VectorXd& x, const VectorXd& qn, const VectorXd& qt, const VectorXd& w,
+                  double& V, VectorXd& gx) {
+    V = std::numeric_limits<double>::quiet_NaN();
+    if (!sys.potential(t1, x, V) || !std::isfinite(V)) return std::numeric_limits<double>::infinity();
+    if (m) sys.constraint(t1, x, gx);
+    return phi(h, V, x, qn, qt) + (m ? w.dot(gx.cwiseAbs()) : 0.0);
   }
   double l1(const VectorXd& g) const { return m ? nu.dot(g.cwiseAbs()) : 0.0; }
 
@@ -179,15 +184,9 @@ struct BackwardEuler::Impl {
     else q = qt;
     if (line_search && have_previous && !opt.semi_implicit) {
       const VectorXd w = 2.0 * lambda.cwiseAbs();
-      auto merit = [&](const VectorXd& x) {
-        double V;
-        if (!sys.potential(t1, x, V) || !std::isfinite(V)) return std::numeric_limits<double>::infinity();
-        VectorXd gx(m);
-        if (m) sys.constraint(t1, x, gx);
-        return incremental_potential(h, V, x, qt) + (variational ? damping_potential(h, x, qn) : 0.0) +
-               (m ? w.dot(gx.cwiseAbs()) : 0.0);
-      };
-      if (!(merit(q) <= merit(qt))) q = qt;
+      double V;
+      VectorXd gx(m);
+      if (!(merit_at(t1, h, q, qn, qt, w, V, gx) <= merit_at(t1, h, qt, qn, qt, w, V, gx))) q = qt;
     }
     VectorXd f(n), R1(n), R0, R2(m), g(m), dq(n), dl(m), rhs(n), qtrial, gtrial(m);
     VectorXd kr(use_kkt ? n + m : 0);
@@ -207,7 +206,7 @@ struct BackwardEuler::Impl {
       }
       sys.force_and_jacobians(t1, q, v, f, fresh ? K.data() : nullptr, fresh ? D.data() : nullptr);
       R1 = M.cwiseProduct(q - qt) / (h * h) - f;
-      if (variational) R1 += pattern_times(Dn, q - qn) / h - fd0;
+      if (variational) R1 += damping_times(q - qn) / h - fd0;
       if (line_search) R0 = R1;  // the gradient of the incremental potential
       add_constraint_terms(sys, t1, q, lambda, G, g, R1.data());
       if (m) R2 = g;
@@ -305,19 +304,14 @@ struct BackwardEuler::Impl {
         // Backtracking (Armijo, halving) on the step's merit; rounding in its value is allowed. A
         // search that fails with a reused matrix is redone with a fresh one.
         if (!std::isfinite(Vq) && !sys.potential(t1, q, Vq)) Vq = std::numeric_limits<double>::infinity();
-        const double phi_q = incremental_potential(h, Vq, q, qt) + (variational ? damping_potential(h, q, qn) : 0.0);
+        const double phi_q = phi(h, Vq, q, qn, qt);
         const double merit0 = phi_q + l1(g);
         const double noise = 1e-13 * (std::abs(phi_q) + std::abs(Vq) + l1(g));
         bool found = false;
         for (; alpha >= 1e-10; alpha *= 0.5) {
           qtrial = q + alpha * dq;
-          double merit = std::numeric_limits<double>::infinity(), Vt = std::numeric_limits<double>::quiet_NaN();
-          sys.potential(t1, qtrial, Vt);
-          if (std::isfinite(Vt)) {
-            if (m) sys.constraint(t1, qtrial, gtrial);
-            merit = incremental_potential(h, Vt, qtrial, qt) + (variational ? damping_potential(h, qtrial, qn) : 0.0) +
-                    l1(gtrial);
-          }
+          double Vt;
+          const double merit = merit_at(t1, h, qtrial, qn, qt, nu, Vt, gtrial);
           if (std::isfinite(merit) && merit <= merit0 + 1e-4 * alpha * slope + noise) {
             Vq = Vt;
             if (opt.on_line_search) opt.on_line_search(merit0, merit, alpha);

@@ -139,8 +139,7 @@ bool ReducedSolver::solve(const double* b, double* x, int refine) {
   VectorXd r(p.n), dx(p.n);
   for (int it = 0; it < refine; ++it) {
     r = Eigen::Map<const VectorXd>(b, p.n);
-    for (Index c = 0; c < p.n; ++c)
-      for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k) r[p.row_ind[k]] -= impl_->vals[k] * x[c];
+    p.add_product(impl_->vals, x, -1.0, r.data());
     solve_once(r.data(), dx.data());
     Eigen::Map<VectorXd>(x, p.n) += dx;
   }

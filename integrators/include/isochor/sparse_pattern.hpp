@@ -28,6 +28,11 @@ struct SparsePattern {
     for (Index c = 0; c < n; ++c) p.col_ptr[c + 1] += p.col_ptr[c];
     return p;
   }
+  // y += scale A x for values A in this pattern (n entries each).
+  void add_product(const double* values, const double* x, double scale, double* y) const {
+    for (Index c = 0; c < n; ++c)
+      for (Index k = col_ptr[c]; k < col_ptr[c + 1]; ++k) y[row_ind[k]] += scale * values[k] * x[c];
+  }
   // Position of (row, col) in the value array, or -1 when outside the pattern.
   Index find(Index row, Index col) const {
     auto b = row_ind.begin() + col_ptr[col], e = row_ind.begin() + col_ptr[col + 1];
