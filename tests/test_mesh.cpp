@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <random>
 
 #include "isochor/error.hpp"
@@ -104,4 +105,56 @@ TEST(Mesh, UnusedNodesAreRemoved) {
   EXPECT_EQ(x.cols(), 4);
   EXPECT_EQ(tets[0], (Tet{0, 1, 2, 3}));
   EXPECT_EQ(sets["s"], std::vector<int>{1});
+}
+
+// The smallest interior angle of a tet's four faces, in degrees.
+static double min_face_angle(const Points& x, const Tet& t) {
+  static constexpr int kFaces[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
+  double smallest = 180;
+  for (const auto& f : kFaces)
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector3d a = x.col(t[f[(c + 1) % 3]]) - x.col(t[f[c]]), b = x.col(t[f[(c + 2) % 3]]) - x.col(t[f[c]]);
+      smallest = std::min(smallest, std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / M_PI);
+    }
+  return smallest;
+}
+
+TEST(Mesh, SliverBoxKeepsItsSizeAndHasTheAnglesItPromises) {
+  // Layers alternate thick (w) and thin (w / 60): 3 thick + 2 thin = size, so w = 1 / (3 + 2 / 60).
+  const double r = 60;
+  Mesh m = make_box(Eigen::Vector3d::Ones(), {5, 5, 5}, Eigen::Vector3d::Zero(), 6, r);
+  EXPECT_NEAR(m.rest_volume(), 1.0, 1e-13);
+  EXPECT_EQ(m.reoriented_tets(), 0);
+  expect_closed_outward(m);
+  const Points& X = m.rest_positions();
+  EXPECT_NEAR(X.row(0).minCoeff(), -0.5, 1e-15);
+  EXPECT_NEAR(X.row(0).maxCoeff(), 0.5, 1e-15);
+  const double w = 1.0 / (3.0 + 2.0 / r);
+  // The second node along x sits one thick layer in, the third one thin layer further.
+  EXPECT_NEAR(X(0, 1) - X(0, 0), w, 1e-15);
+  EXPECT_NEAR(X(0, 2) - X(0, 1), w / r, 1e-15);
+  // A Kuhn tet of a cell thin in one axis and thick in the others has a right-angled face with legs
+  // sqrt(2) w (the diagonal of the thick face) and w / r: its smallest angle is atan(1 / (sqrt(2) r))
+  // = 0.675 degrees, and no face is flatter than that.
+  double smallest = 180, largest_ratio = 0;
+  for (const Tet& t : m.tets()) {
+    smallest = std::min(smallest, min_face_angle(X, t));
+    double lo = 1e300, hi = 0;
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) {
+        const double l = (X.col(t[a]) - X.col(t[b])).norm();
+        lo = std::min(lo, l), hi = std::max(hi, l);
+      }
+    largest_ratio = std::max(largest_ratio, hi / lo);
+  }
+  EXPECT_NEAR(smallest, std::atan(1 / (std::sqrt(2.0) * r)) * 180 / M_PI, 1e-9);
+  EXPECT_LT(smallest, 1.0);
+  // The longest edge of a thin-thick-thick cell's tet is its diagonal sqrt(2 w^2 + (w/r)^2), the
+  // shortest w / r: ratio sqrt(2 r^2 + 1) = 84.9.
+  EXPECT_NEAR(largest_ratio, std::sqrt(2 * r * r + 1), 1e-9);
+  // sliver_ratio = 1 is the regular grid, node for node.
+  Mesh a = make_box(Eigen::Vector3d(2, 1, 3), {3, 4, 5}, Eigen::Vector3d(1, 2, 3), 6);
+  Mesh b = make_box(Eigen::Vector3d(2, 1, 3), {3, 4, 5}, Eigen::Vector3d(1, 2, 3), 6, 1.0);
+  EXPECT_EQ((a.rest_positions() - b.rest_positions()).norm(), 0.0);
+  EXPECT_THROW(make_box(Eigen::Vector3d::Ones(), {2, 2, 2}, Eigen::Vector3d::Zero(), 6, 0.5), Error);
 }

@@ -65,7 +65,8 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     const auto cells = s.int3("cells", {4, 4, 4}, 1, 1000);
     const int split = static_cast<int>(s.integer("split", 6, 5, 6));
     check_tets(s, "cells", static_cast<double>(cells[0]) * static_cast<double>(cells[1]) * static_cast<double>(cells[2]) * split);
-    return make_box(s.vec3("size", Eigen::Vector3d::Ones(), Range::positive()), cells, center, split);
+    const double sliver = s.number("sliver_ratio", 1.0, {1.0, 1e6, false, false});
+    return make_box(s.vec3("size", Eigen::Vector3d::Ones(), Range::positive()), cells, center, split, sliver);
   }
   if (shape == "cylinder") {
     const double r = s.number("radius", 0.5, Range::positive()), height = s.number("height", 1.0, Range::positive());

@@ -7,17 +7,28 @@
 namespace isochor {
 
 Mesh make_box(const Eigen::Vector3d& size, const std::array<long, 3>& cells, const Eigen::Vector3d& center,
-              int split) {
+              int split, double sliver_ratio) {
   if (split != 5 && split != 6) throw Error("box: split = " + std::to_string(split) + ", expected 5 or 6");
+  if (!(sliver_ratio >= 1.0)) throw Error("box: sliver_ratio = " + std::to_string(sliver_ratio) + ", expected >= 1");
   const long nx = cells[0], ny = cells[1], nz = cells[2];
   const long px = nx + 1, py = ny + 1, pz = nz + 1;
   Points x(3, px * py * pz);
   auto id = [&](long i, long j, long k) { return static_cast<int>(i + px * (j + py * k)); };
   const Eigen::Vector3d lo = center - size / 2;
+  // Node coordinates along each axis: even cell layers of width w, odd ones w / sliver_ratio.
+  std::array<std::vector<double>, 3> coord;
+  for (int a = 0; a < 3; ++a) {
+    const long nc = cells[static_cast<std::size_t>(a)], thin = nc / 2, thick = nc - thin;
+    const double w = size[a] / (static_cast<double>(thick) + static_cast<double>(thin) / sliver_ratio);
+    coord[a].assign(1, lo[a]);
+    for (long c = 0; c < nc; ++c) coord[a].push_back(coord[a].back() + (c % 2 == 0 ? w : w / sliver_ratio));
+    coord[a].back() = lo[a] + size[a];
+    if (sliver_ratio == 1.0)  // the regular grid, exactly as before
+      for (long c = 0; c <= nc; ++c) coord[a][c] = lo[a] + size[a] * c / nc;
+  }
   for (long k = 0; k < pz; ++k)
     for (long j = 0; j < py; ++j)
-      for (long i = 0; i < px; ++i)
-        x.col(id(i, j, k)) = lo + Eigen::Vector3d(size.x() * i / nx, size.y() * j / ny, size.z() * k / nz);
+      for (long i = 0; i < px; ++i) x.col(id(i, j, k)) = Eigen::Vector3d(coord[0][i], coord[1][j], coord[2][k]);
 
   std::vector<Tet> tets;
   tets.reserve(nx * ny * nz * split);

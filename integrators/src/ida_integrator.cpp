@@ -18,6 +18,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
+#include <utility>
+#include <vector>
 
 namespace isochor {
 
@@ -34,6 +37,8 @@ struct IdaIntegrator::Impl {
   SUNLinearSolver klu = nullptr;  // klu: SUNDIALS' KLU solver inside LS
   long last_newton_failures = 0;
   void* ida_mem = nullptr;
+  bool trace = false;  // ISOCHOR_TRACE_IDA: also say why a Newton iteration failed
+  double trace_from = 0;
 
   Impl(ConstrainedSystem& s, IdaOptions o) : sys(s), opt(std::move(o)), ggl((check_system(s), s)) {
     n = sys.num_dofs();
@@ -55,6 +60,16 @@ struct IdaIntegrator::Impl {
     const auto t0 = Clock::now();
     const bool ok = ggl.residual(t, N_VGetArrayPointer(yy), N_VGetArrayPointer(yp), N_VGetArrayPointer(rr));
     stats.assembly_seconds += seconds_since(t0);
+    if (!ok && trace) std::fprintf(stderr, "ida t=%.9g: the residual is not finite\n", t);
+    if (trace && t >= trace_from) {  // the largest entry of each block: Newton's progress
+      const double* r = N_VGetArrayPointer(rr);
+      double mx[4] = {0, 0, 0, 0};
+      for (Index i = 0; i < 2 * n + 2 * m; ++i) {
+        const int b = i < n ? 0 : i < 2 * n ? 1 : i < 2 * n + m ? 2 : 3;
+        mx[b] = std::max(mx[b], std::abs(r[i]));
+      }
+      std::fprintf(stderr, "ida   res t=%.9g |Fq|=%.3g |Fv|=%.3g |Fg|=%.3g |Fgv|=%.3g\n", t, mx[0], mx[1], mx[2], mx[3]);
+    }
     return ok ? 0 : 1;  // not finite: recoverable, IDA retries with a smaller step
   }
 
@@ -152,6 +167,7 @@ int reduced_setup(SUNLinearSolver S, SUNMatrix A) {
   s.stats.fresh_factorisations++;
   s.stats.factor_nnz = s.reduced->factor_nnz();
   s.stats.symbolic_seconds = s.reduced->analyse_seconds();
+  if (!ok && s.trace) std::fprintf(stderr, "ida: the reduced setup failed (c_j = %.3g)\n", cj);
   return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;  // not positive definite: retry smaller step
 }
 int reduced_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype) {
@@ -161,6 +177,7 @@ int reduced_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype
   s.stats.solve_seconds += seconds_since(t0);
   s.stats.linear_iterations = s.reduced->iterations();
   s.stats.linear_fallbacks = s.reduced->fallbacks();
+  if (!ok && s.trace) std::fprintf(stderr, "ida: the reduced solve failed\n");
   return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;  // PCG did not converge: IDA retries a smaller step
 }
 
@@ -298,6 +315,55 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   stops.erase(std::unique(stops.begin(), stops.end()), stops.end());
   auto next_stop = stops.begin();
 
+  // ISOCHOR_TRACE_IDA=T: one line per step ending after time T, on stderr: the step, order,
+  // failures so far, the share of the weighted local error estimate held by positions, velocities
+  // and the stabilising multipliers, and the three dofs (node.axis, block) that weigh most.
+  const char* trace_env = std::getenv("ISOCHOR_TRACE_IDA");
+  const double trace_from = trace_env ? std::atof(trace_env) : std::numeric_limits<double>::infinity();
+  s.trace = trace_env != nullptr;
+  s.trace_from = trace_from;
+  N_Vector ele = trace_env ? check_ptr(N_VClone(yy), "N_VClone") : nullptr;
+  N_Vector ewt = trace_env ? check_ptr(N_VClone(yy), "N_VClone") : nullptr;
+  const OnExit release_trace{[&]() {
+    for (N_Vector v : {ele, ewt})
+      if (v) N_VDestroy(v);
+  }};
+  auto trace_step = [&](double t) {
+    long nst = 0, netf = 0, ncfn = 0, nni = 0;
+    int order = 0;
+    double h = 0;
+    IDAGetNumSteps(mem, &nst);
+    IDAGetNumErrTestFails(mem, &netf);
+    IDAGetNumNonlinSolvConvFails(mem, &ncfn);
+    IDAGetNumNonlinSolvIters(mem, &nni);
+    IDAGetLastOrder(mem, &order);
+    IDAGetLastStep(mem, &h);
+    IDAGetEstLocalErrors(mem, ele);
+    IDAGetErrWeights(mem, ewt);
+    const double* e = N_VGetArrayPointer(ele);
+    const double* w = N_VGetArrayPointer(ewt);
+    double share[3] = {0, 0, 0}, total = 0;
+    std::vector<std::pair<double, Index>> top;
+    for (Index i = 0; i < 2 * n; ++i) {
+      const double x = (e[i] * w[i]) * (e[i] * w[i]);
+      share[i < n ? 0 : 1] += x;
+      total += x;
+      top.emplace_back(x, i);
+    }
+    const std::size_t k3 = std::min<std::size_t>(3, top.size());
+    std::partial_sort(top.begin(), top.begin() + static_cast<std::ptrdiff_t>(k3), top.end(),
+                      [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::fprintf(stderr, "ida t=%.9g h=%.3g k=%d steps=%ld netf=%ld ncfn=%ld nni=%ld err=%.3g q=%.2f v=%.2f top:", t, h,
+                 order, nst, netf, ncfn, nni, std::sqrt(total / static_cast<double>(N)), share[0] / std::max(total, 1e-300),
+                 share[1] / std::max(total, 1e-300));
+    for (std::size_t j = 0; j < k3; ++j) {
+      const Index i = top[j].second % n;
+      std::fprintf(stderr, " %ld.%ld%s(%.2f)", static_cast<long>(i / 3), static_cast<long>(i % 3), top[j].second < n ? "q" : "v",
+                   top[j].first / std::max(total, 1e-300));
+    }
+    std::fprintf(stderr, "\n");
+  };
+
   const double frame_interval = times.size() > 1 ? times[1] - times[0] : std::max(times.back() - t0, 1.0);
   constexpr double kStall = 1e-7;
   constexpr long kStallSteps = 1000;
@@ -340,6 +406,7 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
       throw IntegrationError(tret, reason);
     }
     tcur = tret;
+    if (tcur >= trace_from) trace_step(tcur);
     long steps = 0;
     check(IDAGetNumSteps(mem, &steps), "IDAGetNumSteps", tcur);
     if (steps > s.opt.max_steps)

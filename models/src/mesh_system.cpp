@@ -46,6 +46,9 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
     for (int j = 0; j < zones->size(); ++j)
       if (zones->row_dofs(j).empty())
         throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first + "\" has only driven nodes on its boundary: its volume cannot be kept");
+    if (scene.zone_restore_time > 0)
+      zones->restore_from(scene.initial_positions.cols() ? scene.initial_positions : scene.mesh.rest_positions(),
+                          scene.frames.times().front(), scene.zone_restore_time);
     add_constraints(std::move(zones));
   }
   if (auto supports = make_supports(scene, dofs_)) add_constraints(std::move(supports));  // [[boundary]] components
@@ -76,7 +79,8 @@ void scene_initial_state(const Scene& s, const DofMap& dofs, const StartState* s
   v.resize(3 * dofs.num_free());
   for (int f = 0; f < dofs.num_free(); ++f) {
     const int node = dofs.free_nodes[f];
-    q.segment<3>(3 * f) = start ? start->positions.col(node) : s.mesh.rest_positions().col(node);
+    const Points& X = s.initial_positions.cols() ? s.initial_positions : s.mesh.rest_positions();
+    q.segment<3>(3 * f) = start ? start->positions.col(node) : X.col(node);
     v.segment<3>(3 * f) = start ? Eigen::Vector3d(start->velocities.col(node)) : s.initial_velocity;
   }
 }

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <random>
 #include <set>
 
 #include "isochor/constraints.hpp"
@@ -67,6 +68,7 @@ std::vector<double> Scene::breakpoints() const {
   for (const GroundSpec& p : contact_planes())
     if (p.enabled && p.displacement.squaredNorm() > 0) t.insert(t.end(), {p.t0, p.t1});
   if (gravity_ramp > 0) t.push_back(gravity_ramp);
+  if (zone_restore_time > 0 && keep_zones && !zones.empty()) t.push_back(frames.times().front() + zone_restore_time);
   for (const NodeLoad& l : loads) l.history.breakpoints(t);
   for (const PressureLoad& l : pressure_loads) l.history.breakpoints(t);
   std::sort(t.begin(), t.end());
@@ -208,6 +210,26 @@ Driver parse_boundary(const Section& b, const Mesh& mesh) {
   return d;
 }
 
+// initial.flatten: the XPBD paper's scrambled start. Every node is moved into the plane through the
+// mesh's centre normal to the axis, at a uniformly random point of the mesh's bounding box in the
+// other two axes (std::mt19937_64 seeded by initial.seed: the same start on every run).
+void parse_flatten(const Section& in, Scene& sc) {
+  const std::string axis = in.string("flatten", "none", {"none", "x", "y", "z"});
+  const auto seed = in.integer("seed", 1, 0, 2147483647L);
+  if (axis == "none") return;  // a seed is kept for a --set initial.flatten variant
+  const int a = axis[0] - 'x';
+  const Points& X = sc.mesh.rest_positions();
+  const Eigen::Vector3d lo = X.rowwise().minCoeff(), hi = X.rowwise().maxCoeff();
+  std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  sc.initial_positions.resize(3, X.cols());
+  for (Eigen::Index n = 0; n < X.cols(); ++n)
+    for (int d = 0; d < 3; ++d) {
+      const double u = d == a ? 0.5 : unit(rng);
+      sc.initial_positions(d, n) = lo[d] + u * (hi[d] - lo[d]);
+    }
+}
+
 // [[load]]: a point load on a node set (the force split among the nodes, or on each), a
 // traction on the surface triangles whose corners are all selected (rest area, a third to each
 // corner: the consistent load of linear triangles), or a pressure on those triangles (a follower
@@ -338,7 +360,7 @@ void check_initial_contact(const Scene& sc, const Section& contact) {
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, true, {}, {}, {}, {}};
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, 0.0, true, {}, {}, {}, {}};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
@@ -346,6 +368,7 @@ Scene parse_scene(SceneFile file) {
   sc.material = parse_material(root.table("material"));
   sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.material.model == MaterialModel::cnh);
   sc.keep_zones = root.table("zones").boolean("keep", true);
+  sc.zone_restore_time = root.table("zones").number("restore_time", 0.0, Range::non_negative());
   std::vector<int> driven_by(sc.mesh.num_nodes(), -1);
   for (const Section& b : root.tables("boundary")) {
     sc.boundary.push_back(parse_boundary(b, sc.mesh));
@@ -396,7 +419,9 @@ Scene parse_scene(SceneFile file) {
   const Section damping = root.table("damping");
   sc.damping.alpha = damping.number("alpha", 0.0, Range::non_negative());
   sc.damping.beta = damping.number("beta", 0.0, Range::non_negative());
-  sc.initial_velocity = root.table("initial").vec3("velocity", Eigen::Vector3d::Zero());
+  const Section initial = root.table("initial");
+  sc.initial_velocity = initial.vec3("velocity", Eigen::Vector3d::Zero());
+  parse_flatten(initial, sc);
 
   const Section in = root.table("integrator");
   IntegratorSpec& ig = sc.integrator;

@@ -54,12 +54,15 @@ XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_
   for (const Tet& t : mesh.tets()) elements.emplace_back(t.begin(), t.end());
   const Pattern pattern = pattern_from_elements(dofs_, elements);
   zones_ = VolumeConstraints::zones(mesh, scene.keep_zones ? scene_zone_tets(scene) : std::vector<std::vector<int>>{}, dofs_, pattern);
+  if (scene.zone_restore_time > 0)
+    zones_.restore_from(scene.initial_positions.cols() ? scene.initial_positions : mesh.rest_positions(), scene.frames.times().front(),
+                        scene.zone_restore_time);
   zone_grad_.resize(zones_.size());
   for (int j = 0; j < zones_.size(); ++j) zone_grad_[j].resize(zones_.row_dofs(j).size());
 }
 
 void XpbdMeshSystem::initial_state(double t0, Eigen::VectorXd& x, Eigen::VectorXd& v) {
-  const Points& X = start ? start->positions : scene_.mesh.rest_positions();
+  const Points& X = start ? start->positions : scene_.initial_positions.cols() ? scene_.initial_positions : scene_.mesh.rest_positions();
   x = Eigen::Map<const Eigen::VectorXd>(X.data(), X.size());
   v.resize(x.size());
   for (int n = 0; n < scene_.mesh.num_nodes(); ++n)
@@ -129,7 +132,8 @@ void XpbdMeshSystem::after_sweep(double, Eigen::VectorXd& x) {
 
 void XpbdMeshSystem::project_zones(Eigen::VectorXd& x) {
   if (zones_.size() == 0) return;
-  // Each zone: one hard constraint V_j(x) = V_j(rest), projected in turn with fresh values.
+  zones_.set_time(t_);
+  // Each zone: one hard constraint V_j(x) = V_j(rest) (or its restore_time target), projected in turn with fresh values.
   for (int j = 0; j < zones_.size(); ++j) {
     const Points xp = Eigen::Map<const Points>(x.data(), 3, num_points());
     zones_.value(xp, zone_value_);

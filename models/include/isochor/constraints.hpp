@@ -34,6 +34,12 @@ class VolumeConstraints : public ConstraintSet {
   // of a hydrostatic stress lambda_j I). Zone constraints only.
   void add_pressure(const double* lambda, std::vector<double>& p) const override;
   const std::vector<double>& rest_volumes() const { return rest_; }
+  // zones.restore_time: a start whose volumes are not the rest volumes (initial.flatten) cannot
+  // hold g = 0, so each target goes from the volume at x0 to the rest volume between t0 and
+  // t0 + duration along the quintic smoothstep 10s^3 - 15s^4 + 6s^5 (C^2: its velocity and
+  // acceleration vanish at both ends), then stays there. dg/dt carries the target's rate.
+  void restore_from(const Points& x0, double t0, double duration);
+  void set_time(double t) override;
   // Current volume of each constraint.
   void volumes(const Points& x, Eigen::VectorXd& vol) const;
   // g = volume - rest volume.
@@ -76,6 +82,8 @@ class VolumeConstraints : public ConstraintSet {
   std::vector<std::vector<Index>> row_dofs_;
   std::vector<std::vector<int>> row_slot_;  // per element: 12 entries, position in its row or -1
   std::vector<double> rest_;
+  std::vector<double> start_offset_, offset_, rate_;  // restore_from: target - rest at t0, now, d/dt now
+  double restore_t0_ = 0, restore_duration_ = 0;
   std::vector<std::vector<int>> boundary_nodes_;  // per constraint: the nodes of its faces
   std::vector<std::vector<int>> zone_tets_;   // zone constraints: the tets of each zone
   DofMap dofs_;

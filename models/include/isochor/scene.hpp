@@ -88,7 +88,9 @@ struct Scene {
   std::vector<PressureLoad> pressure_loads;  // [[load]] kind = "pressure" (follower loads)
   RayleighDamping damping;
   Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();
+  Points initial_positions;  // every node's start (initial.flatten); empty: the rest positions
   std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tet indices
+  double zone_restore_time = 0.0;  // zones.restore_time (s): zone targets go from the start's volumes to the rest volumes
   bool keep_zones = true;  // zones.keep: false measures the zones' volumes without constraining them
   IntegratorSpec integrator;
   FramesSpec frames;

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "isochor/constraints.hpp"
+#include "isochor/error.hpp"
 
 namespace isochor {
 
@@ -119,7 +120,30 @@ void VolumeConstraints::sum_volumes(const Points& x, double* vol) const {
 
 void VolumeConstraints::value(const Points& x, double* g) const {
   sum_volumes(x, g);
-  for (int j = 0; j < size(); ++j) g[j] -= rest_[j];
+  for (int j = 0; j < size(); ++j) g[j] -= rest_[j] + (offset_.empty() ? 0.0 : offset_[j]);
+}
+
+void VolumeConstraints::restore_from(const Points& x0, double t0, double duration) {
+  if (!(duration > 0)) throw Error("zones.restore_time: expected a duration > 0");
+  start_offset_.assign(rest_.size(), 0.0);
+  sum_volumes(x0, start_offset_.data());
+  for (std::size_t j = 0; j < rest_.size(); ++j) start_offset_[j] -= rest_[j];
+  restore_t0_ = t0;
+  restore_duration_ = duration;
+  set_time(t0);
+}
+
+void VolumeConstraints::set_time(double t) {
+  if (start_offset_.empty()) return;
+  const double s = std::clamp((t - restore_t0_) / restore_duration_, 0.0, 1.0);
+  // remaining fraction 1 - p(s), p = 10s^3 - 15s^4 + 6s^5; dp/ds = 30 s^2 (1 - s)^2
+  const double p = s * s * s * (10.0 + s * (-15.0 + 6.0 * s)), dp = 30.0 * s * s * (1.0 - s) * (1.0 - s) / restore_duration_;
+  offset_.resize(rest_.size());
+  rate_.resize(rest_.size());
+  for (std::size_t j = 0; j < rest_.size(); ++j) {
+    offset_[j] = start_offset_[j] * (1.0 - p);
+    rate_[j] = -start_offset_[j] * dp;
+  }
 }
 
 void VolumeConstraints::gradient(const Points& x, std::vector<double>* rows) const {
@@ -160,6 +184,7 @@ void VolumeConstraints::time_derivative(const Points& x, const Eigen::VectorXd& 
       if (e.nodes[k] >= 0 && dofs_.free_index[e.nodes[k]] < 0)
         gt[e.constraint] += g.segment<3>(3 * k).dot(v.segment<3>(3 * e.nodes[k]));
   }
+  for (std::size_t j = 0; j < rate_.size(); ++j) gt[j] -= rate_[j];
 }
 
 void VolumeConstraints::hessian_times(const Points& x, const Eigen::VectorXd& xdot, std::vector<double>* rows) const {
