@@ -163,6 +163,16 @@ struct BackwardEuler::Impl {
         if (sys) sys->set_damping_forces(true);
       }
     } damping_off;
+    // hybrid: each step starts projected (Dn included) and may switch to the exact Hessian.
+    struct ProjectionOn {
+      ConstrainedSystem* sys = nullptr;
+      ~ProjectionOn() {
+        if (sys) sys->set_hessian_projection(true);
+      }
+    } projection_on;
+    if (opt.exact_near_solution) projection_on.sys = &sys;
+    int whole_in_a_row = 0;
+    bool exact_now = false;
     if (variational) {
       sys.set_damping_forces(true);
       std::fill(Dn.begin(), Dn.end(), 0.0);
@@ -346,6 +356,12 @@ struct BackwardEuler::Impl {
         return false;
       }
       if (opt.semi_implicit) break;
+      whole_in_a_row = alpha < 1.0 ? 0 : whole_in_a_row + 1;
+      if (opt.exact_near_solution && line_search && whole_in_a_row == 2 && !exact_now) {
+        sys.set_hessian_projection(false);  // near the solution: the exact Hessian from here on
+        exact_now = true;
+        refresh = true;
+      }
       if (alpha < 1.0) continue;  // not converged; the next iteration factors afresh
       if (fresh || it == 0) {  // the rate is measured from the last factorisation on
         first = size;

@@ -50,6 +50,10 @@ struct BackwardEulerOptions {
   // The step as a minimisation (above); off: plain Newton on the KKT system.
   bool line_search = true;
   bool project_hessian = false;
+  // With project_hessian and the line search ("hybrid"): once two Newton updates in a row are
+  // taken whole, the rest of the step uses the exact Hessian (quadratic convergence near the
+  // solution, where the projected one contracts linearly, slowly where elements are indefinite).
+  bool exact_near_solution = false;
   // A failed step is retried as two half steps, each of which may be halved again, up to this
   // many levels (0: a failed step stops the run).
   int substeps_on_failure = 0;

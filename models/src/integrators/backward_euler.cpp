@@ -16,7 +16,11 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
   if (o.rescale_volume && kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
     in.fail("rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
   o.linear_solver = parse_linear_solver(in, LinearSolverKind::reduced);
-  o.project_hessian = in.string("hessian", "exact", {"exact", "projected"}) == "projected";
+  const std::string hessian = in.string("hessian", "exact", {"exact", "projected", "hybrid"});
+  o.project_hessian = hessian != "exact";
+  o.exact_near_solution = hessian == "hybrid";
+  if (o.exact_near_solution && kind != IntegratorKind::backward_euler)
+    in.fail("hessian", "\"hybrid\" switches within backward Euler's Newton iteration (the semi-implicit step takes one update)");
   if (in.has("hessian") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
     in.fail("hessian", "is an option of the backward_euler and semi_implicit integrators");
   // Options of backward Euler's Newton iteration alone (semi-implicit takes one update).
