@@ -41,7 +41,6 @@ std::vector<Case> all_materials() {
   c.push_back({"snh", make_snh(1.3, 7.0), true});
   c.push_back({"cnh", make_cnh(1.3, 7.0, 1.0, 0.1), true});
   c.push_back({"cnh_beta9", make_cnh(1.3, 7.0, 9.0, 0.3), true});
-  c.push_back({"cnh_quartic", make_cnh(1.3, 7.0, 1.0, 0.3, 4), true});
   c.push_back({"xpbd_pair", make_xpbd_pair(1.3, 7.0), true});
   return c;
 }
@@ -161,33 +160,5 @@ TEST(Penalty, AlphaTildeIsC2AtEpsilon) {
     EXPECT_NEAR((alpha_tilde(J + d, eps).a - alpha_tilde(J - d, eps).a) / (2 * d), alpha_tilde(J, eps).da, 1e-6);
     EXPECT_NEAR((alpha_tilde(J + d, eps).da - alpha_tilde(J - d, eps).da) / (2 * d), alpha_tilde(J, eps).d2a,
                 1e-5 * std::abs(alpha_tilde(J, eps).d2a));
-  }
-}
-
-TEST(Penalty, QuarticAlphaTildeIsC4AtEpsilonAndKeepsItsShape) {
-  // The third and fourth derivatives, by differences of d2a, match J^(-1/3)'s across epsilon: the
-  // quadratic continuation's third derivative jumps there (0 below), the quartic's does not.
-  const double eps = 0.1, h = 1e-4;
-  auto third = [&](double J, int order) {
-    return (alpha_tilde(J + h, eps, order).d2a - alpha_tilde(J - h, eps, order).d2a) / (2 * h);
-  };
-  const double f3 = -28.0 / 27.0 * std::pow(eps, -10.0 / 3.0);
-  EXPECT_NEAR(third(eps + 2 * h, 4), f3, 1e-2 * std::abs(f3));
-  EXPECT_NEAR(third(eps - 2 * h, 4), f3, 1e-2 * std::abs(f3));
-  EXPECT_NEAR(third(eps - 2 * h, 2), 0.0, 1e-6 * std::abs(f3));  // the paper's: a jump of f3
-  const double f4 = 280.0 / 81.0 * std::pow(eps, -13.0 / 3.0);
-  const double fourth_below = (third(eps - 3 * h, 4) - third(eps - 5 * h, 4)) / (2 * h);
-  EXPECT_NEAR(fourth_below, f4, 2e-2 * f4);
-  // Value and slope continuous; first and second derivatives against central differences; and
-  // positive, decreasing, convex far into inversion.
-  EXPECT_NEAR(alpha_tilde(eps - 1e-12, eps, 4).a, std::pow(eps, -1.0 / 3.0), 1e-9);
-  for (double J : {-3.0, -0.3, 0.0, 0.05, 0.099, 0.5}) {
-    const AlphaTilde a = alpha_tilde(J, eps, 4);
-    const double d = 1e-6;
-    EXPECT_NEAR((alpha_tilde(J + d, eps, 4).a - alpha_tilde(J - d, eps, 4).a) / (2 * d), a.da, 1e-6 * (1 + std::abs(a.da)));
-    EXPECT_NEAR((alpha_tilde(J + d, eps, 4).da - alpha_tilde(J - d, eps, 4).da) / (2 * d), a.d2a, 1e-5 * std::abs(a.d2a));
-    EXPECT_GT(a.a, 0.0);
-    EXPECT_LT(a.da, 0.0);
-    EXPECT_GT(a.d2a, 0.0);
   }
 }

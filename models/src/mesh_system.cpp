@@ -12,7 +12,7 @@ std::shared_ptr<const Material> make_material(const MaterialSpec& m) {
   switch (m.model) {
     case MaterialModel::unh: return make_unh(m.mu, m.lambda);
     case MaterialModel::snh: return make_snh(m.mu, m.lambda);
-    case MaterialModel::cnh: return make_cnh(m.mu, m.lambda, m.beta, m.epsilon, m.extension_order);
+    case MaterialModel::cnh: return make_cnh(m.mu, m.lambda, m.beta, m.epsilon);
     case MaterialModel::snh_simple: return make_xpbd_pair(m.mu, m.lambda);
     case MaterialModel::mass_spring: break;
   }

@@ -147,8 +147,6 @@ MaterialSpec parse_material(const Section& s) {
   }
   m.beta = s.number("beta", m.beta, Range::non_negative());
   m.epsilon = s.number("epsilon", m.epsilon, {0.0, 1.0, true, false});
-  m.extension_order = static_cast<int>(s.integer("extension_order", 2, 2, 4));
-  if (m.extension_order == 3) s.fail("extension_order", "expected 2 (the CNH paper's quadratic) or 4 (quartic)");
   m.epidermis_lambda = s.number("epidermis_lambda", 0.0, Range::non_negative());
   m.epidermis_gamma = s.number("epidermis_gamma", 1.0, Range::non_negative());
   // The mass-spring keys are read for every model, so one scene can switch models by --set.

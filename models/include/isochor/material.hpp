@@ -39,9 +39,7 @@ Penalty penalty_U(double J, double beta);
 struct AlphaTilde {
   double a, da, d2a;
 };
-// order 4 continues it by its quartic Taylor polynomial instead (C^4 at epsilon; still positive,
-// decreasing and convex for every J < epsilon: each Taylor term has the sign that makes it so).
-AlphaTilde alpha_tilde(double J, double epsilon, int order = 2);
+AlphaTilde alpha_tilde(double J, double epsilon);
 
 class Material {
  public:
@@ -70,7 +68,7 @@ std::unique_ptr<Material> make_unh(double mu, double lambda);
 // mu'/2 (I_C - 3) + lambda'/2 (J - a)^2 - mu'/2 log(I_C + 1), a = 1 + 3 mu' / (4 lambda').
 std::unique_ptr<Material> make_snh(double mu, double lambda);
 // CNH, Sheen, Larionov and Pai 2021: mu/2 (alpha~(J)^2 I_C - 3) + lambda U(J; beta).
-std::unique_ptr<Material> make_cnh(double mu, double lambda, double beta, double epsilon, int extension_order = 2);
+std::unique_ptr<Material> make_cnh(double mu, double lambda, double beta, double epsilon);
 // The energy of Macklin and Müller's constraint pair: deviatoric C_D = sqrt(I_C) with compliance
 // 1/mu, hydrostatic C_H = J - gamma with compliance 1/lambda', gamma = 1 + mu/lambda',
 // lambda' = lambda + mu (their rest-stability shift): mu/2 (I_C - 3) + lambda'/2 (J - gamma)^2.

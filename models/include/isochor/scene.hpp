@@ -29,7 +29,6 @@ struct MaterialSpec {
   double mu = 0.0, lambda = 0.0;  // Pa (Lamé parameters, from mu/lambda or E/nu)
   double beta = 1.0;          // CNH penalty shape
   double epsilon = 0.1;       // CNH: J below which alpha~ is extended
-  int extension_order = 2;    // CNH: alpha~'s Taylor continuation below epsilon, 2 (the paper's) or 4
   double epidermis_lambda = 0.0;  // Pa m (surface penalty weight); 0: no epidermis
   double epidermis_gamma = 1.0;
   double spring_stiffness = 1000.0;  // mass_spring: N/m, every spring

@@ -8,10 +8,10 @@ namespace isochor {
 namespace {
 class Cnh : public Material {
  public:
-  Cnh(double mu, double lambda, double beta, double eps, int order) : mu_(mu), lambda_(lambda), beta_(beta), eps_(eps), order_(order) {}
+  Cnh(double mu, double lambda, double beta, double eps) : mu_(mu), lambda_(lambda), beta_(beta), eps_(eps) {}
   std::string name() const override { return "cnh"; }
   InvariantDerivatives invariants(double I, double J) const override {
-    const AlphaTilde a = alpha_tilde(J, eps_, order_);
+    const AlphaTilde a = alpha_tilde(J, eps_);
     const Penalty u = penalty_U(J, beta_);
     const double a2 = a.a * a.a;
     const double da2 = 2.0 * a.a * a.da, d2a2 = 2.0 * (a.da * a.da + a.a * a.d2a);
@@ -25,12 +25,11 @@ class Cnh : public Material {
 
  private:
   double mu_, lambda_, beta_, eps_;
-  int order_;
 };
 }  // namespace
 
-std::unique_ptr<Material> make_cnh(double mu, double lambda, double beta, double epsilon, int extension_order) {
-  return std::make_unique<Cnh>(mu, lambda, beta, epsilon, extension_order);
+std::unique_ptr<Material> make_cnh(double mu, double lambda, double beta, double epsilon) {
+  return std::make_unique<Cnh>(mu, lambda, beta, epsilon);
 }
 
 }  // namespace isochor

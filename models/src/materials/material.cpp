@@ -14,19 +14,10 @@ Penalty penalty_U(double J, double beta) {
   return {d2 * (beta * d2 + 6.0) / 12.0, d * (beta * d2 + 3.0) / 3.0, beta * d2 + 1.0};
 }
 
-AlphaTilde alpha_tilde(double J, double eps, int order) {
+AlphaTilde alpha_tilde(double J, double eps) {
   if (J > eps) {
     const double a = std::cbrt(1.0 / J);
     return {a, -a / (3.0 * J), 4.0 * a / (9.0 * J * J)};
-  }
-  if (order == 4) {
-    // Derivatives of J^(-1/3) at eps: f1 = -f0/(3 eps), f2 = 4 f0/(9 eps^2), f3 = -28 f0/(27 eps^3),
-    // f4 = 280 f0/(81 eps^4); the Taylor polynomial in d = J - eps and its first two derivatives.
-    const double f0 = std::cbrt(1.0 / eps), d = J - eps;
-    const double f1 = -f0 / (3.0 * eps), f2 = 4.0 * f0 / (9.0 * eps * eps), f3 = -28.0 * f0 / (27.0 * eps * eps * eps),
-                 f4 = 280.0 * f0 / (81.0 * eps * eps * eps * eps);
-    return {f0 + d * (f1 + d * (f2 / 2.0 + d * (f3 / 6.0 + d * f4 / 24.0))), f1 + d * (f2 + d * (f3 / 2.0 + d * f4 / 6.0)),
-            f2 + d * (f3 + d * f4 / 2.0)};
   }
   const double e13 = std::cbrt(1.0 / eps);           // eps^(-1/3)
   const double e43 = e13 / eps, e73 = e43 / eps;      // eps^(-4/3), eps^(-7/3)
