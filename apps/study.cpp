@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "isochor/error.hpp"
+#include "isochor/mesh.hpp"
 #include "isochor/output_reader.hpp"
 #include "isochor/scene_file.hpp"
 
@@ -309,7 +310,7 @@ void write_study_results(const Study& s) {
   }
   std::ofstream csv(s.output / "results.csv");
   csv << "method,label,sweep,status,reason,frames,frames_expected,cpu_seconds,wall_seconds,steps,error_l2,"
-         "volume_error,error_centroid\n";
+         "volume_error,error_centroid,shape_error,inverted_tets\n";
   for (const StudyCase& c : s.cases) {
     double cpu = NAN;
     int status = -1;
@@ -322,13 +323,16 @@ void write_study_results(const Study& s) {
     for (const auto& [key, value] : c.sweep) sweep += (sweep.empty() ? "" : ";") + key + "=" + number_text(value);
     std::string reason = !ran ? "not run yet" : status == 0 ? "" : last_line(dir / (c.label + ".log"));
     int frames = 0;
-    double wall = NAN, steps = NAN, err = NAN, vol = NAN, cerr = NAN;
+    double wall = NAN, steps = NAN, err = NAN, vol = NAN, cerr = NAN, shape = NAN, inverted = NAN;
     try {
       RunFile f((dir / (c.label + ".h5")).string());
       frames = f.num_frames();
       const auto totals = f.stat_totals();
       if (totals.count("wall_seconds")) wall = totals.at("wall_seconds");
       if (totals.count("steps")) steps = totals.at("steps");
+      if (frames > 0) shape = rest_shape_error(f.rest_positions(), f.positions(frames - 1));
+      const auto series = f.stat_series();
+      if (auto it = series.find("inverted_tets"); it != series.end() && !it->second.empty()) inverted = it->second.back();
       const auto v = f.volumes();
       vol = 0;
       for (const auto& row : v)
@@ -351,7 +355,7 @@ void write_study_results(const Study& s) {
     csv << c.method << "," << c.label << "," << csv_field(sweep) << "," << (!ran ? "missing" : status == 0 ? "ok" : "failed") << ","
         << csv_field(reason) << "," << frames << "," << (ref ? ref->num_frames() : 0) << "," << number_text(cpu) << ","
         << number_text(wall) << "," << number_text(steps) << "," << number_text(err) << "," << number_text(vol) << ","
-        << number_text(cerr) << "\n";
+        << number_text(cerr) << "," << number_text(shape) << "," << number_text(inverted) << "\n";
   }
 }
 

@@ -158,3 +158,23 @@ TEST(Mesh, SliverBoxKeepsItsSizeAndHasTheAnglesItPromises) {
   EXPECT_EQ((a.rest_positions() - b.rest_positions()).norm(), 0.0);
   EXPECT_THROW(make_box(Eigen::Vector3d::Ones(), {2, 2, 2}, Eigen::Vector3d::Zero(), 6, 0.5), Error);
 }
+
+TEST(Mesh, RestShapeErrorIsZeroForARigidMotionAndMeasuresTheRest) {
+  Mesh m = make_box(Eigen::Vector3d(2, 1, 0.5), {4, 2, 2}, Eigen::Vector3d::Zero(), 6);
+  const Points& X = m.rest_positions();
+  const double diag = std::sqrt(4.0 + 1.0 + 0.25);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  const Points moved = (R * X).colwise() + Eigen::Vector3d(3, -1, 7);
+  EXPECT_LT(rest_shape_error(X, moved), 1e-14);
+  // One node pushed 0.1 away, the others in place: the fit moves a little, the error is about 0.1.
+  Points bumped = X;
+  bumped(2, 0) += 0.1;
+  EXPECT_NEAR(rest_shape_error(X, bumped) * diag, 0.1, 0.01);
+  // Scaled by 1.1 about the centroid: the farthest node (a corner, half a diagonal out) is 0.05 diag away.
+  const Points scaled = 1.1 * X;
+  EXPECT_NEAR(rest_shape_error(X, scaled), 0.05, 1e-12);
+  // A mirror image is not a rigid motion.
+  Points mirrored = X;
+  mirrored.row(0) *= -1;
+  EXPECT_GT(rest_shape_error(X, mirrored), 0.1);
+}

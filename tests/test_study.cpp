@@ -89,6 +89,11 @@ TEST(Study, QuickStudyRunsEveryCaseAndCharts) {
     EXPECT_EQ(r.at("frames"), r.at("frames_expected"));
     err[r.at("method")].push_back(std::stod(r.at("error_l2")));
     vol[r.at("method")].push_back(std::stod(r.at("volume_error")));
+    // The last frame's distance from the rest shape up to a rigid motion (over the diagonal: a
+    // deformed, not a scrambled body) and its inverted tets (none in this gentle scene).
+    EXPECT_GT(std::stod(r.at("shape_error")), 0.0);
+    EXPECT_LT(std::stod(r.at("shape_error")), 0.5);
+    EXPECT_EQ(r.at("inverted_tets"), "0");
   }
   EXPECT_EQ(err["reference"][0], 0.0);
   // IDA's error falls with its tolerance (1e-3 ... 1e-6) and CNH keeps the volume on every method

@@ -38,8 +38,8 @@ def load(d):
         rows = list(csv.DictReader(f))
     for r in rows:
         for k in ("frames", "frames_expected", "cpu_seconds", "wall_seconds", "steps", "error_l2", "volume_error",
-                  "error_centroid"):
-            r[k] = number(r.get(k, "nan"))
+                  "error_centroid", "shape_error", "inverted_tets"):
+            r[k] = number(r.get(k) or "nan")
         r["sweep_pairs"] = [p.split("=", 1) for p in r["sweep"].split(";") if p]
     return rows
 
@@ -200,6 +200,7 @@ def stability(rows, d):
         return None
     cols = min(3, len(methods))
     nrows = (len(methods) + cols - 1) // cols
+    shape_study = any(r["method"].startswith("scramble") for r in rows)
     fig, axes = plt.subplots(nrows, cols, figsize=(4.6 * cols, 3.6 * nrows), squeeze=False)
     for ax in axes.flat[len(methods):]:
         ax.set_axis_off()
@@ -221,6 +222,8 @@ def stability(rows, d):
                 text = f"{'ran, volume off' if lost else 'ok'}\nvolume error\n{vol:.1e}" if np.isfinite(vol) else "ok"
             else:
                 text = short_reason(r["reason"])
+            if shape_study:  # how far from the rest shape and how tangled the last frame is
+                text += f"\nshape {r['shape_error']:.2g}, inv {r['inverted_tets']:.0f}" if r["frames"] > 0 else ""
             ax.text(i, j, text, ha="center", va="center", fontsize=7)
         ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs])
         ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys] if two else [""])
@@ -265,7 +268,7 @@ def write_h5(rows, d):
         for k in ("method", "label", "sweep", "status", "reason"):
             f[k] = np.array([r[k] for r in rows], dtype=h5py.string_dtype())
         for k in ("frames", "frames_expected", "cpu_seconds", "wall_seconds", "steps", "error_l2", "volume_error",
-                  "error_centroid"):
+                  "error_centroid", "shape_error", "inverted_tets"):
             f[k] = np.array([r[k] for r in rows], dtype=float)
 
 
@@ -278,12 +281,13 @@ def report(rows, d, images):
         if img:
             lines += [f"![{img[:-4]}]({img})", ""]
     lines += equal_error_table(rows)
-    lines += ["| method | case | status | frames | CPU s | error (L2) | centroid error | volume error | reason |",
-              "|---|---|---|---|---|---|---|---|---|"]
+    lines += ["| method | case | status | frames | CPU s | error (L2) | centroid error | volume error | shape error | "
+              "inverted | reason |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['method']} | {r['label']} | {r['status']} | {r['frames']:.0f}/{r['frames_expected']:.0f} | "
                      f"{r['cpu_seconds']:.3g} | {r['error_l2']:.3g} | {r['error_centroid']:.3g} | {r['volume_error']:.3g} | "
-                     f"{r['reason'].replace('|', '/')} |")
+                     f"{r['shape_error']:.3g} | {r['inverted_tets']:.0f} | {r['reason'].replace('|', '/')} |")
     with open(os.path.join(d, "report.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
 

@@ -254,6 +254,7 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   check(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg", t0);
   check(IDASetNonlinConvCoef(mem, s.opt.newton_coef), "IDASetNonlinConvCoef", t0);
   check(IDASetMaxOrd(mem, s.opt.max_order), "IDASetMaxOrd", t0);
+  check(IDASetMaxNonlinIters(mem, s.opt.max_newton), "IDASetMaxNonlinIters", t0);
   if (s.opt.max_step > 0) check(IDASetMaxStep(mem, s.opt.max_step), "IDASetMaxStep", t0);
   if (s.opt.initial_step > 0) {
     check(IDASetInitStep(mem, s.opt.initial_step), "IDASetInitStep", t0);

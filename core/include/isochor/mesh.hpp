@@ -79,6 +79,11 @@ class Mesh {
 double surface_volume(const Points& x, const std::vector<Tri>& surface);
 // Sum of signed tet volumes at positions x.
 double tets_volume(const Points& x, const std::vector<Tet>& tets);
+// How far x is from the rest shape X up to a rigid motion: the largest distance of a node of x,
+// moved by the rotation and translation that best fit it onto X (least squares, equal weights:
+// Kabsch; a reflection is not a rigid motion), to its rest position, over the diagonal of X's
+// bounding box. 0 for a rigidly moved copy; the scrambled starts of issue 20 measure recovery.
+double rest_shape_error(const Points& X, const Points& x);
 
 struct SurfaceCheck {
   bool closed = false;          // every edge in exactly two triangles

@@ -33,6 +33,7 @@ struct IdaOptions {
   int max_order = 5;
   double max_step = 0.0;      // 0: no limit
   double newton_coef = 0.33;  // IDA's nonlinear convergence coefficient (smaller: algebraic rows kept tighter)
+  int max_newton = 4;         // Newton iterations per step attempt before IDA calls it a failure (IDASetMaxNonlinIters)
   double initial_step = 0.0;  // 0: a position-based first step (see the .cpp)
   long max_steps = 10000000;  // over the whole run
   // End a step on every frame time too (IDASetStopTime), as before frames were interpolated: for

@@ -27,8 +27,10 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
   o.max_newton = static_cast<int>(in.integer("max_newton", 30, 1, 100000));
   o.line_search = in.boolean("line_search", true);
   o.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 0, 0, 30));
-  for (const char* key : {"max_newton", "line_search", "substeps_on_failure"})
+  for (const char* key : {"line_search", "substeps_on_failure"})
     if (in.has(key) && kind != IntegratorKind::backward_euler) in.fail(key, "is an option of the backward_euler integrator");
+  if (in.has("max_newton") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::ida)
+    in.fail("max_newton", "is an option of the backward_euler and ida integrators");
 }
 
 std::unique_ptr<Integrator> make_backward_euler(const Scene& scene, SceneSystem& system) {
