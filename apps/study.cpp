@@ -335,8 +335,15 @@ void write_study_results(const Study& s) {
       if (auto it = series.find("inverted_tets"); it != series.end() && !it->second.empty()) inverted = it->second.back();
       const auto v = f.volumes();
       vol = 0;
-      for (const auto& row : v)
-        for (std::size_t z = 0; z < row.size(); ++z) vol = std::max(vol, std::abs(row[z] / v[0][z] - 1));
+      const double rest = surface_volume(f.rest_positions(), f.surface());
+      if (!v.empty() && std::abs(v[0][0] / rest - 1) > 1e-6) {
+        // A start away from the rest volume (initial.flatten: volume 0) has no first frame to
+        // measure against: its last frame's total volume against the rest volume.
+        vol = std::abs(v.back()[0] / rest - 1);
+      } else {
+        for (const auto& row : v)
+          for (std::size_t z = 0; z < row.size(); ++z) vol = std::max(vol, std::abs(row[z] / v[0][z] - 1));
+      }
       if (ref && ref_den > 0 && frames > 0) {
         double num = 0;
         const int n = std::min(frames, static_cast<int>(ref_x.size()));
