@@ -57,7 +57,7 @@ Study load_study(const std::string& path, const std::vector<std::string>& overri
   s.kind = st.string("kind", "work_precision", {"work_precision", "stability"});
   const std::vector<std::string> base = st.strings("set");
   const Section ref = root.table("reference");
-  StudyCase r{"reference", "reference", base, {}};
+  StudyCase r{"reference", "reference", base, {}, {}};
   const std::vector<std::string> ref_set =
       ref.exists() ? ref.strings("set")
                    : std::vector<std::string>{"integrator.kind=ida", "integrator.rtol=1e-10", "integrator.atol=1e-12"};
@@ -70,6 +70,11 @@ Study load_study(const std::string& path, const std::vector<std::string>& overri
       m.fail("name", "expected a name without '/', ' ' or ',' other than \"reference\"");
     std::vector<std::string> set = base;
     for (const std::string& o : m.strings("set")) set.push_back(o);
+    std::filesystem::path own_scene;
+    if (m.has("scene")) {
+      own_scene = std::filesystem::path(path).parent_path() / m.string("scene", "");
+      if (!std::filesystem::exists(own_scene)) m.fail("scene", "no such file: " + own_scene.string());
+    }
     // Sweeps: { key = [values] }, the cartesian product of all keys.
     const Section sw = m.table("sweep");
     std::vector<std::pair<std::string, std::vector<double>>> axes;
@@ -90,7 +95,7 @@ Study load_study(const std::string& path, const std::vector<std::string>& overri
       points.swap(next);
     }
     for (const auto& p : points) {
-      StudyCase c{name, label_of(name, p), set, p};
+      StudyCase c{name, label_of(name, p), set, p, own_scene};
       for (const auto& [key, value] : p) c.overrides.push_back(key + "=" + number_text(value));
       s.cases.push_back(c);
     }
@@ -112,7 +117,7 @@ struct Outcome {
 Outcome run_case(const Study& s, const StudyCase& c, const std::string& exe) {
   const auto dir = s.output / "cases";
   // The study owns its directory: a case run again replaces its file.
-  std::vector<std::string> args{exe, "run", s.scene.string(), "-q", "--overwrite", "-o", (dir / (c.label + ".h5")).string()};
+  std::vector<std::string> args{exe, "run", (c.scene.empty() ? s.scene : c.scene).string(), "-q", "--overwrite", "-o", (dir / (c.label + ".h5")).string()};
   for (const std::string& o : c.overrides) {
     args.push_back("--set");
     args.push_back(o);
@@ -344,7 +349,7 @@ void write_study_results(const Study& s) {
         for (const auto& row : v)
           for (std::size_t z = 0; z < row.size(); ++z) vol = std::max(vol, std::abs(row[z] / v[0][z] - 1));
       }
-      if (ref && ref_den > 0 && frames > 0) {
+      if (ref && ref_den > 0 && frames > 0 && f.num_nodes() == ref->num_nodes()) {  // not another mesh
         double num = 0;
         const int n = std::min(frames, static_cast<int>(ref_x.size()));
         double cnum = 0;

@@ -17,6 +17,7 @@ struct StudyCase {
   std::string label;                    // unique file stem
   std::vector<std::string> overrides;   // base, then the method's, then the sweep's
   std::vector<std::pair<std::string, double>> sweep;  // key, value
+  std::filesystem::path scene;          // the method's own base scene (method.scene); empty: the study's
 };
 
 struct Study {

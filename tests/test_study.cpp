@@ -153,3 +153,31 @@ TEST(Render, DrawsAFrameAndNamesMissingPressure) {
   text << in.rdbuf();
   EXPECT_NE(text.str().find("no /frames/pressure (run the scene with output.pressure = true)"), std::string::npos) << text.str();
 }
+
+TEST(Study, AMethodMayNameItsOwnScene) {
+  const auto dir = test::temp_dir() / "own_scene";
+  std::filesystem::create_directories(dir);
+  const std::string demos = std::string(ISOCHOR_SOURCE_DIR) + "/demos/";
+  const std::string path = test::write_file(dir / "s.toml", R"(
+[study]
+scene = ")" + demos + R"(stretch.toml"
+[[method]]
+name = "cube"
+[[method]]
+name = "jelly"
+scene = ")" + demos + R"(jelly_yup.toml"
+)");
+  const Study s = load_study(path);
+  ASSERT_EQ(s.cases.size(), 3u);
+  EXPECT_TRUE(s.cases[0].scene.empty());  // the reference: the study's scene
+  EXPECT_TRUE(s.cases[1].scene.empty());
+  EXPECT_EQ(s.cases[2].scene.filename(), "jelly_yup.toml");
+  const std::string bad = test::write_file(dir / "bad.toml", R"(
+[study]
+scene = ")" + demos + R"(stretch.toml"
+[[method]]
+name = "x"
+scene = "nowhere.toml"
+)");
+  EXPECT_NE(test::error_of([&] { load_study(bad); }).find("method[0].scene: no such file"), std::string::npos);
+}
