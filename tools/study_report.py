@@ -184,7 +184,8 @@ def short_reason(reason):
     import re
     tm = re.search(r"failed at t = ([0-9.eE+-]+) s", reason)
     at = f"\nat {float(tm.group(1)):.3g} s" if tm else ""
-    for key, tag in (("not finite", "inverted /\nexploded"), ("singular", "singular\nmatrix"), ("Newton", "Newton\ndiverged"),
+    for key, tag in (("no progress", "no progress\n(steps stalled)"), ("does not descend", "no descent\n(inertia x1e6)"),
+                     ("not finite", "inverted /\nexploded"), ("singular", "singular\nmatrix"), ("Newton", "Newton\ndiverged"),
                      ("IDA_CONV_FAIL", "IDA corrector\nfailed"), ("IDA_ERR_FAIL", "IDA error\ntest failed"),
                      ("steps", "too many\nsteps"), ("PCG", "linear solve\nfailed"),
                      ("line search", "no descent\n(line search)")):
