@@ -37,8 +37,11 @@ struct IdaIntegrator::Impl {
   SUNLinearSolver klu = nullptr;  // klu: SUNDIALS' KLU solver inside LS
   long last_newton_failures = 0;
   void* ida_mem = nullptr;
-  bool trace = false;  // ISOCHOR_TRACE_IDA: also say why a Newton iteration failed
-  double trace_from = 0;
+  // ISOCHOR_TRACE_IDA=T (docs/scenes.md): steps and Newton residuals after time T, and at any
+  // time why a residual or linear solve failed.
+  const char* trace_env = std::getenv("ISOCHOR_TRACE_IDA");
+  const bool trace = trace_env != nullptr;
+  const double trace_from = trace ? std::atof(trace_env) : std::numeric_limits<double>::infinity();
 
   Impl(ConstrainedSystem& s, IdaOptions o) : sys(s), opt(std::move(o)), ggl((check_system(s), s)) {
     n = sys.num_dofs();
@@ -195,7 +198,7 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   consistent_initial_state(s.sys, t0, q0, v0, a0, l0);
 
   // Everything SUNDIALS allocates is released by this guard, on success or on a throw.
-  N_Vector yy = nullptr, yp = nullptr, id = nullptr, atol = nullptr, yout = nullptr;
+  N_Vector yy = nullptr, yp = nullptr, id = nullptr, atol = nullptr, yout = nullptr, ele = nullptr, ewt = nullptr;
   SUNMatrix J = nullptr;
   void* mem = nullptr;
   const OnExit release{[&]() {
@@ -204,7 +207,7 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
     if (s.klu) SUNLinSolFree(s.klu);
     s.LS = s.klu = nullptr;
     if (J) SUNMatDestroy(J);
-    for (N_Vector* v : {&yy, &yp, &id, &atol, &yout})
+    for (N_Vector* v : {&yy, &yp, &id, &atol, &yout, &ele, &ewt})
       if (*v) N_VDestroy(*v);
     if (s.ctx) SUNContext_Free(&s.ctx);
     s.ida_mem = nullptr;
@@ -317,18 +320,13 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   auto next_stop = stops.begin();
 
   // ISOCHOR_TRACE_IDA=T: one line per step ending after time T, on stderr: the step, order,
-  // failures so far, the share of the weighted local error estimate held by positions, velocities
-  // and the stabilising multipliers, and the three dofs (node.axis, block) that weigh most.
-  const char* trace_env = std::getenv("ISOCHOR_TRACE_IDA");
-  const double trace_from = trace_env ? std::atof(trace_env) : std::numeric_limits<double>::infinity();
-  s.trace = trace_env != nullptr;
-  s.trace_from = trace_from;
-  N_Vector ele = trace_env ? check_ptr(N_VClone(yy), "N_VClone") : nullptr;
-  N_Vector ewt = trace_env ? check_ptr(N_VClone(yy), "N_VClone") : nullptr;
-  const OnExit release_trace{[&]() {
-    for (N_Vector v : {ele, ewt})
-      if (v) N_VDestroy(v);
-  }};
+  // failures so far, the share of the weighted local error estimate held by positions and by
+  // velocities (the multipliers are out of the error test), and the three dofs (free node.axis,
+  // block) that weigh most.
+  if (s.trace) {
+    ele = check_ptr(N_VClone(yy), "N_VClone");
+    ewt = check_ptr(N_VClone(yy), "N_VClone");
+  }
   auto trace_step = [&](double t) {
     long nst = 0, netf = 0, ncfn = 0, nni = 0;
     int order = 0;
@@ -407,7 +405,7 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
       throw IntegrationError(tret, reason);
     }
     tcur = tret;
-    if (tcur >= trace_from) trace_step(tcur);
+    if (tcur >= s.trace_from) trace_step(tcur);
     long steps = 0;
     check(IDAGetNumSteps(mem, &steps), "IDAGetNumSteps", tcur);
     if (steps > s.opt.max_steps)

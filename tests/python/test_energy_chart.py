@@ -6,18 +6,15 @@ import subprocess
 
 import h5py
 import numpy as np
-import pytest
 
-from paths import SOURCE
+from paths import EXE, SOURCE
 
 TOOL = os.path.join(SOURCE, "tools", "energy_chart.py")
 CUBE = os.path.join(SOURCE, "demos", "cube_collapse.toml")
 
 
 def test_the_table_is_the_runs_own_energy_and_a_failed_run_says_so(tmp_path):
-    exe = os.environ.get("ISOCHOR_EXE")
-    if not exe:
-        pytest.skip("ISOCHOR_EXE not set (CTest sets it)")
+    exe = EXE
     ok, bad = tmp_path / "ok.h5", tmp_path / "bad.h5"
     base = [exe, "run", CUBE, "-q", "--set", "mesh.cells=2", "--set", "frames.duration=0.5",
             "--set", "integrator.kind=backward_euler", "--set", "integrator.linear_solver=reduced"]

@@ -7,16 +7,14 @@ import subprocess
 
 import pytest
 
-from paths import SOURCE
+from paths import EXE, SOURCE
 
 TOOL = os.path.join(SOURCE, "tools", "mesh_quality.py")
 SCRAMBLE = os.path.join(SOURCE, "demos", "scramble.toml")
 
 
 def test_sliver_box_extremes_and_counts(tmp_path):
-    exe = os.environ.get("ISOCHOR_EXE")
-    if not exe:
-        pytest.skip("ISOCHOR_EXE not set (CTest sets it)")
+    exe = EXE
     run = tmp_path / "q.h5"
     subprocess.run([exe, "run", SCRAMBLE, "-q", "--set", "mesh.cells=5", "--set", "frames.duration=0", "-o", str(run)],
                    check=True, capture_output=True)
