@@ -13,7 +13,7 @@ TEST(Forces, GravityAndGroundDerivatives) {
   Mesh m = make_box(Eigen::Vector3d(0.4, 0.4, 0.2), {2, 2, 1}, Eigen::Vector3d(0, 0, 0.1), 6);
   DofMap dofs = DofMap::make(m.num_nodes(), {});
   ElasticAssembly a(m, make_snh(1, 1), dofs);
-  GroundSpec ground{true, Vec3(0, 0, 0.004), Vec3(0, 0, 2.0), 1e5, 0.01};
+  const Collider ground = Collider::plane(Vec3(0, 0, 0.004), Vec3(0, 0, 2.0), ContactLaw{1e5, 0.01});
   ExternalPotential ext(lumped_mass(m, 1000.0), Vec3(0, 0, -9.81), {ground}, dofs, a.pattern());
   EXPECT_NEAR(ext.mass().sum(), 1000.0 * 0.032, 1e-12);  // lumped mass sums to the total
   Points x = m.rest_positions();
@@ -83,11 +83,12 @@ TEST(Forces, ContactDampingDerivativesOnAMovingPlane) {
   Mesh m = make_box(Eigen::Vector3d(0.4, 0.4, 0.2), {2, 2, 1}, Eigen::Vector3d(0, 0, 0.1), 6);
   DofMap dofs = DofMap::make(m.num_nodes(), {});
   ElasticAssembly a(m, make_snh(1, 1), dofs);
-  GroundSpec plane{true, Vec3(0, 0, -0.002), Vec3(0.1, 0.2, 1.0).normalized(), 1e5, 0.01};
-  plane.damping = 0.3;
-  plane.displacement = Vec3(0.01, 0.0, 0.02);
-  plane.t0 = 0.0;
-  plane.t1 = 0.1;
+  Collider plane = Collider::plane(Vec3(0, 0, -0.002), Vec3(0.1, 0.2, 1.0).normalized(), ContactLaw{1e5, 0.01});
+  plane.law.damping = 0.3;
+  plane.motion.kind = Driver::Kind::ramp;
+  plane.motion.vector = Vec3(0.01, 0.0, 0.02);
+  plane.motion.t0 = 0.0;
+  plane.motion.t1 = 0.1;
   ExternalPotential ext(lumped_mass(m, 1000.0), Vec3::Zero(), {plane}, dofs, a.pattern());
   ext.set_time(0.05);
   ASSERT_TRUE(ext.damped());
@@ -125,9 +126,9 @@ TEST(Forces, ContactDampingDerivativesOnAMovingPlane) {
     }
   }
   EXPECT_GT(touching, 0);
-  EXPECT_LT(f.dot(v - plane.velocity_at(0.05).replicate(m.num_nodes(), 1)), 0.0);  // it dissipates
+  EXPECT_LT(f.dot(v - plane.motion.velocity(0.05).replicate(m.num_nodes(), 1)), 0.0);  // it dissipates
   // A body moving with the plane feels no damping.
-  EXPECT_EQ(force(x, plane.velocity_at(0.05).replicate(m.num_nodes(), 1)).norm(), 0.0);
+  EXPECT_EQ(force(x, plane.motion.velocity(0.05).replicate(m.num_nodes(), 1)).norm(), 0.0);
 }
 
 // Restitution of a point mass on the damped ground, integrated finely (RK4) with the production
@@ -218,8 +219,8 @@ TEST(Forces, PerAreaContactIsTheSameGroundAtEveryResolution) {
     int bottom = 0;
     for (int n = 0; n < m.num_nodes(); ++n) bottom += m.rest_positions()(2, n) == 0.0;
     for (bool per_area : {true, false}) {
-      GroundSpec ground{true, Vec3::Zero(), Vec3::UnitZ(), k, delta};
-      ground.per_area = per_area;
+      Collider ground = Collider::plane(Vec3::Zero(), Vec3::UnitZ(), ContactLaw{k, delta});
+      ground.law.per_area = per_area;
       ExternalPotential ext(Eigen::VectorXd::Zero(m.num_nodes()), Vec3::Zero(), {ground}, dofs, a.pattern(), area);
       Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
       ext.add_gradient(x, g);

@@ -336,7 +336,7 @@ TEST(Ggl, SolversOnJacobiansCapturedFromABallDrop) {
     // Contact: some node below the contact thickness.
     double lowest = 1e9;
     for (Index i = 2; i < n; i += 3) lowest = std::min(lowest, c.y[i]);
-    EXPECT_LT(lowest, scene.ground.thickness) << "t " << c.t;
+    EXPECT_LT(lowest, scene.colliders.at(0).law.thickness) << "t " << c.t;
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(N, N);
     for (Index col = 0; col < p.n; ++col)
       for (Index k = p.col_ptr[col]; k < p.col_ptr[col + 1]; ++k) J(p.row_ind[k], col) = c.values[k];

@@ -10,27 +10,19 @@
 
 namespace isochor {
 
-Vec3 GroundSpec::point_at(double t) const {
-  return point + displacement * std::clamp((t - t0) / (t1 - t0), 0.0, 1.0);
-}
-
-Vec3 GroundSpec::velocity_at(double t) const {
-  return t > t0 && t < t1 ? Vec3(displacement / (t1 - t0)) : Vec3::Zero();
-}
-
-ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::vector<GroundSpec> planes, const DofMap& dofs,
-                                     const Pattern& pattern, Eigen::VectorXd area)
-    : mass_(std::move(mass)), gravity_(gravity), dofs_(dofs), area_(std::move(area)) {
-  for (GroundSpec& p : planes)
-    if (p.enabled) {
-      p.normal.normalize();
-      if (p.per_area && area_.size() != mass_.size())
-        throw std::invalid_argument("ExternalPotential: a per-area contact plane needs every node's surface area");
-      planes_.push_back(p);
-      points_.push_back(p.point);
-      velocities_.push_back(Vec3::Zero());
-      damped_ = damped_ || p.damping > 0;
-    }
+ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::vector<Collider> colliders, const DofMap& dofs,
+                                     const Pattern& pattern, Eigen::VectorXd area, std::shared_ptr<const Skeleton> skeleton)
+    : mass_(std::move(mass)), gravity_(gravity), colliders_(std::move(colliders)), skeleton_(std::move(skeleton)), dofs_(dofs),
+      area_(std::move(area)) {
+  for (const Collider& c : colliders_) {
+    if (c.law.per_area && area_.size() != mass_.size())
+      throw std::invalid_argument("ExternalPotential: a per-area contact law needs every node's surface area");
+    if (c.bone >= 0 && !skeleton_) throw std::invalid_argument("ExternalPotential: a collider on a bone needs the skeleton");
+    damped_ = damped_ || c.law.damping > 0 || c.law.friction > 0;
+    friction_ = friction_ || c.law.friction > 0;
+  }
+  poses_.resize(colliders_.size());
+  set_time(0.0);
   diag_slots_.resize(9 * static_cast<std::size_t>(dofs.num_free()));
   for (int f = 0; f < dofs.num_free(); ++f)
     for (int a = 0; a < 3; ++a)
@@ -39,39 +31,72 @@ ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::ve
 
 void ExternalPotential::set_time(double t) {
   time_ = t;
-  for (std::size_t k = 0; k < planes_.size(); ++k) {
-    points_[k] = planes_[k].point_at(t);
-    velocities_[k] = planes_[k].velocity_at(t);
+  for (std::size_t k = 0; k < colliders_.size(); ++k) poses_[k] = colliders_[k].pose(t, skeleton_.get());
+}
+
+template <class F>
+void ExternalPotential::for_each_contact(std::size_t c, const Points& x, bool free_only, F&& f) const {
+  const Collider& C = colliders_[c];
+  const ColliderPose& P = poses_[c];
+  const double reach = C.shape.bound() + C.law.thickness;
+  const int count = free_only ? dofs_.num_free() : static_cast<int>(x.cols());
+  for (int j = 0; j < count; ++j) {
+    const int i = free_only ? dofs_.free_nodes[j] : j;
+    // |l| - bound is a lower bound of s: nodes farther than bound + delta cannot touch.
+    if ((x.col(i) - P.b).squaredNorm() > reach * reach) continue;
+    Vec3 n;
+    Mat3 H;
+    const double s = C.distance(P, x.col(i), &n, &H);
+    if (s < C.law.thickness) f(j, i, stiffness(c, i), s, n, H);
   }
 }
 
 void ExternalPotential::add_damping(const Points& x, const Eigen::VectorXd& xdot, Eigen::VectorXd& grad) const {
   if (!damped_) return;
-  for (std::size_t k = 0; k < planes_.size(); ++k) {
-    const GroundSpec& P = planes_[k];
-    if (P.damping <= 0) continue;
-    for (int i = 0; i < x.cols(); ++i)
-      grad.segment<3>(3 * i) -= ground_damping_force(stiffness(k, i), P.damping, P.thickness, points_[k], P.normal, x.col(i),
-                                                     xdot.segment<3>(3 * i) - velocities_[k], nullptr, nullptr);
+  for (std::size_t c = 0; c < colliders_.size(); ++c) {
+    const ContactLaw& L = colliders_[c].law;
+    if (L.damping <= 0 && L.friction <= 0) continue;
+    const ColliderPose& P = poses_[c];
+    for_each_contact(c, x, false, [&](int, int i, double k, double s, const Vec3& n, const Mat3& H) {
+      const Vec3 vrel = xdot.segment<3>(3 * i) - P.velocity_at(x.col(i));
+      grad.segment<3>(3 * i) -= contact_damping_force(k, L.damping, L.friction, L.slip_speed, L.thickness, s, n, H, vrel,
+                                                      -skew(P.omega), nullptr, nullptr);
+    });
   }
 }
 
 void ExternalPotential::add_damping_jacobians(const Points& x, const Eigen::VectorXd& xdot, double* neg_dfdx,
                                               double* neg_dfdv) const {
   if (!damped_ || (!neg_dfdx && !neg_dfdv)) return;
-  for (std::size_t k = 0; k < planes_.size(); ++k) {
-    const GroundSpec& P = planes_[k];
-    if (P.damping <= 0) continue;
-    for (int f = 0; f < dofs_.num_free(); ++f) {
-      const int i = dofs_.free_nodes[f];
+  for (std::size_t c = 0; c < colliders_.size(); ++c) {
+    const ContactLaw& L = colliders_[c].law;
+    if (L.damping <= 0 && L.friction <= 0) continue;
+    const ColliderPose& P = poses_[c];
+    for_each_contact(c, x, true, [&](int f, int i, double k, double s, const Vec3& n, const Mat3& H) {
       Mat3 Dx, Dv;
-      ground_damping_force(stiffness(k, i), P.damping, P.thickness, points_[k], P.normal, x.col(i),
-                           xdot.segment<3>(3 * i) - velocities_[k], &Dx, &Dv);
-      for (int c = 0; c < 9; ++c) {
-        if (neg_dfdx) neg_dfdx[diag_slots_[9 * f + c]] += Dx(c / 3, c % 3);
-        if (neg_dfdv) neg_dfdv[diag_slots_[9 * f + c]] += Dv(c / 3, c % 3);
+      const Vec3 vrel = xdot.segment<3>(3 * i) - P.velocity_at(x.col(i));
+      contact_damping_force(k, L.damping, L.friction, L.slip_speed, L.thickness, s, n, H, vrel, -skew(P.omega), &Dx, &Dv);
+      for (int e = 0; e < 9; ++e) {
+        if (neg_dfdx) neg_dfdx[diag_slots_[9 * f + e]] += Dx(e / 3, e % 3);
+        if (neg_dfdv) neg_dfdv[diag_slots_[9 * f + e]] += Dv(e / 3, e % 3);
       }
-    }
+    });
+  }
+}
+
+void ExternalPotential::contact_forces(const Points& x, const Eigen::VectorXd* xdot, Points& out) const {
+  out.setZero(3, x.cols());
+  for (std::size_t c = 0; c < colliders_.size(); ++c) {
+    const ContactLaw& L = colliders_[c].law;
+    const ColliderPose& P = poses_[c];
+    for_each_contact(c, x, false, [&](int, int i, double k, double s, const Vec3& n, const Mat3& H) {
+      Vec3 g;
+      contact_energy(k, L.thickness, s, n, H, &g, nullptr);
+      out.col(i) -= g;
+      if (xdot && (L.damping > 0 || L.friction > 0))
+        out.col(i) += contact_damping_force(k, L.damping, L.friction, L.slip_speed, L.thickness, s, n, H,
+                                            xdot->segment<3>(3 * i) - P.velocity_at(x.col(i)), -skew(P.omega), nullptr, nullptr);
+    });
   }
 }
 
@@ -99,24 +124,23 @@ double ExternalPotential::add_gradient(const Points& x, Eigen::VectorXd& grad) c
   for (int i = 0; i < x.cols(); ++i) {
     E -= mass_[i] * gravity.dot(x.col(i));
     grad.segment<3>(3 * i) -= mass_[i] * gravity;
-    for (std::size_t k = 0; k < planes_.size(); ++k) {
-      Vec3 gk;
-      E += ground_energy(stiffness(k, i), planes_[k].thickness, points_[k], planes_[k].normal, x.col(i), &gk, nullptr);
-      grad.segment<3>(3 * i) += gk;
-    }
   }
+  for (std::size_t c = 0; c < colliders_.size(); ++c)
+    for_each_contact(c, x, false, [&](int, int i, double k, double s, const Vec3& n, const Mat3& H) {
+      Vec3 gk;
+      E += contact_energy(k, colliders_[c].law.thickness, s, n, H, &gk, nullptr);
+      grad.segment<3>(3 * i) += gk;
+    });
   return E;
 }
 
 void ExternalPotential::add_hessian(const Points& x, double scale, double* values) const {
-  if (planes_.empty()) return;
-  for (int f = 0; f < dofs_.num_free(); ++f)
-    for (std::size_t k = 0; k < planes_.size(); ++k) {
-      Mat3 H;
-      ground_energy(stiffness(k, dofs_.free_nodes[f]), planes_[k].thickness, points_[k], planes_[k].normal, x.col(dofs_.free_nodes[f]),
-                    nullptr, &H);
-      for (int c = 0; c < 9; ++c) values[diag_slots_[9 * f + c]] += scale * H(c / 3, c % 3);
-    }
+  for (std::size_t c = 0; c < colliders_.size(); ++c)
+    for_each_contact(c, x, true, [&](int f, int, double k, double s, const Vec3& n, const Mat3& H) {
+      Mat3 He;
+      contact_energy(k, colliders_[c].law.thickness, s, n, H, nullptr, &He);
+      for (int e = 0; e < 9; ++e) values[diag_slots_[9 * f + e]] += scale * He(e / 3, e % 3);
+    });
 }
 
 double LoadHistory::factor(double t) const {

@@ -66,8 +66,8 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
   node_mass_ *= scene.material.density * mesh.rest_volume() / area;
   dof_mass_.resize(num_dofs());
   for (int f = 0; f < dofs_.num_free(); ++f) dof_mass_.segment<3>(3 * f).setConstant(node_mass_[dofs_.free_nodes[f]]);
-  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.contact_planes(), dofs_, pattern_,
-                                                  surface_areas(scene.mesh));
+  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.colliders, dofs_, pattern_,
+                                                  surface_areas(scene.mesh), scene.skeleton);
   external_->set_loads(scene.loads);
   volume_ = VolumeConstraints::surface(mesh, dofs_, pattern_);
   rest_volume_ = volume_.rest_volumes()[0];

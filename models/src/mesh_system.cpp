@@ -34,8 +34,8 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
   elastic_ = std::make_unique<ElasticAssembly>(scene.mesh, material_, dofs_,
                                                EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
   node_mass_ = lumped_mass(scene.mesh, scene.material.density);
-  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.contact_planes(), dofs_, elastic_->pattern(),
-                                                  surface_areas(scene.mesh));
+  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.colliders, dofs_, elastic_->pattern(),
+                                                  surface_areas(scene.mesh), scene.skeleton);
   external_->set_loads(scene.loads);
   pressure_loads_ = std::make_unique<PressureLoads>(scene.pressure_loads, dofs_, elastic_->pattern());
   damping_ = scene.damping;

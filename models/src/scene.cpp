@@ -65,8 +65,7 @@ std::vector<double> Scene::breakpoints() const {
   for (const Driver& d : boundary) d.breakpoints(t);
   if (skeleton)
     for (const BoneSpec& b : skeleton->bones()) b.motion.breakpoints(t);
-  for (const GroundSpec& p : contact_planes())
-    if (p.enabled && p.displacement.squaredNorm() > 0) t.insert(t.end(), {p.t0, p.t1});
+  for (const Collider& c : colliders) c.motion.breakpoints(t);
   if (gravity_ramp > 0) t.push_back(gravity_ramp);
   if (zone_restore_time > 0 && keep_zones && !zones.empty()) t.push_back(frames.times().front() + zone_restore_time);
   for (const NodeLoad& l : loads) l.history.breakpoints(t);
@@ -74,12 +73,6 @@ std::vector<double> Scene::breakpoints() const {
   std::sort(t.begin(), t.end());
   t.erase(std::unique(t.begin(), t.end()), t.end());
   return t;
-}
-
-std::vector<GroundSpec> Scene::contact_planes() const {
-  std::vector<GroundSpec> p{ground};
-  p.insert(p.end(), planes.begin(), planes.end());
-  return p;
 }
 
 Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what) {
@@ -156,11 +149,9 @@ MaterialSpec parse_material(const Section& s) {
   return m;
 }
 
-Driver parse_boundary(const Section& b, const Mesh& mesh) {
+// A motion in time: `kind` ("fixed", "ramp", "keyframes", "sinusoid", "rotation") and its keys.
+Driver parse_motion(const Section& b) {
   Driver d;
-  const Section sel = b.table("select");
-  if (!sel.exists()) b.fail("select", "missing, expected the nodes to drive, e.g. { kind = \"set\", name = \"zmin\" }");
-  d.nodes = select_nodes(mesh, Selection::parse(sel));
   const std::string kind = b.string("kind", "fixed", {"fixed", "ramp", "keyframes", "sinusoid", "rotation"});
   if (kind == "ramp") {
     d.kind = Driver::Kind::ramp;
@@ -176,19 +167,24 @@ Driver parse_boundary(const Section& b, const Mesh& mesh) {
     d.frequency = b.number("frequency", 1.0, Range::positive());
     d.phase = b.number("phase", 0.0);
   } else if (kind == "rotation") {
-    const std::vector<int> nodes = d.nodes;
     d = parse_keyframes(b, "angles", 1, M_PI / 180.0, "one angle (degrees)");
-    d.nodes = nodes;
     d.rotation = true;
     d.center = b.vec3("center", Eigen::Vector3d::Zero());
     d.axis = b.vec3("axis", Eigen::Vector3d::UnitZ());
     if (d.axis.norm() == 0) b.fail("axis", "expected a non-zero vector");
     d.axis.normalize();
   } else if (kind == "keyframes") {
-    const std::vector<int> nodes = d.nodes;
     d = parse_keyframes(b, "values", 3, 1.0, "3 numbers (a displacement)");
-    d.nodes = nodes;
   }
+  return d;
+}
+
+Driver parse_boundary(const Section& b, const Mesh& mesh) {
+  const Section sel = b.table("select");
+  if (!sel.exists()) b.fail("select", "missing, expected the nodes to drive, e.g. { kind = \"set\", name = \"zmin\" }");
+  const std::vector<int> nodes = select_nodes(mesh, Selection::parse(sel));
+  Driver d = parse_motion(b);
+  d.nodes = nodes;
   // Which components the driver holds: all (default), some axes, or the normal of a plane.
   if (b.has("components") && b.has("normal")) b.fail("normal", "give either components or normal, not both");
   if (b.has("components")) {
@@ -326,41 +322,156 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
 }  // namespace
 
 namespace {
-// A body that starts inside a contact plane meets a force of its whole penetration at once, and
-// the integrators crawl (IDA at 1e-9 s steps) or fail: an error naming the plane and the nodes.
+
+// A contact law: `defaults` ([contact]'s, or built-in ones) for keys the table does not give.
+ContactLaw parse_contact_law(const Section& c, const ContactLaw& defaults) {
+  ContactLaw L;
+  L.stiffness = c.number("stiffness", defaults.stiffness, Range::positive());
+  L.thickness = c.number("thickness", defaults.thickness, Range::positive());
+  L.per_area = c.string("law", defaults.per_area ? "area" : "node", {"node", "area"}) == "area";
+  L.damping = c.number("damping", defaults.damping, Range::non_negative());
+  L.friction = c.number("friction", defaults.friction, Range::non_negative());
+  L.slip_speed = c.number("slip_speed", defaults.slip_speed, Range::positive());
+  return L;
+}
+
+Eigen::Vector3d nonzero_vec3(const Section& s, std::string_view key, const Eigen::Vector3d& fallback) {
+  const Eigen::Vector3d v = s.vec3(key, fallback);
+  if (v.norm() == 0) s.fail(key, "expected a non-zero vector");
+  return v.normalized();
+}
+
+double required_positive(const Section& s, std::string_view key, const std::string& what) {
+  if (!s.has(key)) s.fail(key, "missing, " + what);
+  return s.number(key, 0.0, Range::positive());
+}
+
+// One [[collider]]: its shape, pose, law and motion (docs/scenes.md).
+Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& defaults) {
+  Collider C;
+  C.name = c.path();
+  using K = ColliderShape::Kind;
+  if (!c.has("shape")) c.fail("shape", "missing, expected one of \"plane\", \"sphere\", \"capsule\", \"box\", \"cylinder\"");
+  C.shape.kind = parse_choice<K>(c, "shape", K::plane,
+                                 {{"plane", K::plane}, {"sphere", K::sphere}, {"capsule", K::capsule}, {"box", K::box}, {"cylinder", K::cylinder}});
+  ColliderShape& S = C.shape;
+  C.center = c.vec3("center", Eigen::Vector3d::Zero());
+  const Eigen::Vector3d axis = nonzero_vec3(c, "axis", Eigen::Vector3d::UnitZ());
+  C.rotation = frame_with_axis(axis, c.number("angle", 0.0) * M_PI / 180.0);
+  double smallest = 0;  // the smallest half dimension (bounds the rounding)
+  switch (S.kind) {
+    case K::plane: break;
+    case K::sphere: S.radius = required_positive(c, "radius", "a sphere needs its radius (m)"); break;
+    case K::capsule:
+      S.radius = required_positive(c, "radius", "a capsule needs its radius (m)");
+      S.half_length = 0.5 * required_positive(c, "length", "a capsule needs the length of its axis segment (m)");
+      break;
+    case K::box: {
+      if (!c.has("size")) c.fail("size", "missing, a box needs its edge lengths [x, y, z] (m)");
+      const Eigen::Vector3d size = c.vec3("size", {});
+      if (size.minCoeff() <= 0) c.fail("size", "expected three positive edge lengths (m)");
+      S.half_extents = 0.5 * size;
+      smallest = S.half_extents.minCoeff();
+      break;
+    }
+    case K::cylinder:
+      S.radius = required_positive(c, "radius", "a cylinder needs its radius (m; hollow: the hole's)");
+      S.half_length = 0.5 * required_positive(c, "length", "a cylinder needs its height (m)");
+      S.wall = c.number("wall", 0.0, Range::non_negative());
+      smallest = std::min(S.half_length, S.wall > 0 ? 0.5 * S.wall : S.radius);
+      break;
+  }
+  if (S.kind == K::box || S.kind == K::cylinder) {
+    S.rounding = c.number("rounding", 0.1 * smallest, Range::non_negative());
+    if (S.rounding > smallest)
+      c.fail("rounding", "expected at most " + std::to_string(smallest) + " m (half the shape's smallest dimension)");
+  }
+  C.law = parse_contact_law(c, defaults);
+  const Section motion = c.table("motion");
+  if (c.has("bone")) {
+    if (motion.exists()) c.fail("motion", "a collider follows a bone or a motion, not both");
+    const std::string bone = c.string("bone", "");
+    if (!sc.skeleton) c.fail("bone", "the scene has no [skeleton] (expected a bone name from [[skeleton.bone]])");
+    const auto& bones = sc.skeleton->bones();
+    for (std::size_t b = 0; b < bones.size(); ++b)
+      if (bones[b].name == bone) C.bone = static_cast<int>(b);
+    if (C.bone < 0) c.fail("bone", "no bone named \"" + bone + "\" in [skeleton]");
+  } else if (motion.exists()) {
+    C.motion = parse_motion(motion);
+  }
+  return C;
+}
+
+// contact.ground, [[contact.plane]] and [[collider]] into sc.colliders.
+void parse_colliders(const Section& root, Scene& sc) {
+  const Section contact = root.table("contact");
+  const ContactLaw defaults = parse_contact_law(contact, ContactLaw{});
+  if (contact.boolean("ground", false)) {
+    sc.colliders.push_back(Collider::plane(contact.vec3("point", Eigen::Vector3d::Zero()),
+                                           nonzero_vec3(contact, "normal", Eigen::Vector3d::UnitZ()), defaults));
+    sc.colliders.back().name = "contact.ground";
+  } else {
+    contact.vec3("point", Eigen::Vector3d::Zero());  // read (and checked) for a --set contact.ground variant
+    nonzero_vec3(contact, "normal", Eigen::Vector3d::UnitZ());
+  }
+  for (const Section& p : contact.tables("plane")) {
+    if (!p.has("point") || !p.has("normal")) p.fail(p.has("point") ? "normal" : "point", "missing, a contact plane needs a point and a normal");
+    Collider C = Collider::plane(p.vec3("point", {}), nonzero_vec3(p, "normal", {}), parse_contact_law(p, defaults));
+    C.name = p.path();
+    const Eigen::Vector3d u = p.vec3("displacement", Eigen::Vector3d::Zero());
+    const double t0 = p.number("t0", 0.0, Range::non_negative()), t1 = p.number("t1", 1.0, Range::positive());
+    if (t1 <= t0) p.fail("t1", "expected t1 > t0");
+    if (u.squaredNorm() > 0) {
+      C.motion.kind = Driver::Kind::ramp;
+      C.motion.vector = u;
+      C.motion.t0 = t0;
+      C.motion.t1 = t1;
+    }
+    sc.colliders.push_back(C);
+  }
+  for (const Section& c : root.tables("collider")) sc.colliders.push_back(parse_collider(c, sc, defaults));
+}
+
+// A body that starts inside a collider meets a force of its whole penetration at once, and the
+// integrators crawl (IDA at 1e-9 s steps) or fail: an error naming the collider and the nodes.
 // Within the contact thickness the law is as smooth as anywhere (a body may start resting there).
-void check_initial_contact(const Scene& sc, const Section& contact) {
-  const Points& x = sc.mesh.rest_positions();
-  const std::vector<GroundSpec> planes = sc.contact_planes();
-  for (std::size_t p = 0; p < planes.size(); ++p) {
-    const GroundSpec& g = planes[p];
-    if (!g.enabled) continue;
-    const Eigen::Vector3d point = g.point_at(0.0);
+void check_initial_contact(const Section& root, const Scene& sc) {
+  const Section contact = root.table("contact");
+  const Points& x = sc.initial_positions.size() ? sc.initial_positions : sc.mesh.rest_positions();
+  for (std::size_t k = 0; k < sc.colliders.size(); ++k) {
+    const Collider& C = sc.colliders[k];
+    const ColliderPose P = C.pose(0.0, sc.skeleton.get());
     int inside = 0;
     double deepest = 0;
     for (int n = 0; n < x.cols(); ++n) {
-      const double d = (x.col(n) - point).dot(g.normal);
-      if (d < -g.thickness) {
+      const double d = C.distance(P, x.col(n), nullptr, nullptr);
+      if (d < -C.law.thickness) {
         ++inside;
         deepest = std::min(deepest, d);
       }
     }
     if (inside == 0) continue;
-    char buf[320];
+    char where[160];
+    if (C.shape.kind == ColliderShape::Kind::plane)
+      std::snprintf(where, sizeof where, "below the plane through [%g, %g, %g] with normal [%g, %g, %g]", P.b.x(), P.b.y(),
+                    P.b.z(), P.A(0, 2), P.A(1, 2), P.A(2, 2));
+    else
+      std::snprintf(where, sizeof where, "inside this %s at t = 0", C.shape.name());
+    char buf[400];
     std::snprintf(buf, sizeof buf,
-                  "%d of %d nodes start more than the contact thickness (%g m) below the plane through [%g, %g, %g] "
-                  "with normal [%g, %g, %g] (the deepest %.3g m; expected the body on the normal's side: move "
-                  "mesh.center or the plane)",
-                  inside, static_cast<int>(x.cols()), g.thickness, point.x(), point.y(), point.z(), g.normal.x(),
-                  g.normal.y(), g.normal.z(), -deepest);
-    if (p == 0) contact.fail("ground", buf);
-    contact.tables("plane").at(p - 1).fail("point", buf);
+                  "%d of %d nodes start more than the contact thickness (%g m) %s (the deepest %.3g m; expected the "
+                  "body outside it: move mesh.center or the collider)",
+                  inside, static_cast<int>(x.cols()), C.law.thickness, where, -deepest);
+    if (C.name == "contact.ground") contact.fail("ground", buf);
+    if (C.name.rfind("contact.plane", 0) == 0) contact.tables("plane").at(k - (sc.colliders[0].name == "contact.ground")).fail("point", buf);
+    root.tables("collider").at(k - (sc.colliders.size() - root.tables("collider").size())).fail(C.shape.kind == ColliderShape::Kind::plane ? "center" : "shape", buf);
   }
 }
+
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, 0.0, true, {}, {}, {}, {}};
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, 0.0, true, {}, {}, {}, {}};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
@@ -387,34 +498,7 @@ Scene parse_scene(SceneFile file) {
   const Section forces = root.table("forces");
   sc.gravity = forces.vec3("gravity", sc.gravity);
   sc.gravity_ramp = forces.number("gravity_ramp", 0.0, Range::non_negative());
-  const Section contact = root.table("contact");
-  sc.ground.enabled = contact.boolean("ground", false);
-  sc.ground.point = contact.vec3("point", Eigen::Vector3d::Zero());
-  sc.ground.normal = contact.vec3("normal", Eigen::Vector3d::UnitZ());
-  if (sc.ground.normal.norm() == 0) contact.fail("normal", "expected a non-zero vector");
-  sc.ground.normal.normalize();
-  sc.ground.stiffness = contact.number("stiffness", sc.ground.stiffness, Range::positive());
-  sc.ground.thickness = contact.number("thickness", sc.ground.thickness, Range::positive());
-  sc.ground.per_area = contact.string("law", "node", {"node", "area"}) == "area";
-  sc.ground.damping = contact.number("damping", 0.0, Range::non_negative());
-  for (const Section& p : contact.tables("plane")) {
-    GroundSpec g;
-    g.enabled = true;
-    if (!p.has("point") || !p.has("normal")) p.fail(p.has("point") ? "normal" : "point", "missing, a contact plane needs a point and a normal");
-    g.point = p.vec3("point", {});
-    g.normal = p.vec3("normal", {});
-    if (g.normal.norm() == 0) p.fail("normal", "expected a non-zero vector");
-    g.normal.normalize();
-    g.stiffness = p.number("stiffness", sc.ground.stiffness, Range::positive());
-    g.thickness = p.number("thickness", sc.ground.thickness, Range::positive());
-    g.per_area = p.string("law", sc.ground.per_area ? "area" : "node", {"node", "area"}) == "area";
-    g.damping = p.number("damping", sc.ground.damping, Range::non_negative());
-    g.displacement = p.vec3("displacement", Eigen::Vector3d::Zero());
-    g.t0 = p.number("t0", 0.0, Range::non_negative());
-    g.t1 = p.number("t1", 1.0, Range::positive());
-    if (g.t1 <= g.t0) p.fail("t1", "expected t1 > t0");
-    sc.planes.push_back(g);
-  }
+  parse_colliders(root, sc);
   for (const Section& l : root.tables("load")) parse_load(l, sc.mesh, sc);
   const Section damping = root.table("damping");
   sc.damping.alpha = damping.number("alpha", 0.0, Range::non_negative());
@@ -481,7 +565,7 @@ Scene parse_scene(SceneFile file) {
       in.fail("dt", buf);
     }
   }
-  check_initial_contact(sc, contact);
+  check_initial_contact(root, sc);
 
   const Section out = root.table("output");
   const std::string stem = std::filesystem::path(sc.file.name()).stem().string();

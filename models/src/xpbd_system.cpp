@@ -30,10 +30,11 @@ XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_
       held_[it->second].drivers.push_back(r.driver);
     }
   }
-  for (const GroundSpec& g : scene.contact_planes())
-    if (g.enabled && g.damping != 0)
-      throw Error(scene.file.name() + ": contact damping is not available with integrator.kind = \"xpbd\" (its contact is a "
-                                      "projection onto the plane; expected contact.damping = 0)");
+  for (const Collider& c : scene.colliders)
+    if (c.law.damping != 0 || c.law.friction != 0)
+      throw Error(scene.file.name() + ": " + c.name + ": contact damping and friction are not available with integrator.kind = "
+                                      "\"xpbd\" (its contact is a projection onto the collider's surface; expected damping = 0 "
+                                      "and friction = 0)");
   const Mesh& mesh = scene.mesh;
   const double mu = scene.material.mu, lambda = scene.material.lambda;
   const double lambda_p = std::isinf(lambda) ? lambda : lambda + mu;
@@ -151,12 +152,12 @@ void XpbdMeshSystem::project_zones(Eigen::VectorXd& x) {
 }
 
 void XpbdMeshSystem::project_collisions(double t, Eigen::VectorXd& x) {
-  for (const GroundSpec& g : scene_.contact_planes()) {
-    if (!g.enabled) continue;
-    const Eigen::Vector3d p = g.point_at(t), n = g.normal.normalized();
+  for (const Collider& c : scene_.colliders) {
+    const ColliderPose P = c.pose(t, scene_.skeleton.get());
     for (int node : dofs_.free_nodes) {
-      const double s = (x.segment<3>(3 * node) - p).dot(n);
-      if (s < 0) x.segment<3>(3 * node) -= s * n;
+      Eigen::Vector3d n;
+      const double s = c.distance(P, x.segment<3>(3 * node), &n, nullptr);
+      if (s < 0) x.segment<3>(3 * node) -= s * n;  // onto the surface (exactly for a plane, to first order else)
     }
   }
 }

@@ -48,15 +48,25 @@ double spring_energy(double k, double rest_length, const Vec6& x, Vec6* grad, Ma
 // its derivatives with respect to positions and velocities (6x6 each).
 Vec6 spring_damping_force(double c, const Vec6& x, const Vec6& v, Mat6* df_dx, Mat6* df_dv);
 
-// Smooth ground: a plane through `point` with unit `normal`; for the signed distance s of a node,
-// energy k/3 (delta - s)^3 when s < delta (contact thickness delta), else 0. C^2 in position.
+// Contact with a rigid body (colliders.hpp) at a node whose signed distance to it is s, with
+// gradient n = ds/dx and Hessian H = d2s/dx2 there: energy k/3 (delta - s)^3 when s < delta
+// (contact thickness delta), else 0. C^2 in position where s is; gradient -k p^2 n and Hessian
+// 2 k p n n^T - k p^2 H with the penetration p = delta - s.
+double contact_energy(double k, double delta, double s, const Vec3& n, const Mat3& H, Vec3* grad, Mat3* hess);
+// The contact's dissipative force at a node moving at v_rel relative to the body's material there
+// (dv_rel/dx = -skew(omega) for a body turning at omega: pass it as dvrel_dx).
+// Normal damping (Hunt & Crossley's form): with sdot = n . v_rel, f = -k alpha p^2 sdot n, the
+// elastic force k p^2 times alpha sdot: C^1 in position, linear in velocity; a point mass hitting
+// at speed v0 leaves at e = sqrt(1 - 4/3 alpha v0) to first order in alpha v0 (docs/scenes.md).
+// Smoothed Coulomb friction: with the tangential velocity u = (I - n n^T) v_rel, f = -mu_c k p^2
+// u / sqrt(|u|^2 + eps^2) (eps the slip speed: below it friction grows linearly with the speed).
+// Returns f; -df/dx and -df/dv into the 3x3 blocks if asked.
+Vec3 contact_damping_force(double k, double alpha, double mu_c, double eps, double delta, double s, const Vec3& n,
+                           const Mat3& H, const Vec3& v_rel, const Mat3& dvrel_dx, Mat3* neg_dfdx, Mat3* neg_dfdv);
+
+// The same for a plane through `point` with unit `normal` (s = (x - point) . normal, H = 0).
 double ground_energy(double k, double delta, const Vec3& point, const Vec3& normal, const Vec3& x, Vec3* grad,
                      Mat3* hess);
-// The ground's normal damping (Hunt & Crossley's form): with penetration p = delta - s > 0 and
-// the node's normal velocity relative to the plane sdot = n . (v - v_plane), the force
-// f = -k alpha p^2 sdot n, the elastic force k p^2 times alpha sdot. C^1 in position, linear in
-// velocity; a point mass hitting at speed v0 leaves at e = sqrt(1 - 4/3 alpha v0) to first order
-// in alpha v0 (docs/scenes.md). Returns f; -df/dx and -df/dv into the 3x3 blocks if asked.
 Vec3 ground_damping_force(double k, double alpha, double delta, const Vec3& point, const Vec3& normal, const Vec3& x,
                           const Vec3& v_rel, Mat3* neg_dfdx, Mat3* neg_dfdv);
 

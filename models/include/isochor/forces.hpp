@@ -1,29 +1,13 @@
-// Forces other than elasticity: gravity and ground contact (as a potential), Rayleigh damping,
+// Forces other than elasticity: gravity, loads and contact with colliders (as a potential), Rayleigh damping,
 // and the spring network of the mass-spring model.
 #pragma once
+#include <memory>
 #include <vector>
 
 #include "isochor/assembly.hpp"
+#include "isochor/colliders.hpp"
 
 namespace isochor {
-
-struct GroundSpec {
-  bool enabled = false;
-  Vec3 point = Vec3::Zero(), normal = Vec3::UnitZ();
-  double stiffness = 1e6;   // k in k/3 (delta - s)^3, N/m^3
-  double thickness = 1e-3;  // delta, m
-  // Per node (false): energy k/3 (delta - s)^3 at every node, k in N/m^3. Per area (true): the
-  // same times the node's rest surface area A_i (a third of its surface triangles'), k in N/m^4:
-  // a pressure k p^2 at penetration p, the same ground for a coarse and a fine mesh.
-  bool per_area = false;
-  // alpha (s/m): normal damping k alpha p^2 sdot (elements.hpp: ground_damping_force); 0: none.
-  double damping = 0.0;
-  // A moving plane: its point travels by `displacement` between t0 and t1 (linearly).
-  Vec3 displacement = Vec3::Zero();
-  double t0 = 0.0, t1 = 1.0;
-  Vec3 point_at(double t) const;
-  Vec3 velocity_at(double t) const;
-};
 
 // How a load grows in time (statics: pseudo-time): min(1, t / ramp) (ramp = 0: full at once), or
 // piecewise linear through (times, factors), held outside them.
@@ -73,48 +57,61 @@ class PressureLoads {
   double time_ = 0.0;
 };
 
-// Gravity, dead loads and the ground as one external potential:
-// sum_i -m_i g . x_i - sum_loads f_i . x_i + ground energy.
+// Gravity, dead loads and the colliders (the ground among them) as one external potential:
+// sum_i -m_i g . x_i - sum_loads f_i . x_i + contact energy; the colliders' damping and friction
+// as a dissipative force beside it.
 class ExternalPotential {
  public:
-  // planes: the ground and any other contact planes (only enabled ones act).
-  // area: each node's rest surface area (per_area planes; empty if none is per area).
-  ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::vector<GroundSpec> planes, const DofMap& dofs,
-                    const Pattern& pattern, Eigen::VectorXd area = {});
+  // area: each node's rest surface area (per-area contact laws; empty if none is per area).
+  // skeleton: the scene's, if a collider rides a bone.
+  ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::vector<Collider> colliders, const DofMap& dofs,
+                    const Pattern& pattern, Eigen::VectorXd area = {}, std::shared_ptr<const Skeleton> skeleton = {});
   double energy(const Points& x) const;
   // grad += gradient over every node (3 N).
   double add_gradient(const Points& x, Eigen::VectorXd& grad) const;
-  // values += scale * Hessian over the free dofs (the ground's 3x3 diagonal blocks).
+  // values += scale * Hessian over the free dofs (the contact's 3x3 diagonal blocks).
   void add_hessian(const Points& x, double scale, double* values) const;
   const Eigen::VectorXd& mass() const { return mass_; }
   // Gravity is multiplied by this factor (loads applied in increments); 1 by default.
   void set_gravity_scale(double s) { gravity_scale_ = s; }
-  // Moves the contact planes to where they are at time t, and scales the loads.
+  // Moves the colliders to where they are at time t, and scales the loads.
   void set_time(double t);
   void set_loads(std::vector<NodeLoad> loads) { loads_ = std::move(loads); }
   // grad += -(the loads' forces) at the current time; returns their potential -f . x.
   double add_load_gradient(Eigen::VectorXd& grad, const Points* x = nullptr) const;
-  // The contact planes' normal damping: grad += -f (every node, 3 N), for velocities xdot (3 N).
+  // The colliders' damping and friction: grad += -f (every node, 3 N), for velocities xdot (3 N).
   void add_damping(const Points& x, const Eigen::VectorXd& xdot, Eigen::VectorXd& grad) const;
-  // -df/dx and -df/dv of the damping over the free dofs (either may be null).
+  // -df/dx and -df/dv of the damping and friction over the free dofs (either may be null).
   void add_damping_jacobians(const Points& x, const Eigen::VectorXd& xdot, double* neg_dfdx, double* neg_dfdv) const;
   bool damped() const { return damped_; }
+  bool has_friction() const { return friction_; }
+  bool has_contact() const { return !colliders_.empty(); }
+  // The force of every collider on every node (N, 3 x N): the contact's elastic force, plus its
+  // damping and friction for velocities xdot (if given).
+  void contact_forces(const Points& x, const Eigen::VectorXd* xdot, Points& out) const;
+  const std::vector<Collider>& colliders() const { return colliders_; }
+  const std::vector<ColliderPose>& poses() const { return poses_; }
 
  private:
   Vec3 g() const { return gravity_scale_ * gravity_; }
+  // Calls f(node, k, s, n, H) for every node (every free node if free_only) within collider c's
+  // contact thickness.
+  template <class F>
+  void for_each_contact(std::size_t c, const Points& x, bool free_only, F&& f) const;
   Eigen::VectorXd mass_;
   Vec3 gravity_;
   double gravity_scale_ = 1.0;
-  std::vector<GroundSpec> planes_;
-  std::vector<Vec3> points_, velocities_;  // where each plane is now, and its velocity
+  std::vector<Collider> colliders_;
+  std::vector<ColliderPose> poses_;  // where each collider is now
+  std::shared_ptr<const Skeleton> skeleton_;
   std::vector<NodeLoad> loads_;
   double time_ = 0.0;
-  bool damped_ = false;
+  bool damped_ = false, friction_ = false;
   DofMap dofs_;
   std::vector<Index> diag_slots_;  // 9 per free node
   Eigen::VectorXd area_;
-  double stiffness(std::size_t plane, int node) const {
-    return planes_[plane].per_area ? planes_[plane].stiffness * area_[node] : planes_[plane].stiffness;
+  double stiffness(std::size_t c, int node) const {
+    return colliders_[c].law.per_area ? colliders_[c].law.stiffness * area_[node] : colliders_[c].law.stiffness;
   }
 };
 

@@ -47,7 +47,10 @@ class MeshSystem : public SceneSystem {
   bool rescale_volume(double t, VectorXd& q) override;
   bool potential(double t, const VectorXd& q, double& V) override;
   bool has_damping() const override { return damping_.alpha != 0 || damping_.beta != 0 || external_->damped(); }
+  // Friction is not variational (its force is not the gradient of a dissipation frozen per step):
+  // a scene with friction keeps its damping forces on, and backward Euler takes plain Newton steps.
   bool set_damping_forces(bool on) override {
+    if (external_->has_friction()) return false;
     damping_on_ = on;
     return true;
   }

@@ -82,8 +82,8 @@ struct Scene {
   std::vector<Driver> boundary;  // Dirichlet drivers, in file order
   Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.81);
   double gravity_ramp = 0.0;  // s (pseudo-time in statics): gravity grows linearly to full at this time; 0: full at once
-  GroundSpec ground;
-  std::vector<GroundSpec> planes;  // [[contact.plane]]: more contact planes, possibly moving
+  // The ground (contact.ground), the [[contact.plane]]s and the [[collider]]s, in that order.
+  std::vector<Collider> colliders;
   std::vector<NodeLoad> loads;     // [[load]]: point loads and tractions (dead loads)
   std::vector<PressureLoad> pressure_loads;  // [[load]] kind = "pressure" (follower loads)
   RayleighDamping damping;
@@ -100,12 +100,10 @@ struct Scene {
   // Every node driven by [[boundary]] or bound to a bone, and their positions and velocities at t.
   std::vector<int> driven_nodes() const;
   void drive(double t, Points& x, Eigen::VectorXd* xdot) const;
-  // The factor on gravity at time t (forces.gravity_ramp), and every contact plane (the ground
-  // first, enabled or not, then [[contact.plane]]).
+  // The factor on gravity at time t (forces.gravity_ramp).
   double gravity_scale(double t) const;
-  std::vector<GroundSpec> contact_planes() const;
-  // Sorted distinct times where what the scene prescribes is not smooth in time: drivers' and
-  // bones' breakpoints (drivers.hpp), a moving plane's start and end, the end of the gravity ramp.
+  // Sorted distinct times where what the scene prescribes is not smooth in time: drivers', bones'
+  // and moving colliders' breakpoints (drivers.hpp), the end of the gravity ramp.
   std::vector<double> breakpoints() const;
 };
 

@@ -94,33 +94,60 @@ Vec6 spring_damping_force(double c, const Vec6& x, const Vec6& v, Mat6* df_dx, M
   return f;
 }
 
-double ground_energy(double k, double delta, const Vec3& point, const Vec3& normal, const Vec3& x, Vec3* grad,
-                     Mat3* hess) {
-  const double s = (x - point).dot(normal);
+double contact_energy(double k, double delta, double s, const Vec3& n, const Mat3& H, Vec3* grad, Mat3* hess) {
   const double p = delta - s;
   if (p <= 0) {
     if (grad) grad->setZero();
     if (hess) hess->setZero();
     return 0.0;
   }
-  if (grad) *grad = -k * p * p * normal;
-  if (hess) *hess = 2.0 * k * p * normal * normal.transpose();
+  if (grad) *grad = -k * p * p * n;
+  if (hess) *hess = 2.0 * k * p * n * n.transpose() - k * p * p * H;
   return k / 3.0 * p * p * p;
+}
+
+Vec3 contact_damping_force(double k, double alpha, double mu_c, double eps, double delta, double s, const Vec3& n,
+                           const Mat3& H, const Vec3& v_rel, const Mat3& dvrel_dx, Mat3* neg_dfdx, Mat3* neg_dfdv) {
+  const double p = delta - s;
+  if (neg_dfdx) neg_dfdx->setZero();
+  if (neg_dfdv) neg_dfdv->setZero();
+  if (p <= 0) return Vec3::Zero();
+  Vec3 f = Vec3::Zero();
+  const double sdot = n.dot(v_rel);
+  // d sdot / dx = v_rel^T H + n^T dvrel_dx (a row).
+  const Vec3 dsdot = H * v_rel + dvrel_dx.transpose() * n;
+  if (alpha > 0) {
+    const double c = k * alpha;
+    f -= c * p * p * sdot * n;
+    // f = -c p^2 sdot n with dp/dx = -n^T, dn/dx = H.
+    if (neg_dfdx) *neg_dfdx += c * (-2.0 * p * sdot * n * n.transpose() + p * p * n * dsdot.transpose() + p * p * sdot * H);
+    if (neg_dfdv) *neg_dfdv += c * p * p * n * n.transpose();
+  }
+  if (mu_c > 0) {
+    const Mat3 T = Mat3::Identity() - n * n.transpose();
+    const Vec3 u = T * v_rel;
+    const double r = std::sqrt(u.squaredNorm() + eps * eps), fn = k * p * p;
+    const Vec3 phi = u / r;
+    const Mat3 Dphi = (Mat3::Identity() - u * u.transpose() / (r * r)) / r;
+    f -= mu_c * fn * phi;
+    // du/dx = T dvrel_dx - sdot H - n (H v_rel)^T; d fn/dx = -2 k p n^T.
+    if (neg_dfdx)
+      *neg_dfdx += mu_c * (-2.0 * k * p * phi * n.transpose() +
+                           fn * Dphi * (T * dvrel_dx - sdot * H - n * (H * v_rel).transpose()));
+    if (neg_dfdv) *neg_dfdv += mu_c * fn * Dphi * T;
+  }
+  return f;
+}
+
+double ground_energy(double k, double delta, const Vec3& point, const Vec3& normal, const Vec3& x, Vec3* grad,
+                     Mat3* hess) {
+  return contact_energy(k, delta, (x - point).dot(normal), normal, Mat3::Zero(), grad, hess);
 }
 
 Vec3 ground_damping_force(double k, double alpha, double delta, const Vec3& point, const Vec3& normal, const Vec3& x,
                           const Vec3& v_rel, Mat3* neg_dfdx, Mat3* neg_dfdv) {
-  const double p = delta - (x - point).dot(normal);
-  if (p <= 0) {
-    if (neg_dfdx) neg_dfdx->setZero();
-    if (neg_dfdv) neg_dfdv->setZero();
-    return Vec3::Zero();
-  }
-  const double sdot = normal.dot(v_rel), c = k * alpha;
-  // dp/dx = -n^T: d(p^2)/dx = -2 p n^T.
-  if (neg_dfdx) *neg_dfdx = -2.0 * c * p * sdot * normal * normal.transpose();
-  if (neg_dfdv) *neg_dfdv = c * p * p * normal * normal.transpose();
-  return -c * p * p * sdot * normal;
+  return contact_damping_force(k, alpha, 0.0, 0.0, delta, (x - point).dot(normal), normal, Mat3::Zero(), v_rel,
+                               Mat3::Zero(), neg_dfdx, neg_dfdv);
 }
 
 }  // namespace isochor
