@@ -59,7 +59,7 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
                            const std::function<bool(int, const Frame&)>& on_frame) {
   const auto start = std::chrono::steady_clock::now();
   const bool tets = sys.has_tets();
-  return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), velocities = Points(),
+  return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), contact = Points(), poses = std::vector<double>(), velocities = Points(),
           multipliers = std::vector<double>()](
              int j, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
              const RunStats::FrameSample& s) mutable {
@@ -84,6 +84,12 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
     if (sys.has_loads()) {
       sys.loads(loads);
       f.loads = &loads;
+    }
+    if (sys.has_contact()) {
+      sys.contact(contact);
+      f.contact = &contact;
+      sys.collider_poses(poses);
+      f.collider_poses = &poses;
     }
     if (tets) f.stats.push_back({"inverted_tets", static_cast<double>(sys.inverted_tets())});
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -145,6 +151,7 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   {
     const double frames = static_cast<double>(sc.frames.num_frames());
     const double per_frame = 48.0 * sc.mesh.num_nodes() + (sys->has_loads() ? 24.0 * sc.mesh.num_nodes() : 0.0) +
+                             (sys->has_contact() ? 24.0 * sc.mesh.num_nodes() : 0.0) +
                              (sc.output.pressure ? 8.0 * sc.mesh.num_tets() : 0.0) + 2048;
     const double need = frames * per_frame, room = output_room_bytes(summary.output);
     if (!resume && need > room) {

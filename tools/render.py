@@ -3,7 +3,7 @@
 
     /usr/bin/python3 tools/render.py RUN.h5 [--frames 0,10,-1 | flattest | --every N]
         [--color deformation|displacement|pressure|zone] [--up z|y|-y|x,y,z] [--elev 18 --azim -60]
-        [--out DIR | --out FILE.png] [--size 800] [--mp4] [--loads]
+        [--out DIR | --out FILE.png] [--size 800] [--mp4] [--loads] [--contact]
 
 The surface is shaded smoothly (per-vertex normals, a key light, a fill light and a highlight)
 and drawn back to front with Gouraud triangles (matplotlib's Agg renderer). The colour is, per
@@ -17,8 +17,10 @@ vertex:
 Up is the ground's normal when the scene has a ground, else against gravity, else z; --up
 overrides it (a mesh modelled y-up: --up y). --elev and --azim place the camera relative to up.
 The ground and every [[contact.plane]] (moved to the frame's time) are drawn in their own
-planes; the body casts a shadow on the ground. --loads draws the applied loads (/frames/load) as
-arrows, the largest a fifth of the body's size. --out FILE.png with one frame writes that file.
+planes; the body casts a shadow on the ground. [[collider]] shapes are drawn translucent where
+the run wrote their poses (/frames/collider_pose). --loads draws the applied loads (/frames/load) as
+arrows, the largest a fifth of the body's size; --contact the colliders' force on each node
+(/frames/contact) the same way. --out FILE.png with one frame writes that file.
 """
 import argparse
 import os
@@ -104,6 +106,56 @@ def up_of(scene, override):
     if np.linalg.norm(g) > 0:
         return -unit(g), "against gravity"
     return np.array([0.0, 0.0, 1.0]), "z (no ground, no gravity)"
+
+
+def colliders_of(scene):
+    """The [[collider]] tables in scene order, after the ground and the planes: (index in
+    /frames/collider_pose, table)."""
+    contact = scene.get("contact", {})
+    first = (1 if contact.get("ground", False) else 0) + len(contact.get("plane", []))
+    return [(first + i, c) for i, c in enumerate(scene.get("collider", []))]
+
+
+def ring(radius, z, m=32):
+    a = np.linspace(0, 2 * np.pi, m, endpoint=False)
+    return np.stack([radius * np.cos(a), radius * np.sin(a), np.full(m, float(z))], axis=1)
+
+
+def band(r0, r1, m=32):
+    """Triangles between two rings (arrays of m points), as (2m, 3, 3)."""
+    j = np.roll(np.arange(m), -1)
+    i = np.arange(m)
+    return np.concatenate([np.stack([r0[i], r0[j], r1[j]], 1), np.stack([r0[i], r1[j], r1[i]], 1)])
+
+
+def shape_triangles(c):
+    """A collider's surface as triangles (T, 3, 3) in its own frame (axis z), for drawing; None for
+    a plane. Rounded edges are drawn sharp."""
+    kind = c.get("shape")
+    if kind in ("sphere", "capsule"):
+        r, half = float(c["radius"]), (0.5 * float(c["length"]) if kind == "capsule" else 0.0)
+        polar = np.linspace(0, np.pi, 13)
+        rings = [ring(r * np.sin(p), r * np.cos(p) + (half if p <= np.pi / 2 else -half)) for p in polar]
+        if kind == "capsule":  # the cylinder between the two caps
+            rings = rings[:7] + [ring(r, -half)] + rings[7:]
+        return np.concatenate([band(a, b) for a, b in zip(rings[:-1], rings[1:])])
+    if kind == "box":
+        h = 0.5 * np.array(c["size"], float)
+        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * h
+        faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+        return np.array([corners[[q[0], q[1], q[2]]] for q in faces] + [corners[[q[0], q[2], q[3]]] for q in faces])
+    if kind == "cylinder":
+        r, half, wall = float(c["radius"]), 0.5 * float(c["length"]), float(c.get("wall", 0.0))
+        outer = r + wall if wall > 0 else r
+        top, bottom = ring(outer, half), ring(outer, -half)
+        tris = [band(bottom, top)]
+        if wall > 0:  # the hole's wall and two annuli
+            itop, ibot = ring(r, half), ring(r, -half)
+            tris += [band(itop, ibot), band(top, itop), band(ibot, bottom)]
+        else:
+            tris += [band(top, 0 * top + [0, 0, half]), band(0 * bottom + [0, 0, -half], bottom)]
+        return np.concatenate(tris)
+    return None
 
 
 # ---- Geometry -----------------------------------------------------------------------------
@@ -227,6 +279,7 @@ def main():
     ap.add_argument("--azim", type=float, default=-60)
     ap.add_argument("--size", type=int, default=700, help="picture width and height in pixels")
     ap.add_argument("--loads", action="store_true")
+    ap.add_argument("--contact", action="store_true", help="draw the colliders' force on each node (/frames/contact)")
     ap.add_argument("--no-shadow", action="store_true")
     a = ap.parse_args()
     if not os.path.exists(a.run):
@@ -265,11 +318,24 @@ def main():
     os.makedirs(out, exist_ok=True)
     if a.loads and "/frames/load" not in f:
         sys.exit(f"{a.run}: no /frames/load (the scene has no [[load]])")
+    if a.contact and "/frames/contact" not in f:
+        sys.exit(f"{a.run}: no /frames/contact (the scene has no collider, or its integrator projects contact)")
     if a.color == "pressure" and "/frames/pressure" not in f:
         sys.exit(f"{a.run}: no /frames/pressure (run the scene with output.pressure = true)")
 
     cam = Camera(up, a.elev, a.azim)
     planes = planes_of(scene)
+    colliders = []  # (pose index, triangles in the collider's frame); planes among them join `planes`
+    for i, c in colliders_of(scene):
+        if "/frames/collider_pose" not in f:
+            break
+        tri = shape_triangles(c)
+        if tri is not None:
+            colliders.append((i, tri))
+        else:
+            pose = f["/frames/collider_pose"][0][i]
+            planes.append({"point": pose[9:], "normal": pose[:9].reshape(3, 3)[:, 2], "ground": False,
+                           "pose": i})
     weights = node_weights(X, T, f["/mesh/rest_volumes"][()])
     under = tri_tet(S, T)
     surf_nodes = np.unique(S)
@@ -340,6 +406,9 @@ def main():
         ax.set_aspect("equal")
         behind, in_front = [], []
         for p in planes:
+            if "pose" in p:  # a [[collider]] plane: where it is at this frame
+                pose = f["/frames/collider_pose"][k][p["pose"]]
+                p["point"], p["normal"] = pose[9:], pose[:9].reshape(3, 3)[:, 2]
             quad, pa, pb = plane_quad(plane_point(p, t), p["normal"], mid, 0.75 * span)
             q2, qd = cam.project(quad)
             facing = p["normal"] @ cam.toward > 0
@@ -365,6 +434,20 @@ def main():
                     ax.add_collection(PolyCollection(s2[S[fn @ n_ > 0]], facecolors=(0.3, 0.3, 0.3, 0.08),
                                                      edgecolors="none", zorder=0.6))
         ax.add_artist(GouraudTriangles(xy[tris], colors, zorder=1))
+        body_depth = float(np.median(depth[surf_nodes]))
+        for i, tri in colliders:  # translucent, flat-shaded, far to near; behind the body or in front
+            pose = f["/frames/collider_pose"][k][i]
+            w = tri @ pose[:9].reshape(3, 3).T + pose[9:]
+            fn_c = np.cross(w[:, 1] - w[:, 0], w[:, 2] - w[:, 0])
+            fn_c /= np.maximum(np.linalg.norm(fn_c, axis=1, keepdims=True), 1e-300)
+            light = 0.45 + 0.45 * np.abs(fn_c @ unit(cam.toward + 0.5 * up))
+            w2, wd = cam.project(w.reshape(-1, 3))
+            w2, wd = w2.reshape(-1, 3, 2), wd.reshape(-1, 3).mean(1)
+            order_c = np.argsort(wd)
+            rgba = np.column_stack([0.45 * light, 0.55 * light, 0.75 * light, np.full(len(light), 0.45)])
+            near = wd[order_c] > body_depth
+            for sel, z in ((~near, 0.8), (near, 2.5)):
+                ax.add_collection(PolyCollection(w2[order_c][sel], facecolors=rgba[order_c][sel], edgecolors="none", zorder=z))
         for q2, colour, *_ in in_front:
             ax.add_collection(PolyCollection([q2], facecolors=[colour], edgecolors=(0.3, 0.4, 0.6, 0.8), zorder=2))
         title_load = ""
@@ -377,6 +460,16 @@ def main():
             ax.quiver(s0[:, 0], s0[:, 1], s1[:, 0] - s0[:, 0], s1[:, 1] - s0[:, 1], angles="xy", scale_units="xy",
                       scale=1, color="crimson", width=0.003, zorder=3)
             title_load = f"  load {np.linalg.norm(L.sum(0)):.3g} N"
+        if a.contact:
+            C = f["/frames/contact"][k]
+            on = np.linalg.norm(C, axis=1) > 0
+            biggest = max(np.linalg.norm(f["/frames/contact"][j], axis=1).max() for j in frames) or 1.0
+            if on.any():
+                s0, _ = cam.project(x[on])
+                s1, _ = cam.project(x[on] + 0.2 * span / biggest * C[on])
+                ax.quiver(s0[:, 0], s0[:, 1], s1[:, 0] - s0[:, 0], s1[:, 1] - s0[:, 1], angles="xy", scale_units="xy",
+                          scale=1, color="darkorange", width=0.003, zorder=3)
+            title_load += f"  contact {np.linalg.norm(C.sum(0)):.3g} N"
         c2, _ = cam.project(mid)
         ax.set_xlim(c2[0] - 0.55 * span, c2[0] + 0.55 * span)
         ax.set_ylim(c2[1] - 0.55 * span, c2[1] + 0.55 * span)

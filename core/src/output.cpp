@@ -260,7 +260,9 @@ struct OutputWriter::Impl {
   int nodes = 0, tets = 0, frames = 0;
   bool pressure = false;
   bool zone_index = false;  // /mesh/zone exists (a cell attribute "zone" in the sidecar)
-  std::unique_ptr<Series> time, positions, velocities, multipliers, volume, energy, pressure_series, load_series;
+  std::unique_ptr<Series> time, positions, velocities, multipliers, volume, energy, pressure_series, collider_pose;
+  // Per-node vectors of a frame, when the scene has them: "load" and "contact" (kNodeVectors).
+  std::map<std::string, std::unique_ptr<Series>> node_series;
   std::map<std::string, std::unique_ptr<Series>> stats;
   H frames_group, xdmf_group, stats_group;
   int lock_fd = -1;
@@ -271,7 +273,8 @@ struct OutputWriter::Impl {
   // Every per-frame series of the file.
   std::vector<Series*> all_series() {
     std::vector<Series*> all{time.get(), positions.get(), velocities.get(), multipliers.get(), volume.get(), energy.get(),
-                             pressure_series.get(), load_series.get()};
+                             pressure_series.get(), collider_pose.get()};
+    for (auto& [name, series] : node_series) all.push_back(series.get());
     for (auto& [name, series] : stats) all.push_back(series.get());
     all.erase(std::remove(all.begin(), all.end(), nullptr), all.end());
     return all;
@@ -283,7 +286,7 @@ struct OutputWriter::Impl {
       if (series->rows() > static_cast<hsize_t>(k)) series->truncate(static_cast<hsize_t>(k));
     for (int j = k;; ++j) {
       bool any = false;
-      for (const char* prefix : {"position_", "pressure_", "load_"}) {
+      for (const char* prefix : {"position_", "pressure_", "load_", "contact_"}) {
         const std::string name = prefix + frame_name(j);
         if (H5Lexists(xdmf_group, name.c_str(), H5P_DEFAULT) > 0) {
           check(H5Ldelete(xdmf_group, name.c_str(), H5P_DEFAULT), "unlink " + name);
@@ -374,10 +377,10 @@ struct OutputWriter::Impl {
       << "    <Attribute Name=\"position\" AttributeType=\"Vector\" Center=\"Node\">\n"
       << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
       << h5_name << ":/frames/xdmf/position_" << f << "</DataItem>\n    </Attribute>\n";
-    if (load_series)
-      x << "    <Attribute Name=\"load\" AttributeType=\"Vector\" Center=\"Node\">\n"
+    for (const auto& [name, series] : node_series)
+      x << "    <Attribute Name=\"" << name << "\" AttributeType=\"Vector\" Center=\"Node\">\n"
         << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
-        << h5_name << ":/frames/xdmf/load_" << f << "</DataItem>\n    </Attribute>\n";
+        << h5_name << ":/frames/xdmf/" << name << "_" << f << "</DataItem>\n    </Attribute>\n";
     if (zone_index)
       x << "    <Attribute Name=\"zone\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
         << "     <DataItem Dimensions=\"" << tets << "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" << h5_name
@@ -466,13 +469,16 @@ struct OutputWriter::Impl {
     velocities = std::make_unique<Series>(frames_group, "velocities", H5T_NATIVE_DOUBLE);
     if (H5Lexists(frames_group, "multipliers", H5P_DEFAULT) > 0)
       multipliers = std::make_unique<Series>(frames_group, "multipliers", H5T_NATIVE_DOUBLE);
+    if (H5Lexists(frames_group, "collider_pose", H5P_DEFAULT) > 0)
+      collider_pose = std::make_unique<Series>(frames_group, "collider_pose", H5T_NATIVE_DOUBLE);
     volume = std::make_unique<Series>(frames_group, "volume", H5T_NATIVE_DOUBLE);
     energy = std::make_unique<Series>(frames_group, "energy", H5T_NATIVE_DOUBLE);
     if (positions->row.at(0) != static_cast<hsize_t>(nodes) || volume->row.at(0) != 1 + zones)
       throw Error(path + ": its mesh or zones differ from the scene's (a mesh file changed since?): cannot be resumed");
     if (pressure) pressure_series = std::make_unique<Series>(frames_group, "pressure", H5T_NATIVE_DOUBLE);
-    if (H5Lexists(frames_group, "load", H5P_DEFAULT) > 0)
-      load_series = std::make_unique<Series>(frames_group, "load", H5T_NATIVE_DOUBLE);
+    for (const char* name : {"load", "contact"})
+      if (H5Lexists(frames_group, name, H5P_DEFAULT) > 0)
+        node_series[name] = std::make_unique<Series>(frames_group, name, H5T_NATIVE_DOUBLE);
     H5G_info_t g{};
     check(H5Gget_info(stats_group, &g), "list /stats");
     for (hsize_t i = 0; i < g.nlinks; ++i) {
@@ -694,6 +700,15 @@ void OutputWriter::Impl::append_frame(const Frame& f, hsize_t k) {
     if (f.multipliers->size() != m.multipliers->row[0]) throw Error(m.path + ": a frame's multipliers changed in number");
     m.multipliers->append(k, f.multipliers->data());
   }
+  if (f.collider_poses && !f.collider_poses->empty()) {
+    const hsize_t colliders = f.collider_poses->size() / 12;
+    if (!m.collider_pose) {
+      if (k > 0) throw Error(m.path + ": collider poses appeared after the first frame");
+      m.collider_pose = std::make_unique<Series>(m.frames_group, "collider_pose", std::vector<hsize_t>{colliders, 12}, H5T_NATIVE_DOUBLE);
+    }
+    if (colliders != m.collider_pose->row[0]) throw Error(m.path + ": a frame's colliders changed in number");
+    m.collider_pose->append(k, f.collider_poses->data());
+  }
   m.volume->append(k, f.volumes.data());
   m.energy->append(k, f.energy.data());
   m.add_frame_view("/frames/positions", m.frames, 3, "position");
@@ -703,15 +718,17 @@ void OutputWriter::Impl::append_frame(const Frame& f, hsize_t k) {
     m.pressure_series->append(k, f.pressure->data());
     m.add_frame_view("/frames/pressure", m.frames, 0, "pressure");
   }
-  if (f.loads) {
-    if (f.loads->cols() != m.nodes) throw Error(m.path + ": a frame's loads need every node");
-    if (!m.load_series) {
-      if (k > 0) throw Error(m.path + ": loads appeared after the first frame");
-      m.load_series = std::make_unique<Series>(m.frames_group, "load", std::vector<hsize_t>{static_cast<hsize_t>(m.nodes), 3},
-                                               H5T_NATIVE_DOUBLE);
+  for (const auto& [name, field] : {std::pair<const char*, const Points*>{"load", f.loads}, {"contact", f.contact}}) {
+    if (!field) continue;
+    if (field->cols() != m.nodes) throw Error(m.path + ": a frame's " + name + " needs every node");
+    std::unique_ptr<Series>& series = m.node_series[name];
+    if (!series) {
+      if (k > 0) throw Error(m.path + ": " + name + " appeared after the first frame");
+      series = std::make_unique<Series>(m.frames_group, name, std::vector<hsize_t>{static_cast<hsize_t>(m.nodes), 3},
+                                        H5T_NATIVE_DOUBLE);
     }
-    m.load_series->append(k, f.loads->data());
-    m.add_frame_view("/frames/load", m.frames, 3, "load");
+    series->append(k, field->data());
+    m.add_frame_view(std::string("/frames/") + name, m.frames, 3, name);
   }
   for (const auto& [name, value] : f.stats) {
     auto it = m.stats.find(name);
@@ -759,10 +776,11 @@ void OutputWriter::close() {
   m.positions.reset();
   m.velocities.reset();
   m.multipliers.reset();
+  m.collider_pose.reset();
   m.volume.reset();
   m.energy.reset();
   m.pressure_series.reset();
-  m.load_series.reset();
+  m.node_series.clear();
   m.stats.clear();
   m.frames_group.reset();
   m.xdmf_group.reset();

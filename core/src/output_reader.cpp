@@ -169,10 +169,10 @@ std::vector<double> RunFile::pressures(int frame) const {
   return p;
 }
 
-Points RunFile::loads(int frame) const {
+Points RunFile::node_vectors(const std::string& name, int frame) const {
   if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
   Points f(3, num_nodes());
-  read_frame_row(impl_->file, impl_->path, "/frames/load", frame, 3, static_cast<hsize_t>(num_nodes()), f.data());
+  read_frame_row(impl_->file, impl_->path, ("/frames/" + name).c_str(), frame, 3, static_cast<hsize_t>(num_nodes()), f.data());
   return f;
 }
 

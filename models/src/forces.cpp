@@ -34,6 +34,15 @@ void ExternalPotential::set_time(double t) {
   for (std::size_t k = 0; k < colliders_.size(); ++k) poses_[k] = colliders_[k].pose(t, skeleton_.get());
 }
 
+void ExternalPotential::pose_numbers(std::vector<double>& out) const {
+  out.clear();
+  for (const ColliderPose& P : poses_) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) out.push_back(P.A(r, c));
+    out.insert(out.end(), P.b.data(), P.b.data() + 3);
+  }
+}
+
 template <class F>
 void ExternalPotential::for_each_contact(std::size_t c, const Points& x, bool free_only, F&& f) const {
   const Collider& C = colliders_[c];

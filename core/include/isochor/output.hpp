@@ -26,6 +26,10 @@ struct Frame {
   std::array<double, 3> energy{0, 0, 0};  // kinetic, elastic, external potential
   const std::vector<double>* pressure = nullptr;  // per tet, when pressure output is on
   const Points* loads = nullptr;  // the applied load on every node (N), when the scene has loads
+  const Points* contact = nullptr;  // the colliders' force on every node (N), when the scene has colliders
+  // Where each collider is: 12 numbers per collider, its local-to-world rotation A (row-major)
+  // and translation b (x = A l + b), in the scene's order (the ground and planes first).
+  const std::vector<double>* collider_poses = nullptr;
   std::vector<std::pair<std::string, double>> stats;  // per-frame series under /stats
 };
 

@@ -27,7 +27,9 @@ class RunFile {
   Points positions(int frame) const;
   Points velocities(int frame) const;  // every node (m/s): runs written since they could be resumed
   std::vector<double> pressures(int frame) const;  // per tet; the run must have output.pressure = true
-  Points loads(int frame) const;                   // per node (N); the scene must have [[load]]
+  Points loads(int frame) const { return node_vectors("load", frame); }       // per node (N); the scene must have [[load]]
+  Points contact(int frame) const { return node_vectors("contact", frame); }  // per node (N); the scene must have colliders
+  Points node_vectors(const std::string& name, int frame) const;  // /frames/<name>
   std::map<std::string, std::string> attributes() const;       // root attributes (strings)
   std::map<std::string, double> stat_totals() const;           // numeric attributes of /stats
   std::string stat_text(const std::string& name) const;        // a string attribute of /stats ("" if none)

@@ -91,6 +91,8 @@ class ExternalPotential {
   void contact_forces(const Points& x, const Eigen::VectorXd* xdot, Points& out) const;
   const std::vector<Collider>& colliders() const { return colliders_; }
   const std::vector<ColliderPose>& poses() const { return poses_; }
+  // The poses as 12 numbers each: A row-major, then b.
+  void pose_numbers(std::vector<double>& out) const;
 
  private:
   Vec3 g() const { return gravity_scale_ * gravity_; }

@@ -46,6 +46,9 @@ class MassSpringSystem : public SceneSystem {
   void set_state(double t, const VectorXd& q, const VectorXd& v) override;
   const Points& positions() const override { return x_; }
   const Eigen::VectorXd& velocities() const override { return xdot_; }
+  bool has_contact() const override { return external_->has_contact(); }
+  void contact(Points& out) const override { external_->contact_forces(x_, &xdot_, out); }
+  void collider_poses(std::vector<double>& out) const override { external_->pose_numbers(out); }
   std::array<double, 3> energies() const override;  // kinetic, springs, external
   std::vector<double> volumes() const override;      // the enclosed volume (no zones)
   const DofMap& dofs() const override { return dofs_; }

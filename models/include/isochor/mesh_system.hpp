@@ -76,6 +76,9 @@ class MeshSystem : public SceneSystem {
   int inverted_tets() const override { return elastic_->inverted_tets(x_); }
   bool has_loads() const override { return !scene_.loads.empty() || !pressure_loads_->empty(); }
   void loads(Points& out) const override;
+  bool has_contact() const override { return external_->has_contact(); }
+  void contact(Points& out) const override { external_->contact_forces(x_, &xdot_, out); }
+  void collider_poses(std::vector<double>& out) const override { external_->pose_numbers(out); }
   const DofMap& dofs() const override { return dofs_; }
 
  private:

@@ -34,6 +34,12 @@ class SceneSystem : public ConstrainedSystem {
   // Whether the scene applies [[load]]s, and the load on every node at the current state (N).
   virtual bool has_loads() const { return false; }
   virtual void loads(Points& /*out*/) const {}
+  // Whether the scene has colliders (the ground among them) that push with a force, and that
+  // force on every node at the current state (N: contact, damping and friction).
+  virtual bool has_contact() const { return false; }
+  virtual void contact(Points& /*out*/) const {}
+  // Each collider's pose at the current time (Frame::collider_poses).
+  virtual void collider_poses(std::vector<double>& /*out*/) const {}
   // A resumed run's start (null: the scene's rest state and initial velocity): initial_state()
   // returns it for the unknowns.
   void set_start(const StartState* start) { start_ = start; }

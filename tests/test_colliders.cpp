@@ -1,0 +1,342 @@
+// Rigid colliders: every shape's signed distance against its closed form and its gradient and
+// Hessian against central differences; the contact's energy, damping and friction against
+// central differences on moving and turning colliders; a collider's pose against the motion of
+// the mesh nodes its driver or bone moves.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <functional>
+#include <random>
+
+#include "isochor/colliders.hpp"
+#include "isochor/forces.hpp"
+#include "isochor/output_reader.hpp"
+#include "run.hpp"
+#include "isochor/scene.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+
+namespace {
+
+// Central differences of a value and its gradient (3 components) against the gradient and Hessian.
+void check_fd(const std::function<double(const Vec3&, Vec3*, Mat3*)>& f, const Vec3& x, const std::string& what,
+              double tol = 1e-6) {
+  Vec3 g, gfd;
+  Mat3 H, Hfd;
+  f(x, &g, &H);
+  const double h = 1e-6;
+  for (int k = 0; k < 3; ++k) {
+    Vec3 xp = x, xm = x, gp, gm;
+    xp[k] += h;
+    xm[k] -= h;
+    gfd[k] = (f(xp, &gp, nullptr) - f(xm, &gm, nullptr)) / (2 * h);
+    Hfd.col(k) = (gp - gm) / (2 * h);
+  }
+  EXPECT_LT((g - gfd).norm(), tol * std::max(1.0, gfd.norm())) << what << " at " << x.transpose();
+  EXPECT_LT((H - Hfd).norm(), tol * std::max(1.0, Hfd.norm())) << what << " at " << x.transpose();
+}
+
+// A collider of every shape, placed off the origin and turned.
+std::vector<Collider> shapes() {
+  std::vector<Collider> all;
+  auto add = [&](ColliderShape s) {
+    Collider c;
+    c.shape = s;
+    c.name = s.name();
+    c.center = Vec3(0.1, -0.2, 0.3);
+    c.rotation = frame_with_axis(Vec3(0.3, 0.4, 1.0), 0.7);
+    all.push_back(c);
+  };
+  using K = ColliderShape::Kind;
+  add({K::plane});
+  add({K::sphere, 0.2});
+  add({K::capsule, 0.1, 0.15});
+  add({K::box, 0, 0, Vec3(0.2, 0.1, 0.15), 0.03});
+  add({K::cylinder, 0.2, 0.1, Vec3::Zero(), 0.02});         // solid
+  add({K::cylinder, 0.2, 0.05, Vec3::Zero(), 0.01, 0.04});  // hollow: a band
+  return all;
+}
+
+// Random world points within `band` of the collider's surface (by rejection on the distance).
+std::vector<Vec3> near_surface(const Collider& c, const ColliderPose& P, double band, int count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double R = std::isfinite(c.shape.bound()) ? c.shape.bound() + band : 0.5;
+  std::vector<Vec3> pts;
+  while (static_cast<int>(pts.size()) < count) {
+    const Vec3 x = P.b + R * Vec3(u(rng), u(rng), u(rng));
+    if (std::abs(c.distance(P, x, nullptr, nullptr)) < band) pts.push_back(x);
+  }
+  return pts;
+}
+
+}  // namespace
+
+TEST(Colliders, DistancesMatchTheirClosedForms) {
+  using K = ColliderShape::Kind;
+  const ColliderShape sphere{K::sphere, 0.2}, capsule{K::capsule, 0.1, 0.15}, box{K::box, 0, 0, Vec3(0.2, 0.1, 0.15), 0.03},
+      cyl{K::cylinder, 0.2, 0.1, Vec3::Zero(), 0.02}, band{K::cylinder, 0.2, 0.05, Vec3::Zero(), 0.01, 0.04};
+  EXPECT_NEAR(sphere.distance(Vec3(0.3, 0.4, 0), nullptr, nullptr), 0.5 - 0.2, 1e-15);
+  EXPECT_NEAR(sphere.distance(Vec3(0.0, 0.0, 0.05), nullptr, nullptr), -0.15, 1e-15);
+  EXPECT_NEAR(capsule.distance(Vec3(0.3, 0.4, 0.1), nullptr, nullptr), 0.5 - 0.1, 1e-15);         // beside the segment
+  EXPECT_NEAR(capsule.distance(Vec3(0, 0.3, 0.15 + 0.4), nullptr, nullptr), 0.5 - 0.1, 1e-15);    // beyond its end
+  EXPECT_NEAR(box.distance(Vec3(0.05, 0.02, 0.15 + 0.07), nullptr, nullptr), 0.07, 1e-15);        // above a face
+  EXPECT_NEAR(box.distance(Vec3(0.05, 0.02, 0.15 - 0.01), nullptr, nullptr), -0.01, 1e-15);       // just inside it
+  // Beyond a rounded edge: the distance to the inner box's edge minus the rounding radius.
+  EXPECT_NEAR(box.distance(Vec3(0.2 + 0.03, 0.0, 0.15 + 0.04), nullptr, nullptr), std::hypot(0.06, 0.07) - 0.03, 1e-15);
+  EXPECT_NEAR(cyl.distance(Vec3(0.3, 0.4, 0.0), nullptr, nullptr), 0.5 - 0.2, 1e-15);
+  EXPECT_NEAR(cyl.distance(Vec3(0.01, 0.02, 0.1 + 0.3), nullptr, nullptr), 0.3, 1e-15);
+  // The band: tissue in its hole is outside (positive), at the hole's radius distance 0, and the
+  // wall is solid; above the band there is nothing near the axis.
+  EXPECT_NEAR(band.distance(Vec3(0, 0, 0), nullptr, nullptr), 0.2, 1e-15);
+  EXPECT_NEAR(band.distance(Vec3(0.06, 0.08, 0.01), nullptr, nullptr), 0.2 - 0.1, 1e-15);
+  EXPECT_NEAR(band.distance(Vec3(0.22, 0, 0.0), nullptr, nullptr), -0.02, 1e-15);  // in the middle of the wall
+  EXPECT_NEAR(band.distance(Vec3(0.3, 0, 0.0), nullptr, nullptr), 0.3 - 0.24, 1e-15);
+  EXPECT_NEAR(band.distance(Vec3(0.0, 0.1, 0.4), nullptr, nullptr), std::hypot(0.2 + 0.01 - 0.1, 0.4 - 0.04) - 0.01, 1e-15);
+}
+
+TEST(Colliders, GradientAndHessianOfEveryShapeAgainstFiniteDifferences) {
+  for (const Collider& c : shapes()) {
+    const ColliderPose P = c.pose(0.0, nullptr);
+    for (const Vec3& x : near_surface(c, P, 0.02, 40, 3)) {
+      check_fd([&](const Vec3& y, Vec3* g, Mat3* H) { return c.distance(P, y, g, H); }, x, c.name, 1e-5);
+      Vec3 g;
+      c.distance(P, x, &g, nullptr);
+      EXPECT_NEAR(g.norm(), 1.0, 1e-12) << c.name;  // a distance: |grad s| = 1
+    }
+  }
+}
+
+TEST(Colliders, ContactEnergyDampingAndFrictionAgainstFiniteDifferences) {
+  // Each shape turning about an axis and moving, with damping and friction.
+  const double k = 3e4, delta = 0.01;
+  for (Collider c : shapes()) {
+    c.law = ContactLaw{k, delta, false, 0.4, 0.6, 0.05};
+    c.motion = Driver{};
+    c.motion.kind = Driver::Kind::keyframes_cubic;
+    c.motion.rotation = true;
+    c.motion.axis = Vec3(1, -1, 2).normalized();
+    c.motion.center = Vec3(0.2, 0.1, 0);
+    c.motion.times = {0.0, 1.0, 2.0};
+    c.motion.values = {Vec3::Zero(), Vec3(0.8, 0, 0), Vec3(0.3, 0, 0)};
+    const ColliderPose P = c.pose(0.6, nullptr);
+    ASSERT_GT(P.omega.norm(), 0.1);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (const Vec3& x : near_surface(c, P, delta, 20, 9)) {
+      if (c.distance(P, x, nullptr, nullptr) > 0.9 * delta) continue;
+      check_fd([&](const Vec3& y, Vec3* g, Mat3* H) {
+        Vec3 n;
+        Mat3 Hs;
+        const double s = c.distance(P, y, &n, &Hs);
+        return contact_energy(k, delta, s, n, Hs, g, H);
+      }, x, std::string(c.name) + " energy", 1e-5);
+      const Vec3 v(u(rng), u(rng), u(rng));
+      auto force = [&](const Vec3& y, const Vec3& vy, Mat3* Dx, Mat3* Dv) {
+        Vec3 n;
+        Mat3 Hs;
+        const double s = c.distance(P, y, &n, &Hs);
+        return contact_damping_force(k, c.law.damping, c.law.friction, c.law.slip_speed, delta, s, n, Hs,
+                                     vy - P.velocity_at(y), -skew(P.omega), Dx, Dv);
+      };
+      Mat3 Dx, Dv, Dx_fd, Dv_fd;
+      force(x, v, &Dx, &Dv);
+      const double h = 1e-7;
+      for (int j = 0; j < 3; ++j) {
+        const Vec3 e = h * Vec3::Unit(j);
+        Dx_fd.col(j) = -(force(x + e, v, nullptr, nullptr) - force(x - e, v, nullptr, nullptr)) / (2 * h);
+        Dv_fd.col(j) = -(force(x, v + e, nullptr, nullptr) - force(x, v - e, nullptr, nullptr)) / (2 * h);
+      }
+      EXPECT_LT((Dx - Dx_fd).norm(), 1e-5 * std::max(1.0, Dx_fd.norm())) << c.name << " -df/dx at " << x.transpose();
+      EXPECT_LT((Dv - Dv_fd).norm(), 1e-5 * std::max(1.0, Dv_fd.norm())) << c.name << " -df/dv";
+      // Dissipative: the force does negative work on the velocity relative to the collider.
+      EXPECT_LE(force(x, v, nullptr, nullptr).dot(v - P.velocity_at(x)), 0.0) << c.name;
+    }
+  }
+}
+
+TEST(Colliders, RelativeVelocityIsTheRateOfTheDistance) {
+  // The damping and friction see v - w(x), w the collider material's velocity at x: then
+  // n . (v - w) is the time derivative of s along a node moving at v (the dg/dt-like term of a
+  // moving collider), for a translating and a turning one.
+  for (bool turning : {false, true})
+    for (Collider c : shapes()) {
+      c.motion = Driver{};
+      if (turning) {
+        c.motion.kind = Driver::Kind::keyframes_cubic;
+        c.motion.rotation = true;
+        c.motion.axis = Vec3(0.2, 1, 0.5).normalized();
+        c.motion.center = Vec3(-0.1, 0.3, 0.2);
+        c.motion.times = {0.0, 1.0};
+        c.motion.values = {Vec3::Zero(), Vec3(1.2, 0, 0)};
+      } else {
+        c.motion.kind = Driver::Kind::sinusoid;
+        c.motion.vector = Vec3(0.05, -0.02, 0.04);
+        c.motion.frequency = 2.0;
+      }
+      const double t = 0.4, h = 1e-6;
+      const ColliderPose P = c.pose(t, nullptr);
+      const Vec3 v(0.3, -0.1, 0.2);
+      for (const Vec3& x : near_surface(c, P, 0.02, 10, 11)) {
+        Vec3 n;
+        c.distance(P, x, &n, nullptr);
+        const double sdot = n.dot(v - P.velocity_at(x));
+        const double fd = (c.distance(c.pose(t + h, nullptr), x + h * v, nullptr, nullptr) -
+                           c.distance(c.pose(t - h, nullptr), x - h * v, nullptr, nullptr)) /
+                          (2 * h);
+        EXPECT_NEAR(sdot, fd, 1e-6) << c.name << (turning ? " turning" : " translating");
+      }
+    }
+}
+
+TEST(Colliders, ACollidersBoneCarriesItAsItsBoundNodes) {
+  // A box collider on a pin-jointed bone: a point fixed in the collider is where the skeleton puts
+  // a mesh node bound to that bone at the same rest position, with the same velocity.
+  const std::string text = R"(
+[mesh]
+shape = "box"
+size = [1.0, 1.0, 1.0]
+cells = 4
+center = [0.5, 0.5, 0.5]
+[material]
+model = "cnh"
+mu = 1000.0
+lambda = 1000.0
+[skeleton]
+[[skeleton.bone]]
+name = "arm"
+joint = "pin"
+origin = [0.5, 0.5, 0.5]
+axis = [1.0, 2.0, 2.0]
+motion = "sinusoid"
+amplitude = [70.0]
+frequency = 0.7
+phase = 0.3
+select = { kind = "box", min = [0.95, -0.1, -0.1], max = [1.1, 1.1, 1.1] }
+[[collider]]
+shape = "box"
+center = [1.5, 0.5, 0.5]
+size = [0.4, 0.3, 0.2]
+axis = [0.0, 1.0, 1.0]
+angle = 20.0
+bone = "arm"
+)";
+  const Scene s = parse_scene(SceneFile::parse(text, "bone_collider.toml"));
+  ASSERT_EQ(s.colliders.size(), 1u);
+  const Collider& c = s.colliders[0];
+  const Points& X = s.mesh.rest_positions();
+  for (double t : {0.1, 0.45, 1.2}) {
+    Points x = X;
+    Eigen::VectorXd v = Eigen::VectorXd::Zero(3 * X.cols());
+    s.drive(t, x, &v);
+    const ColliderPose P = c.pose(t, s.skeleton.get());
+    for (int n : s.skeleton->bones()[0].nodes) {
+      const Vec3 l = c.rotation.transpose() * (X.col(n) - c.center);  // the node's rest point in the collider's frame
+      EXPECT_LT((P.A * l + P.b - x.col(n)).norm(), 1e-12) << "t " << t;
+      EXPECT_LT((P.velocity_at(x.col(n)) - v.segment<3>(3 * n)).norm(), 1e-12) << "t " << t;
+    }
+  }
+}
+
+TEST(Colliders, BadCollidersAreNamed) {
+  const std::string mesh = "[mesh]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = 1\ncenter = [0, 0, 0.2]\n[material]\nmu = 1.0\nlambda = 1.0\n";
+  auto err = [&](const std::string& collider) {
+    return test::error_of([&] { parse_scene(SceneFile::parse(mesh + "[[collider]]\n" + collider, "c.toml")); });
+  };
+  EXPECT_NE(err("radius = 0.1\n").find("collider[0].shape: missing"), std::string::npos);
+  EXPECT_NE(err("shape = \"cone\"\n").find("collider[0].shape"), std::string::npos);
+  EXPECT_NE(err("shape = \"sphere\"\n").find("collider[0].radius: missing"), std::string::npos);
+  EXPECT_NE(err("shape = \"box\"\nsize = [0.1, 0.0, 0.1]\n").find("collider[0].size: expected three positive"), std::string::npos);
+  EXPECT_NE(err("shape = \"cylinder\"\nradius = 0.1\nlength = 0.1\nrounding = 0.2\n").find("collider[0].rounding: expected at most"),
+            std::string::npos);
+  EXPECT_NE(err("shape = \"sphere\"\nradius = 0.1\nbone = \"arm\"\n").find("collider[0].bone: the scene has no [skeleton]"),
+            std::string::npos);
+  EXPECT_NE(err("shape = \"sphere\"\nradius = 0.1\nsize = [1, 1, 1]\n").find("size"), std::string::npos);  // not a sphere's key
+  // The body inside a sphere at t = 0: its 8 corners are 0.0866 m from the centre.
+  EXPECT_NE(err("shape = \"sphere\"\nradius = 0.1\ncenter = [0, 0, 0.2]\n")
+                .find("collider[0].shape: 8 of 8 nodes start more than the contact thickness (0.001 m) inside this sphere"),
+            std::string::npos);
+}
+
+namespace {
+
+// A stiff 0.1 m block (1 kg) resting on the top face (z = 0) of a box collider under gravity
+// tilted by `tilt` degrees about y (a slope), with the given friction. It starts at the
+// penetration p where its 9 bottom nodes carry its weight, 9 k p^2 = m g cos(tilt).
+Scene block_on_box(double tilt, double friction, const std::string& kind) {
+  const double a = tilt * M_PI / 180.0, p = std::sqrt(9.81 * std::cos(a) / 9 / 1e8);
+  char text[2048];
+  std::snprintf(text, sizeof text, R"(
+[mesh]
+shape = "box"
+size = [0.1, 0.1, 0.1]
+cells = 2
+center = [0.0, 0.0, %.17g]
+[material]
+model = "snh"
+mu = 2e6
+lambda = 2e6
+[forces]
+gravity = [%.17g, 0.0, %.17g]
+[contact]
+stiffness = 1e8
+thickness = 1e-3
+damping = 100.0
+[[collider]]
+shape = "box"
+center = [0.0, 0.0, -0.05]
+size = [2.0, 2.0, 0.1]
+friction = %.17g
+slip_speed = 1e-3
+[integrator]
+kind = "%s"
+%s
+)",
+                0.05 + 1e-3 - p, 9.81 * std::sin(a), -9.81 * std::cos(a), friction, kind.c_str(),
+                kind == "static" ? "[frames]\ncount = 3" : "rtol = 1e-6\natol = 1e-9\n[damping]\nbeta = 1e-3\n[frames]\nrate = 20\nduration = 0.3");
+  return parse_scene(SceneFile::parse(text, "block.toml"));
+}
+
+}  // namespace
+
+TEST(Colliders, ABlockRestsOnABoxWithItsWeight) {
+  // Statics: the box collider carries the block's weight, m g = 9.81 N (written per node).
+  const auto dir = test::temp_dir();
+  const Scene sc = block_on_box(0.0, 0.0, "static");
+  RunFile f(run_scene(sc, (dir / "rest.h5").string(), false).output);
+  const Points F = f.contact(f.num_frames() - 1);
+  EXPECT_NEAR(F.row(2).sum(), 1000.0 * 1e-3 * 9.81, 1e-6 * 9.81);
+  EXPECT_NEAR(F.row(0).sum(), 0.0, 1e-9);
+  int touching = 0;
+  for (int i = 0; i < F.cols(); ++i) touching += F.col(i).norm() > 0;
+  EXPECT_EQ(touching, 9);  // the bottom face's 3 x 3 nodes
+}
+
+TEST(Colliders, ABlockSlidesDownATiltedBoxAtCoulombsAcceleration) {
+  // On a 30 degree slope with friction 0.3 < tan 30: a = g (sin 30 - 0.3 cos 30) = 2.3564 m/s^2;
+  // with 0.8 > tan 30 it sticks, creeping at the slip speed's v = eps r / sqrt(1 - r^2),
+  // r = tan 30 / 0.8, where the smoothed friction balances the weight's pull along the slope.
+  const auto dir = test::temp_dir();
+  const double a = 30 * M_PI / 180.0, g = 9.81;
+  const Vec3 along = Vec3::UnitX();  // down the slope (gravity is tilted)
+  auto slope_speed = [&](double friction, std::vector<double>& speed) {
+    const Scene sc = block_on_box(30.0, friction, "ida");
+    RunFile f(run_scene(sc, (dir / ("slide" + std::to_string(friction) + ".h5")).string(), false).output);
+    speed.clear();
+    for (int k = 0; k < f.num_frames(); ++k) {
+      const Points v = f.velocities(k);
+      speed.push_back(v.rowwise().mean().dot(along));
+    }
+    return f.times();
+  };
+  std::vector<double> v;
+  const std::vector<double> t = slope_speed(0.3, v);
+  ASSERT_EQ(t.size(), 7u);
+  const double acc = (v[6] - v[2]) / (t[6] - t[2]);
+  EXPECT_NEAR(acc, g * (std::sin(a) - 0.3 * std::cos(a)), 1e-3 * g);
+  slope_speed(0.8, v);
+  const double r = std::tan(a) / 0.8, creep = 1e-3 * r / std::sqrt(1 - r * r);
+  EXPECT_NEAR(v[6], creep, 1e-3 * creep);
+  EXPECT_NEAR(v[4], creep, 1e-3 * creep);
+}
