@@ -1,4 +1,5 @@
 #include "isochor/scene.hpp"
+#include "isochor/paint.hpp"
 #include "isochor/integrator_registry.hpp"
 
 #include <Eigen/Geometry>
@@ -283,7 +284,78 @@ void parse_load(const Section& l, const Mesh& mesh, Scene& sc) {
   sc.loads.push_back(std::move(load));
 }
 
-std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section& s, const Mesh& mesh, bool global) {
+// Checks a new zone's name: non-empty, no '/', '.' or ',', not defined before.
+void check_zone_name(const Section& z, std::string_view key, const std::string& name,
+                     const std::vector<std::pair<std::string, std::vector<int>>>& zones) {
+  if (name.empty()) z.fail(key, "missing, expected a zone name");
+  if (name.find_first_of("/.,") != std::string::npos) z.fail(key, "expected a name without '/', '.' or ','");
+  for (const auto& other : zones)
+    if (other.first == name) z.fail(key, "zone \"" + name + "\" is defined twice");
+}
+
+// [[zones.paint]]: zones painted on the surface (paint.hpp), one per entry of labels, colors or
+// weights.
+void parse_paint(const Section& p, const Mesh& mesh, const SceneFile& file,
+                 std::vector<std::pair<std::string, std::vector<int>>>& zones) {
+  if (!p.has("file")) p.fail("file", "missing, expected a paint file (.ply, .obj or .csv)");
+  const std::string path = file.resolve_path(p.string("file", ""));
+  PaintRule rule;
+  const int given = p.has("labels") + p.has("colors") + p.has("weights");
+  if (given != 1) p.fail(given ? "colors" : "labels", "expected exactly one of labels, colors or weights (a table from zone names)");
+  const char* key = p.has("labels") ? "labels" : p.has("colors") ? "colors" : "weights";
+  rule.by = p.has("labels") ? PaintRule::By::labels : p.has("colors") ? PaintRule::By::colors : PaintRule::By::weights;
+  const Section t = p.table(key);
+  if (!t.exists() || t.keys().empty()) p.fail(key, "expected a table from zone names, e.g. { belly = 1, back = 2 }");
+  for (const std::string& name : t.keys()) {
+    check_zone_name(t, name, name, zones);
+    rule.zones.push_back(name);
+    if (rule.by == PaintRule::By::labels) {
+      rule.labels.push_back(t.integer(name, 0, -2147483647L, 2147483647L));
+    } else if (rule.by == PaintRule::By::colors) {
+      const std::vector<double> c = t.numbers(name, Range::non_negative());
+      if (c.size() != 3) t.fail(name, "expected a colour [r, g, b] (0..1, or 0..255)");
+      Eigen::Vector3d v(c[0], c[1], c[2]);
+      if (v.maxCoeff() > 1) v /= 255.0;
+      rule.colors.push_back(v);
+    } else {
+      rule.weights.push_back(t.string(name, ""));
+    }
+  }
+  rule.property = p.string("property", "label");
+  rule.color_tolerance = p.number("color_tolerance", 0.1, Range::positive());
+  const Points& X = mesh.rest_positions();
+  const double diagonal = (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
+  const double tolerance = p.number("tolerance", 0.02 * diagonal, Range::positive());
+  const std::string disconnected = p.string("disconnected", "error", {"error", "keep", "split"});
+  std::vector<std::vector<int>> tets;
+  try {
+    const PaintedPoints painted = read_paint(path, &X);
+    tets = painted_zones(mesh, painted, paint_membership(painted, rule), tolerance);
+  } catch (const Error& e) {
+    p.fail("file", e.what());
+  }
+  for (std::size_t z = 0; z < rule.zones.size(); ++z) {
+    if (tets[z].empty())
+      t.fail(rule.zones[z], "no tet is painted " + rule.zones[z] + " (expected some painted vertex with this paint)");
+    auto pieces = connected_pieces(mesh, tets[z]);
+    if (pieces.size() > 1 && disconnected == "error")
+      t.fail(rule.zones[z], "zone \"" + rule.zones[z] + "\" is painted in " + std::to_string(pieces.size()) +
+                                " disconnected pieces (of " + std::to_string(pieces[0].size()) + ", " +
+                                std::to_string(pieces[1].size()) + (pieces.size() > 2 ? ", ..." : "") +
+                                " tets): paint each piece as its own zone, or set disconnected = \"keep\" or \"split\"");
+    if (pieces.size() > 1 && disconnected == "split") {
+      for (std::size_t k = 0; k < pieces.size(); ++k) {
+        std::sort(pieces[k].begin(), pieces[k].end());
+        zones.emplace_back(rule.zones[z] + "_" + std::to_string(k + 1), std::move(pieces[k]));
+      }
+    } else {
+      zones.emplace_back(rule.zones[z], std::move(tets[z]));
+    }
+  }
+}
+
+std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section& s, const Mesh& mesh, const SceneFile& file,
+                                                                  bool global) {
   std::vector<std::pair<std::string, std::vector<int>>> zones;
   if (s.boolean("global", global)) {
     std::vector<int> all(mesh.num_tets());
@@ -306,12 +378,10 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
   }
   if (s.boolean("from_mesh", false))
     for (const auto& [name, tets] : mesh.zones) zones.emplace_back(name, tets);
+  for (const Section& p : s.tables("paint")) parse_paint(p, mesh, file, zones);
   for (const Section& z : s.tables("zone")) {
-    std::string name = z.string("name", "");
-    if (name.empty()) z.fail("name", "missing, expected a zone name");
-    if (name.find_first_of("/.,") != std::string::npos) z.fail("name", "expected a name without '/', '.' or ','");
-    for (const auto& other : zones)
-      if (other.first == name) z.fail("name", "zone \"" + name + "\" is defined twice");
+    const std::string name = z.string("name", "");
+    check_zone_name(z, "name", name, zones);
     Section sel = z.table("select");
     if (!sel.exists()) z.fail("select", "missing, expected a selection such as { kind = \"box\", min = [..], max = [..] }");
     zones.emplace_back(name, select_tets(mesh, Selection::parse(sel)));
@@ -477,7 +547,7 @@ Scene parse_scene(SceneFile file) {
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
   sc.mesh = mesh_from_scene(mesh, sc.file);
   sc.material = parse_material(root.table("material"));
-  sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.material.model == MaterialModel::cnh);
+  sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.file, sc.material.model == MaterialModel::cnh);
   sc.keep_zones = root.table("zones").boolean("keep", true);
   sc.zone_restore_time = root.table("zones").number("restore_time", 0.0, Range::non_negative());
   std::vector<int> driven_by(sc.mesh.num_nodes(), -1);

@@ -8,7 +8,8 @@
 // OUT_DIR/failure.* and its path is printed, to become a regression input in tests/data/fuzz/.
 //
 // Readers: scene (TOML, with overrides; meshing included, within a 200 MB budget), msh (Gmsh
-// v2.2 and v4.1), tetgen (.node/.ele), obj, stl (closed surfaces, read only), bvh. The msh,
+// v2.2 and v4.1), tetgen (.node/.ele), obj, stl (closed surfaces, read only), bvh, ply and csv
+// (paint files, carried onto a small box). The msh, ply, csv,
 // tetgen, obj and stl seeds are made here (a small Gmsh mesh of two boxes, written in each
 // format); scene and bvh seeds are given as files.
 #include <gmsh.h>
@@ -31,6 +32,7 @@
 #include "isochor/error.hpp"
 #include "isochor/memory.hpp"
 #include "isochor/meshing.hpp"
+#include "isochor/paint.hpp"
 #include "isochor/scene.hpp"
 
 using namespace isochor;
@@ -157,6 +159,48 @@ std::vector<fs::path> make_mesh_seeds(const std::string& reader, const fs::path&
     seeds.push_back(dir / "seed.stl");
   }
   gmsh::finalize();
+  if (reader == "ply" || reader == "csv") {  // paint files: ASCII and binary PLY, CSV by point and by node
+    const Mesh m = make_box({1, 1, 1}, {2, 2, 2}, Eigen::Vector3d::Zero(), 6);
+    std::ostringstream ascii, binary, points, nodes;
+    const char* header = "element vertex %d\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\n"
+                         "property uchar green\nproperty uchar blue\nproperty int label\nelement face %d\n"
+                         "property list uchar int vertex_indices\nend_header\n";
+    char h[400];
+    std::snprintf(h, sizeof h, header, m.num_nodes(), static_cast<int>(m.surface().size()));
+    ascii << "ply\nformat ascii 1.0\n" << h;
+    binary << "ply\nformat binary_little_endian 1.0\n" << h;
+    points << "x,y,z,label,w\n";
+    nodes << "node,label\n";
+    for (int i = 0; i < m.num_nodes(); ++i) {
+      const Eigen::Vector3d p = m.rest_positions().col(i);
+      ascii << p.x() << " " << p.y() << " " << p.z() << " 255 0 " << i % 256 << " " << i % 3 << "\n";
+      const float f[3] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())};
+      const unsigned char c[3] = {255, 0, static_cast<unsigned char>(i % 256)};
+      const int label = i % 3;
+      binary.write(reinterpret_cast<const char*>(f), sizeof f);
+      binary.write(reinterpret_cast<const char*>(c), sizeof c);
+      binary.write(reinterpret_cast<const char*>(&label), sizeof label);
+      points << p.x() << "," << p.y() << "," << p.z() << "," << i % 3 << "," << 0.1 * (i % 10) << "\n";
+      nodes << i << "," << i % 3 << "\n";
+    }
+    for (const Tri& t : m.surface()) {
+      ascii << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
+      const unsigned char three = 3;
+      binary.write(reinterpret_cast<const char*>(&three), 1);
+      binary.write(reinterpret_cast<const char*>(t.data()), 3 * sizeof(int));
+    }
+    if (reader == "ply") {
+      write_text(dir / "ascii.ply", ascii.str());
+      write_text(dir / "binary.ply", binary.str());
+      seeds.push_back(dir / "ascii.ply");
+      seeds.push_back(dir / "binary.ply");
+    } else {
+      write_text(dir / "points.csv", points.str());
+      write_text(dir / "nodes.csv", nodes.str());
+      seeds.push_back(dir / "points.csv");
+      seeds.push_back(dir / "nodes.csv");
+    }
+  }
   if (reader == "tetgen" || reader == "obj") {
     const Mesh m = make_box({1, 1, 1}, {2, 2, 2}, Eigen::Vector3d::Zero(), 6);
     std::ostringstream node, ele, obj;
@@ -193,7 +237,14 @@ void read_input(const std::string& reader, const fs::path& p, const std::vector<
   else if (reader == "obj") read_obj_surface(p.string(), x, tris);
   else if (reader == "stl") read_stl_surface(p.string(), x, tris);
   else if (reader == "bvh") (void)read_bvh(p.string());
-  else throw std::invalid_argument("unknown reader " + reader);
+  else if (reader == "ply" || reader == "csv") {  // paint files, read against a 27-node mesh
+    const Mesh m = make_box({1, 1, 1}, {2, 2, 2}, Eigen::Vector3d::Zero(), 6);
+    const PaintedPoints painted = read_paint(p.string(), &m.rest_positions());
+    PaintRule rule;
+    rule.zones = {"a", "b"};
+    rule.labels = {1, 2};
+    (void)painted_zones(m, painted, paint_membership(painted, rule), 1e9);
+  } else throw std::invalid_argument("unknown reader " + reader);
 }
 
 // --set overrides for a scene: keys of the seed (key = value lines, under their [table]) with
