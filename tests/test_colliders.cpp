@@ -340,3 +340,32 @@ TEST(Colliders, ABlockSlidesDownATiltedBoxAtCoulombsAcceleration) {
   EXPECT_NEAR(v[6], creep, 1e-3 * creep);
   EXPECT_NEAR(v[4], creep, 1e-3 * creep);
 }
+
+TEST(Colliders, ABandTightensByItsResizeFactors) {
+  // A hollow cylinder (a band of hole radius 0.2 m) whose radius goes to 0.9 of it over 1 s
+  // (linear keys): a point in its hole at distance r from the axis is 0.2 f(t) - r from it.
+  const std::string mesh = "[mesh]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = 1\n[material]\nmu = 1.0\nlambda = 1.0\n";
+  const std::string band =
+      "[[collider]]\nshape = \"cylinder\"\nradius = 0.2\nwall = 0.02\nlength = 0.05\n"
+      "resize = { times = [0.0, 1.0], factors = [1.0, 0.9] }\n";
+  const Scene s = parse_scene(SceneFile::parse(mesh + band, "band.toml"));
+  ASSERT_EQ(s.colliders.size(), 1u);
+  for (double t : {0.0, 0.25, 1.0, 2.0}) {
+    const ColliderPose P = s.colliders[0].pose(t, nullptr);
+    const double f = 1.0 - 0.1 * std::min(t, 1.0);
+    EXPECT_NEAR(P.radius_scale, f, 1e-15);
+    EXPECT_NEAR(s.colliders[0].distance(P, Vec3(0.03, 0.04, 0.01), nullptr, nullptr), 0.2 * f - 0.05, 1e-15);
+  }
+  const std::vector<double> b = s.breakpoints();
+  EXPECT_NE(std::find(b.begin(), b.end(), 1.0), b.end());  // the knot: a stop for IDA
+  auto err = [&](const std::string& extra) {
+    return test::error_of([&] { parse_scene(SceneFile::parse(mesh + band + extra, "band.toml")); });
+  };
+  EXPECT_NE(err("damping = 0.1\n").find("collider[0].resize: a collider whose radius changes has no damping"), std::string::npos);
+  EXPECT_NE(test::error_of([&] {
+              parse_scene(SceneFile::parse(mesh + "[[collider]]\nshape = \"box\"\nsize = [1, 1, 1]\ncenter = [0, 0, 2]\n"
+                                                  "resize = { times = [0.0, 1.0], factors = [1.0, 0.9] }\n",
+                                           "box.toml"));
+            }).find("collider[0].resize: only a sphere's, capsule's or cylinder's radius can change"),
+            std::string::npos);
+}

@@ -159,6 +159,7 @@ ColliderPose Collider::pose(double t, const Skeleton* skeleton) const {
   }
   p.A = Rm * rotation;
   p.b = Rm * center + p.origin;
+  if (resize.kind != Driver::Kind::fixed) p.radius_scale = resize.displacement(t).x();
   return p;
 }
 
@@ -166,7 +167,14 @@ double Collider::distance(const ColliderPose& p, const Vec3& x, Vec3* grad, Mat3
   const Vec3 l = p.A.transpose() * (x - p.b);
   Vec3 gl;
   Mat3 Hl;
-  const double s = shape.distance(l, grad ? &gl : nullptr, hess ? &Hl : nullptr);
+  double s;
+  if (p.radius_scale != 1.0) {
+    ColliderShape scaled = shape;
+    scaled.radius *= p.radius_scale;
+    s = scaled.distance(l, grad ? &gl : nullptr, hess ? &Hl : nullptr);
+  } else {
+    s = shape.distance(l, grad ? &gl : nullptr, hess ? &Hl : nullptr);
+  }
   if (grad) *grad = p.A * gl;
   if (hess) *hess = p.A * Hl * p.A.transpose();
   return s;

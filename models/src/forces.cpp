@@ -47,7 +47,7 @@ template <class F>
 void ExternalPotential::for_each_contact(std::size_t c, const Points& x, bool free_only, F&& f) const {
   const Collider& C = colliders_[c];
   const ColliderPose& P = poses_[c];
-  const double reach = C.shape.bound() + C.law.thickness;
+  const double reach = C.shape.bound() * std::max(1.0, P.radius_scale) + C.law.thickness;
   const int count = free_only ? dofs_.num_free() : static_cast<int>(x.cols());
   for (int j = 0; j < count; ++j) {
     const int i = free_only ? dofs_.free_nodes[j] : j;

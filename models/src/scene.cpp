@@ -66,7 +66,10 @@ std::vector<double> Scene::breakpoints() const {
   for (const Driver& d : boundary) d.breakpoints(t);
   if (skeleton)
     for (const BoneSpec& b : skeleton->bones()) b.motion.breakpoints(t);
-  for (const Collider& c : colliders) c.motion.breakpoints(t);
+  for (const Collider& c : colliders) {
+    c.motion.breakpoints(t);
+    c.resize.breakpoints(t);
+  }
   if (gravity_ramp > 0) t.push_back(gravity_ramp);
   if (zone_restore_time > 0 && keep_zones && !zones.empty()) t.push_back(frames.times().front() + zone_restore_time);
   for (const NodeLoad& l : loads) l.history.breakpoints(t);
@@ -468,6 +471,20 @@ Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& def
     if (C.bone < 0) c.fail("bone", "no bone named \"" + bone + "\" in [skeleton]");
   } else if (motion.exists()) {
     C.motion = parse_motion(motion);
+  }
+  const Section resize = c.table("resize");
+  if (resize.exists()) {
+    if (S.kind != K::sphere && S.kind != K::capsule && S.kind != K::cylinder)
+      c.fail("resize", "only a sphere's, capsule's or cylinder's radius can change");
+    if (C.law.damping > 0 || C.law.friction > 0)
+      c.fail("resize", "a collider whose radius changes has no damping or friction (expected damping = 0 and friction = 0)");
+    C.resize = parse_keyframes(resize, "factors", 1, 1.0, "one factor on the radius");
+    for (const Eigen::Vector3d& f : C.resize.values)
+      if (!(f.x() > 0)) resize.fail("factors", "expected positive factors on the radius");
+    double smallest_factor = 1.0;
+    for (const Eigen::Vector3d& f : C.resize.values) smallest_factor = std::min(smallest_factor, f.x());
+    if (S.kind == K::cylinder && S.wall == 0 && S.rounding > S.radius * smallest_factor)
+      resize.fail("factors", "the radius would shrink below the rounding (" + std::to_string(S.rounding) + " m)");
   }
   return C;
 }

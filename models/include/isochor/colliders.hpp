@@ -60,6 +60,7 @@ struct ColliderPose {
   Mat3 A = Mat3::Identity();
   Vec3 b = Vec3::Zero();
   Vec3 omega = Vec3::Zero(), origin = Vec3::Zero(), origin_velocity = Vec3::Zero();
+  double radius_scale = 1.0;  // the shape's radius is scaled by this (Collider::resize)
   Vec3 velocity_at(const Vec3& x) const { return omega.cross(x - origin) + origin_velocity; }
 };
 
@@ -71,8 +72,12 @@ struct Collider {
   Mat3 rotation = Mat3::Identity();  // rest pose; column 2 is the shape's axis (a plane's normal)
   Driver motion;                     // Kind::fixed: static; a ramp, keyframes, sinusoid or rotation
   int bone = -1;                     // >= 0: carried by this bone of the scene's skeleton
+  // A factor on the radius in time (keyframes in x of its values; Kind::fixed: 1): a band that
+  // tightens. The sphere's, capsule's or cylinder's radius (a hollow one's hole; its wall and
+  // rounding stay). Not with damping or friction (their velocity would need the radius' rate).
+  Driver resize;
 
-  bool moves() const { return bone >= 0 || motion.kind != Driver::Kind::fixed; }
+  bool moves() const { return bone >= 0 || motion.kind != Driver::Kind::fixed || resize.kind != Driver::Kind::fixed; }
   // The pose at t (a bone's needs the skeleton, realized at t by this call).
   ColliderPose pose(double t, const Skeleton* skeleton) const;
   // Signed distance of the world point x at this pose; world gradient and Hessian if asked.
