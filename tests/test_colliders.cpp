@@ -369,3 +369,32 @@ TEST(Colliders, ABandTightensByItsResizeFactors) {
             }).find("collider[0].resize: only a sphere's, capsule's or cylinder's radius can change"),
             std::string::npos);
 }
+
+TEST(Colliders, TheWaistbandHoldsTheWaistInsideItsTighteningBand) {
+  // demos/waistband_dynamic.toml to t = 0.5 s, where the band's radius is 0.95 of 0.131 m (its
+  // cubic keys at the middle): the waist (0.13 m at rest) stays inside the band, no surface node
+  // under it farther from the axis than the band's radius plus the contact thickness, while every
+  // zone (the whole body and 8 painted ones) keeps its volume.
+  const auto dir = test::temp_dir();
+  Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/waistband_dynamic.toml", {"frames.duration=0.5"});
+  ASSERT_EQ(sc.zones.size(), 9u);
+  RunFile f(run_scene(sc, (dir / "waist.h5").string(), false).output);
+  ASSERT_EQ(f.num_frames(), 11);
+  const auto volumes = f.volumes();
+  for (std::size_t k = 0; k < volumes.size(); ++k)
+    for (std::size_t z = 0; z < volumes[k].size(); ++z) EXPECT_NEAR(volumes[k][z] / volumes[0][z], 1.0, 1e-10) << "frame " << k;
+  const Points X = f.positions(0), x = f.positions(f.num_frames() - 1);
+  const double R = 0.131 * 0.95, delta = 2e-3;
+  double widest_rest = 0, widest = 0;
+  for (int v : sc.mesh.surface_nodes())
+    if (std::abs(X(2, v) - 0.40) < 0.02) {
+      widest_rest = std::max(widest_rest, std::hypot(X(0, v), X(1, v)));
+      widest = std::max(widest, std::hypot(x(0, v), x(1, v)));
+    }
+  EXPECT_GT(widest_rest, R + delta);  // the band had to squeeze
+  EXPECT_LE(widest, R + delta);
+  const Points F = f.contact(f.num_frames() - 1);
+  double inward = 0;  // the band pushes towards the axis
+  for (int v = 0; v < F.cols(); ++v) inward -= F.col(v).head<2>().dot(x.col(v).head<2>().normalized());
+  EXPECT_GT(inward, 0.0);
+}

@@ -1,0 +1,153 @@
+#!/usr/bin/python3
+"""Measure waistband runs (demos/waistband.toml) and draw them side by side (the CNH paper's Figure 1).
+
+    /usr/bin/python3 tools/waistband.py LABEL=RUN.h5 [LABEL=RUN.h5 ...] [--out docs/images/waistband.png]
+        [--markdown FILE.md] [--band-z 0.40] [--band-height 0.05]
+
+For each run, at its last frame against its first: the total and per-zone volume change (every
+zone in /frames/volume, constrained or only measured), the waist circumference in the planes
+just above the band, at its middle and just below it (the length of the surface's cross-section),
+and the bulge: the largest outward radial displacement of a surface node above and below the band
+(within 10 cm of it). The picture shows each body's cross-section in the plane y = 0 (front view:
+rest dashed, last frame solid), the band at its last radius, and a zoom on the waist.
+"""
+import argparse
+import sys
+
+import h5py
+import numpy as np
+
+
+def slice_segments(x, tris, axis, level):
+    """Segments where the plane x[axis] = level cuts the triangles (array (k, 2, 3))."""
+    d = x[tris][:, :, axis] - level  # (T, 3)
+    segs = []
+    for t, dd in zip(x[tris], d):
+        pts = []
+        for i in range(3):
+            a, b = dd[i], dd[(i + 1) % 3]
+            if (a < 0) != (b < 0):
+                s = a / (a - b)
+                pts.append(t[i] + s * (t[(i + 1) % 3] - t[i]))
+        if len(pts) == 2:
+            segs.append(pts)
+    return np.array(segs).reshape(-1, 2, 3)
+
+
+def circumference(x, tris, z):
+    s = slice_segments(x, tris, 2, z)
+    return float(np.linalg.norm(s[:, 1] - s[:, 0], axis=1).sum())
+
+
+def band_radius(f):
+    """The band's hole radius at the last frame (from its pose series' scale is not stored: from
+    the scene's resize factors at the last time)."""
+    import tomllib
+    scene = tomllib.loads(f.attrs["scene"] if isinstance(f.attrs["scene"], str) else f.attrs["scene"].decode())
+    c = scene["collider"][0]
+    r = float(c["radius"])
+    rs = c.get("resize")
+    if rs:
+        t = float(f["/frames/time"][-1])
+        times, factors = rs["times"], rs["factors"]
+        r *= float(np.interp(t, times, factors))  # the keys' values (cubic and linear agree at the keys)
+    return r, float(c["length"]), float(c.get("wall", 0.0)), np.array(c.get("center", [0, 0, 0]), float)
+
+
+def measure(path, band_z, band_h):
+    f = h5py.File(path, "r", locking=False)
+    X = f["/frames/positions"][0]
+    x = f["/frames/positions"][-1]
+    S = f["/mesh/surface"][()]
+    V = f["/frames/volume"][()]
+    cols = f["/frames/volume"].attrs["columns"]
+    cols = (cols if isinstance(cols, str) else cols.decode()).split(",")
+    out = {"time": float(f["/frames/time"][-1]), "frames": len(f["/frames/time"]),
+           "volume": {c: float(V[-1, k] / V[0, k] - 1) for k, c in enumerate(cols)}}
+    for name, z in (("above", band_z + 0.5 * band_h + 0.01), ("at", band_z), ("below", band_z - 0.5 * band_h - 0.01)):
+        out["circ_" + name] = (circumference(X, S, z), circumference(x, S, z))
+    nodes = np.unique(S)
+    dr = np.hypot(x[nodes, 0], x[nodes, 1]) - np.hypot(X[nodes, 0], X[nodes, 1])
+    zr = X[nodes, 2]
+    above = (zr > band_z + 0.5 * band_h) & (zr < band_z + 0.5 * band_h + 0.1)
+    below = (zr < band_z - 0.5 * band_h) & (zr > band_z - 0.5 * band_h - 0.1)
+    under = np.abs(zr - band_z) < 0.5 * band_h
+    out["bulge_above"] = float(dr[above].max())
+    out["bulge_below"] = float(dr[below].max())
+    out["squeeze"] = float(-dr[under].min())
+    stats = f["/stats"].attrs
+    out["wall"] = float(stats.get("wall_seconds", np.nan))
+    out["status"] = f.attrs.get("status", "")
+    out["status"] = out["status"] if isinstance(out["status"], str) else out["status"].decode()
+    return out, f
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("runs", nargs="+", help="LABEL=RUN.h5")
+    ap.add_argument("--out", default="")
+    ap.add_argument("--markdown", default="")
+    ap.add_argument("--band-z", type=float, default=0.40)
+    ap.add_argument("--band-height", type=float, default=0.05)
+    a = ap.parse_args()
+    runs = []
+    for r in a.runs:
+        if "=" not in r:
+            sys.exit(f"{r}: expected LABEL=RUN.h5")
+        label, path = r.rsplit("=", 1)
+        m, f = measure(path, a.band_z, a.band_height)
+        runs.append((label, path, m, f))
+    zones = [c for c in runs[0][2]["volume"]]
+    lines = ["| | " + " | ".join(label for label, *_ in runs) + " |", "|---" * (len(runs) + 1) + "|"]
+    lines.append("| status (last frame, time) | " + " | ".join(f"{m['status']}, {m['time']:.2f} s" for _, _, m, _ in runs) + " |")
+    for z in zones:
+        lines.append(f"| volume change: {z} | " + " | ".join(f"{100 * m['volume'][z]:+.3g}%" for _, _, m, _ in runs) + " |")
+    for name, what in (("above", "just above the band"), ("at", "at the band"), ("below", "just below the band")):
+        lines.append(f"| waist circumference {what} (rest → last, cm) | " + " | ".join(
+            f"{100 * m['circ_' + name][0]:.2f} → {100 * m['circ_' + name][1]:.2f}" for _, _, m, _ in runs) + " |")
+    lines.append("| squeeze under the band (largest inward, mm) | " + " | ".join(f"{1000 * m['squeeze']:.1f}" for _, _, m, _ in runs) + " |")
+    lines.append("| bulge above / below (largest outward, mm) | " + " | ".join(
+        f"{1000 * m['bulge_above']:.2f} / {1000 * m['bulge_below']:.2f}" for _, _, m, _ in runs) + " |")
+    lines.append("| wall time (s) | " + " | ".join(f"{m['wall']:.1f}" for _, _, m, _ in runs) + " |")
+    table = "\n".join(lines)
+    print(table)
+    if a.markdown:
+        open(a.markdown, "w").write(table + "\n")
+    if a.out:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from matplotlib.patches import Rectangle
+        fig, axes = plt.subplots(2, len(runs), figsize=(4.2 * len(runs), 9), gridspec_kw={"height_ratios": [3, 2]})
+        axes = np.array(axes).reshape(2, len(runs))
+        for j, (label, path, m, f) in enumerate(runs):
+            X = f["/frames/positions"][0]
+            x = f["/frames/positions"][-1]
+            S = f["/mesh/surface"][()]
+            R, L, wall, c = band_radius(f)
+            for row in range(2):
+                ax = axes[row, j]
+                for pos, style in ((X, dict(color="0.6", ls="--", lw=0.8)), (x, dict(color="tab:blue", lw=1.4))):
+                    for s in slice_segments(pos, S, 1, 0.0):
+                        ax.plot(s[:, 0], s[:, 2], **style)
+                for sign in (-1, 1):
+                    x0 = sign * R if sign > 0 else -R - wall
+                    ax.add_patch(Rectangle((x0, c[2] - L / 2), wall, L, color="tab:red", alpha=0.6))
+                ax.set_aspect("equal")
+                if row == 0:
+                    ax.set_title(f"{label}\nvolume {100 * m['volume']['total']:+.2g}%", fontsize=10)
+                    ax.set_xlabel("x (m)")
+                else:
+                    ax.set_xlim(0.06, 0.17)
+                    ax.set_ylim(c[2] - 0.12, c[2] + 0.12)
+                    ax.set_title(f"waist: bulge {1000 * m['bulge_above']:.1f} / {1000 * m['bulge_below']:.1f} mm", fontsize=9)
+                    ax.set_xlabel("x (m)")
+                ax.set_ylabel("z (m)")
+        fig.suptitle("A band tightening by 10% around the waist: cross-sections at y = 0 (rest dashed, last frame solid)", fontsize=11)
+        fig.tight_layout()
+        fig.savefig(a.out, dpi=110)
+        print(f"wrote {a.out}")
+
+
+if __name__ == "__main__":
+    main()
