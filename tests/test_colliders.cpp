@@ -10,6 +10,9 @@
 
 #include "isochor/colliders.hpp"
 #include "isochor/forces.hpp"
+#include "isochor/material.hpp"
+#include "isochor/meshing.hpp"
+#include "isochor/self_contact.hpp"
 #include "isochor/output_reader.hpp"
 #include "run.hpp"
 #include "isochor/scene.hpp"
@@ -397,4 +400,66 @@ TEST(Colliders, TheWaistbandHoldsTheWaistInsideItsTighteningBand) {
   double inward = 0;  // the band pushes towards the axis
   for (int v = 0; v < F.cols(); ++v) inward -= F.col(v).head<2>().dot(x.col(v).head<2>().normalized());
   EXPECT_GT(inward, 0.0);
+}
+
+TEST(SelfContact, GradientAgainstFiniteDifferencesAndTheNodesOwnBlock) {
+  // One mesh of a 0.1 m box and a 0.02 m box 0.2 m above it at rest, the small one then moved
+  // down to 3 mm above the large one's top face (within the 6 mm contact thickness), every node
+  // moved at random by up to 0.5 mm: the small box's four bottom nodes touch the top face's
+  // triangles. The energy's gradient against central differences (nodes and triangle corners);
+  // a touching node, whose closest point is inside a face, has the exact 3x3 block 2 k p n n^T on
+  // itself (the corners' blocks are Gauss-Newton: the pattern keeps only these blocks,
+  // docs/decisions.md).
+  const Mesh a = make_box(Eigen::Vector3d(0.1, 0.1, 0.1), {1, 1, 1}, Eigen::Vector3d(0, 0, 0), 6);
+  const Mesh b = make_box(Eigen::Vector3d(0.02, 0.02, 0.02), {1, 1, 1}, Eigen::Vector3d(0.004, -0.007, 0.2), 6);
+  Points X(3, a.num_nodes() + b.num_nodes());
+  X << a.rest_positions(), b.rest_positions();
+  std::vector<Tet> tets = a.tets();
+  for (Tet t : b.tets()) {
+    for (int& v : t) v += a.num_nodes();
+    tets.push_back(t);
+  }
+  const Mesh m(X, tets);
+  const DofMap dofs = DofMap::make(m.num_nodes(), {});
+  ElasticAssembly asm_(m, make_snh(1, 1), dofs);
+  ContactLaw law{1e5, 0.006};
+  SelfContact self(m, law, 0.05, dofs, asm_.pattern());
+  Points x = X;
+  x.rightCols(b.num_nodes()).row(2).array() -= 0.2 - 0.053 - 0.01;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-5e-4, 5e-4);
+  for (int i = 0; i < x.size(); ++i) x.data()[i] += u(rng);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
+  const double E = self.add_gradient(x, g);
+  ASSERT_GT(E, 0.0);
+  const double h = 1e-7;
+  double worst = 0;
+  for (int i = 0; i < x.size(); ++i) {
+    Points xp = x, xm = x;
+    xp.data()[i] += h;
+    xm.data()[i] -= h;
+    Eigen::VectorXd unused = Eigen::VectorXd::Zero(x.size());
+    const double fd = (self.add_gradient(xp, unused) - self.add_gradient(xm, unused)) / (2 * h);
+    worst = std::max(worst, std::abs(fd - g[i]));
+  }
+  EXPECT_LT(worst, 1e-6 * g.cwiseAbs().maxCoeff());
+  // A bottom node of the small box.
+  const int centre = a.num_nodes();
+  ASSERT_LT(x(2, centre), 0.05 + 0.006);
+  std::vector<double> values(asm_.pattern().nnz(), 0.0);
+  self.add_hessian(x, 1.0, values.data());
+  Mat3 H, Hfd;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) H(r, c) = values[asm_.pattern().find(3 * centre + r, 3 * centre + c)];
+  for (int c = 0; c < 3; ++c) {
+    Points xp = x, xm = x;
+    xp(c, centre) += h;
+    xm(c, centre) -= h;
+    Eigen::VectorXd gp = Eigen::VectorXd::Zero(x.size()), gm = Eigen::VectorXd::Zero(x.size());
+    self.add_gradient(xp, gp);
+    self.add_gradient(xm, gm);
+    Hfd.col(c) = (gp - gm).segment<3>(3 * centre) / (2 * h);
+  }
+  EXPECT_GT(H.norm(), 0.0);
+  EXPECT_LT((H - Hfd).norm(), 1e-5 * Hfd.norm());
 }

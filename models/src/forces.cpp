@@ -107,6 +107,7 @@ void ExternalPotential::contact_forces(const Points& x, const Eigen::VectorXd* x
                                             xdot->segment<3>(3 * i) - P.velocity_at(x.col(i)), -skew(P.omega), nullptr, nullptr);
     });
   }
+  if (self_) self_->add_forces(x, out);
 }
 
 double ExternalPotential::energy(const Points& x) const {
@@ -140,6 +141,7 @@ double ExternalPotential::add_gradient(const Points& x, Eigen::VectorXd& grad) c
       E += contact_energy(k, colliders_[c].law.thickness, s, n, H, &gk, nullptr);
       grad.segment<3>(3 * i) += gk;
     });
+  if (self_) E += self_->add_gradient(x, grad);
   return E;
 }
 
@@ -150,6 +152,7 @@ void ExternalPotential::add_hessian(const Points& x, double scale, double* value
       contact_energy(k, colliders_[c].law.thickness, s, n, H, nullptr, &He);
       for (int e = 0; e < 9; ++e) values[diag_slots_[9 * f + e]] += scale * He(e / 3, e % 3);
     });
+  if (self_) self_->add_hessian(x, scale, values);
 }
 
 double LoadHistory::factor(double t) const {

@@ -66,6 +66,9 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
   node_mass_ *= scene.material.density * mesh.rest_volume() / area;
   dof_mass_.resize(num_dofs());
   for (int f = 0; f < dofs_.num_free(); ++f) dof_mass_.segment<3>(3 * f).setConstant(node_mass_[dofs_.free_nodes[f]]);
+  if (scene.self_contact.enabled)
+    throw Error(scene.file.name() + ": [contact.self] is not available with the mass-spring model (expected no contact "
+                                    "between body parts)");
   external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.colliders, dofs_, pattern_,
                                                   surface_areas(scene.mesh), scene.skeleton);
   external_->set_loads(scene.loads);

@@ -517,6 +517,24 @@ void parse_colliders(const Section& root, Scene& sc) {
     sc.colliders.push_back(C);
   }
   for (const Section& c : root.tables("collider")) sc.colliders.push_back(parse_collider(c, sc, defaults));
+  const Section self = contact.table("self");
+  if (self.exists()) {
+    sc.self_contact.enabled = self.boolean("enabled", true);
+    ContactLaw plain = defaults;  // the ground's damping and friction are not inherited
+    plain.damping = plain.friction = 0;
+    sc.self_contact.law = parse_contact_law(self, plain);
+    if (sc.self_contact.law.damping > 0 || sc.self_contact.law.friction > 0)
+      self.fail(self.has("damping") ? "damping" : "friction", "contact between body parts has no damping or friction (expected 0)");
+    // The default neighbourhood: three mean surface edges.
+    const Points& X = sc.mesh.rest_positions();
+    double edges = 0;
+    for (const Tri& t : sc.mesh.surface())
+      for (int e = 0; e < 3; ++e) edges += (X.col(t[e]) - X.col(t[(e + 1) % 3])).norm();
+    const double mean = sc.mesh.surface().empty() ? 0.0 : edges / (3.0 * static_cast<double>(sc.mesh.surface().size()));
+    sc.self_contact.exclude = self.number("exclude", 3 * mean, Range::positive());
+    if (sc.self_contact.exclude <= sc.self_contact.law.thickness)
+      self.fail("exclude", "expected more than the contact thickness (" + std::to_string(sc.self_contact.law.thickness) + " m)");
+  }
 }
 
 // A body that starts inside a collider meets a force of its whole penetration at once, and the
@@ -558,7 +576,7 @@ void check_initial_contact(const Section& root, const Scene& sc) {
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, 0.0, true, {}, {}, {}, {}};
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, 0.0, true, {}, {}, {}, {}};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");

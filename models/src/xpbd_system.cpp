@@ -30,6 +30,9 @@ XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_
       held_[it->second].drivers.push_back(r.driver);
     }
   }
+  if (scene.self_contact.enabled)
+    throw Error(scene.file.name() + ": [contact.self] is not available with integrator.kind = \"xpbd\" (expected no contact "
+                                    "between body parts)");
   for (const Collider& c : scene.colliders)
     if (c.law.damping != 0 || c.law.friction != 0)
       throw Error(scene.file.name() + ": " + c.name + ": contact damping and friction are not available with integrator.kind = "

@@ -6,6 +6,7 @@
 
 #include "isochor/assembly.hpp"
 #include "isochor/colliders.hpp"
+#include "isochor/self_contact.hpp"
 
 namespace isochor {
 
@@ -85,7 +86,11 @@ class ExternalPotential {
   void add_damping_jacobians(const Points& x, const Eigen::VectorXd& xdot, double* neg_dfdx, double* neg_dfdv) const;
   bool damped() const { return damped_; }
   bool has_friction() const { return friction_; }
-  bool has_contact() const { return !colliders_.empty(); }
+  bool has_contact() const { return !colliders_.empty() || self_; }
+  // Contact between parts of the body (self_contact.hpp): in the energy, gradient, Hessian and
+  // contact forces from now on.
+  void set_self_contact(std::unique_ptr<SelfContact> s) { self_ = std::move(s); }
+  const SelfContact* self_contact() const { return self_.get(); }
   // The force of every collider on every node (N, 3 x N): the contact's elastic force, plus its
   // damping and friction for velocities xdot (if given).
   void contact_forces(const Points& x, const Eigen::VectorXd* xdot, Points& out) const;
@@ -106,6 +111,7 @@ class ExternalPotential {
   std::vector<Collider> colliders_;
   std::vector<ColliderPose> poses_;  // where each collider is now
   std::shared_ptr<const Skeleton> skeleton_;
+  std::unique_ptr<SelfContact> self_;
   std::vector<NodeLoad> loads_;
   double time_ = 0.0;
   bool damped_ = false, friction_ = false;

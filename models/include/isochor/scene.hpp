@@ -84,6 +84,12 @@ struct Scene {
   double gravity_ramp = 0.0;  // s (pseudo-time in statics): gravity grows linearly to full at this time; 0: full at once
   // The ground (contact.ground), the [[contact.plane]]s and the [[collider]]s, in that order.
   std::vector<Collider> colliders;
+  // [contact.self]: contact between parts of the body (self_contact.hpp); off without the table.
+  struct SelfContactSpec {
+    bool enabled = false;
+    ContactLaw law;
+    double exclude = 0;  // m
+  } self_contact;
   std::vector<NodeLoad> loads;     // [[load]]: point loads and tractions (dead loads)
   std::vector<PressureLoad> pressure_loads;  // [[load]] kind = "pressure" (follower loads)
   RayleighDamping damping;

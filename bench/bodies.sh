@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# The bodies of issue 17, seconds per frame measured side by side, run alternately in rounds on
+# one thread; medians:
+#   demos/waistband_dynamic.toml (~12.7K tets, a band tightening by 10% over 1 s, IDA): CNH with
+#     its 9 zones, UNH nu = 0.4545 and UNH nu = 0.499 (zones measured only);
+#   demos/squeeze_cylinders.toml (~5.8K tets, two cylinders pressing a jelly, IDA): CNH with its
+#     global zone (lambda 60, beta 12) and SNH (lambda 400), the CNH paper's Table 1.
+#   bench/bodies.sh [build] [rounds]
+set -euo pipefail
+build=${1:-build}
+rounds=${2:-3}
+cd "$(dirname "$0")/.."
+mkdir -p out/bench
+run() {  # name scene overrides...
+  local name=$1 scene=$2
+  shift 2
+  OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$build/isochor" run "$scene" --overwrite -q -o "out/bench/$name.h5" "$@" > /dev/null
+}
+for r in $(seq 1 "$rounds"); do
+  run "waist_cnh_r$r" demos/waistband_dynamic.toml
+  for nu in 0.4545 0.499; do
+    run "waist_unh${nu}_r$r" demos/waistband_dynamic.toml --set material.model=unh --set material.nu=$nu --set zones.keep=false
+  done
+  run "squeeze_cnh_r$r" demos/squeeze_cylinders.toml
+  run "squeeze_snh_r$r" demos/squeeze_cylinders.toml --set material.model=snh --set material.lambda=400.0 --set zones.global=false
+done
+/usr/bin/python3 - "$rounds" <<'PY'
+import sys, h5py, numpy as np
+rounds = int(sys.argv[1])
+print(f"bodies, medians over {rounds} round(s), one thread")
+print(f"{'scene':10s} {'model':12s} {'s/frame':>9s} {'wall s':>8s} {'steps':>7s} {'Jacobians':>9s} {'largest volume change':>22s}")
+for scene, name, tag in (("waistband", "CNH, zones", "waist_cnh"), ("waistband", "UNH 0.4545", "waist_unh0.4545"),
+                         ("waistband", "UNH 0.499", "waist_unh0.499"), ("squeeze", "CNH, zone", "squeeze_cnh"),
+                         ("squeeze", "SNH", "squeeze_snh")):
+    per_frame, wall, steps, jac, dv = [], [], [], [], []
+    for r in range(1, rounds + 1):
+        f = h5py.File(f"out/bench/{tag}_r{r}.h5", "r")
+        a = f["/stats"].attrs
+        per_frame += list(np.diff(f["/stats/wall_seconds"][()]))
+        wall.append(a["wall_seconds"])
+        steps.append(a["steps"])
+        jac.append(a["jacobian_evaluations"])
+        V = f["/frames/volume"][()]
+        dv.append(np.abs(V[:, 0] / V[0, 0] - 1).max())
+    print(f"{scene:10s} {name:12s} {np.median(per_frame):9.3f} {np.median(wall):8.2f} {np.median(steps):7.0f} "
+          f"{np.median(jac):9.0f} {100 * np.median(dv):21.3g}%")
+PY

@@ -1,0 +1,55 @@
+// Contact between parts of one body (issue 17): every surface node against the deformed surface
+// of the body away from itself. Its energy is the ground's law on the node's distance d to the
+// nearest surface triangle that is not near it at rest (no vertex within `exclude` of the node
+// in the rest state, so a node does not touch its own neighbourhood):
+//   k/3 (delta - d)^3 when d < delta (per node, or times the node's rest surface area).
+// The distance to a union of triangles is their smallest, so one term per node (a node near an
+// edge is not counted twice). The gradient moves the node and the triangle's corners (by the
+// closest point's barycentric weights); the Jacobian keeps the scene's fixed pattern: only the
+// 3x3 blocks of the node and of each corner on themselves, Gauss-Newton (2 k p w_i^2 n n^T), so
+// Newton's iterations are those of an approximate Jacobian where contact is active
+// (docs/decisions.md measures it). Candidates come from a k-d tree (nanoflann) over the deformed
+// surface's triangle centroids, rebuilt at each evaluation.
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "isochor/assembly.hpp"
+#include "isochor/colliders.hpp"
+
+namespace isochor {
+
+class SelfContact {
+ public:
+  SelfContact(const Mesh& mesh, const ContactLaw& law, double exclude, const DofMap& dofs, const Pattern& pattern,
+              Eigen::VectorXd area = {});
+  ~SelfContact();
+  // grad += gradient (every node, 3 N); returns the energy.
+  double add_gradient(const Points& x, Eigen::VectorXd& grad) const;
+  // values += scale * the Gauss-Newton diagonal blocks (free nodes).
+  void add_hessian(const Points& x, double scale, double* values) const;
+  // out += the contact force on every node.
+  void add_forces(const Points& x, Points& out) const;
+  // The deepest approach: the smallest d over nodes in contact (m; +inf if none), at x.
+  double closest(const Points& x) const;
+
+ private:
+  struct Pair {
+    int node;
+    Tri tri;
+    Vec3 weights;  // of the closest point on the triangle
+    Vec3 n;        // unit, from the closest point to the node
+    double d;
+  };
+  // The nearest non-excluded triangle within delta for every surface node.
+  std::vector<Pair> pairs(const Points& x) const;
+  const Mesh& mesh_;
+  ContactLaw law_;
+  double exclude2_;
+  DofMap dofs_;
+  std::vector<Index> diag_slots_;  // 9 per free node
+  Eigen::VectorXd area_;
+  double reach_ = 0;  // largest rest centroid-to-corner distance of a surface triangle
+};
+
+}  // namespace isochor
