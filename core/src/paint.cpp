@@ -332,6 +332,15 @@ std::vector<std::vector<double>> paint_membership(const PaintedPoints& p, const 
   return in;
 }
 
+Eigen::Vector3d barycentric(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                            const Eigen::Vector3d& c) {
+  const Eigen::Vector3d u = b - a, w = c - a, r = q - a;
+  const double uu = u.dot(u), uw = u.dot(w), ww = w.dot(w), det = uu * ww - uw * uw;
+  if (!(det > 0)) return Eigen::Vector3d(1, 0, 0);
+  const double l1 = (ww * r.dot(u) - uw * r.dot(w)) / det, l2 = (uu * r.dot(w) - uw * r.dot(u)) / det;
+  return Eigen::Vector3d(1 - l1 - l2, l1, l2);
+}
+
 Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                     const Eigen::Vector3d& c) {
   // Voronoi regions of the vertices, edges and face (Ericson, Real-Time Collision Detection, 5.1.5).
@@ -406,14 +415,10 @@ std::vector<std::vector<int>> painted_zones(const Mesh& mesh, const PaintedPoint
       const double d = (q - c).squaredNorm();
       if (d < best_d) best_d = d, best = static_cast<std::size_t>(item.first), at = q;
     }
-    // Barycentric coordinates of the surface point on its triangle.
     const Tri& f = S[best];
-    const Eigen::Vector3d a = X.col(f[0]), u = X.col(f[1]) - a, w = X.col(f[2]) - a, ra = at - a;
-    const double uu = u.dot(u), uw = u.dot(w), ww = w.dot(w), det = uu * ww - uw * uw;
-    const double l1 = det > 0 ? (ww * ra.dot(u) - uw * ra.dot(w)) / det : 0.0;
-    const double l2 = det > 0 ? (uu * ra.dot(w) - uw * ra.dot(u)) / det : 0.0;
+    const Eigen::Vector3d l = barycentric(at, X.col(f[0]), X.col(f[1]), X.col(f[2]));
     for (std::size_t z = 0; z < Z; ++z) {
-      const double paint = (1 - l1 - l2) * node_in[z][f[0]] + l1 * node_in[z][f[1]] + l2 * node_in[z][f[2]];
+      const double paint = l[0] * node_in[z][f[0]] + l[1] * node_in[z][f[1]] + l[2] * node_in[z][f[2]];
       if (paint >= 0.5) zones[z].push_back(e);
     }
   }

@@ -13,14 +13,6 @@ namespace isochor {
 namespace {
 using KdTree = nanoflann::KDTreeEigenMatrixAdaptor<Points, 3, nanoflann::metric_L2_Simple, false>;
 
-// Barycentric weights of q on the triangle (a, b, c).
-Vec3 barycentric(const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 u = b - a, w = c - a, r = q - a;
-  const double uu = u.dot(u), uw = u.dot(w), ww = w.dot(w), det = uu * ww - uw * uw;
-  if (!(det > 0)) return Vec3(1, 0, 0);
-  const double l1 = (ww * r.dot(u) - uw * r.dot(w)) / det, l2 = (uu * r.dot(w) - uw * r.dot(u)) / det;
-  return Vec3(1 - l1 - l2, l1, l2);
-}
 }  // namespace
 
 SelfContact::SelfContact(const Mesh& mesh, const ContactLaw& law, double exclude, const DofMap& dofs, const Pattern& pattern,

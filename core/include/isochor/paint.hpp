@@ -52,6 +52,11 @@ std::vector<std::vector<int>> painted_zones(const Mesh& mesh, const PaintedPoint
 // The pieces of a set of tets (tets sharing a node are connected), largest first.
 std::vector<std::vector<int>> connected_pieces(const Mesh& mesh, const std::vector<int>& tets);
 
+// The barycentric weights of q (a point of the triangle's plane) on the triangle (a, b, c);
+// (1, 0, 0) for a degenerate triangle.
+Eigen::Vector3d barycentric(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                            const Eigen::Vector3d& c);
+
 // The closest point to p on the triangle (a, b, c).
 Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                     const Eigen::Vector3d& c);
