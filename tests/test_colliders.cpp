@@ -462,4 +462,29 @@ TEST(SelfContact, GradientAgainstFiniteDifferencesAndTheNodesOwnBlock) {
   }
   EXPECT_GT(H.norm(), 0.0);
   EXPECT_LT((H - Hfd).norm(), 1e-5 * Hfd.norm());
+  // Normal damping: dissipative, and the touching node's own block of -df/dv against central
+  // differences (the force is linear in the velocities).
+  ContactLaw damped = law;
+  damped.damping = 0.5;
+  SelfContact dself(m, damped, 0.05, dofs, asm_.pattern());
+  Eigen::VectorXd v(x.size());
+  for (int i = 0; i < v.size(); ++i) v[i] = u(rng) * 1000;
+  Eigen::VectorXd gd = Eigen::VectorXd::Zero(x.size());
+  dself.add_damping(x, v, gd);
+  EXPECT_GT(gd.dot(v), 0.0);  // -f . v > 0: it dissipates
+  std::vector<double> D(asm_.pattern().nnz(), 0.0);
+  dself.add_damping_jacobian(x, D.data());
+  Mat3 Dn, Dfd;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) Dn(r, c) = D[asm_.pattern().find(3 * centre + r, 3 * centre + c)];
+  for (int c = 0; c < 3; ++c) {
+    Eigen::VectorXd vp = v, vm = v, gp = Eigen::VectorXd::Zero(x.size()), gm = Eigen::VectorXd::Zero(x.size());
+    vp[3 * centre + c] += 1e-3;
+    vm[3 * centre + c] -= 1e-3;
+    dself.add_damping(x, vp, gp);
+    dself.add_damping(x, vm, gm);
+    Dfd.col(c) = (gp - gm).segment<3>(3 * centre) / 2e-3;
+  }
+  EXPECT_GT(Dn.norm(), 0.0);
+  EXPECT_LT((Dn - Dfd).norm(), 1e-8 * Dfd.norm());
 }

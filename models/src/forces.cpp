@@ -62,6 +62,7 @@ void ExternalPotential::for_each_contact(std::size_t c, const Points& x, bool fr
 
 void ExternalPotential::add_damping(const Points& x, const Eigen::VectorXd& xdot, Eigen::VectorXd& grad) const {
   if (!damped_) return;
+  if (self_) self_->add_damping(x, xdot, grad);
   for (std::size_t c = 0; c < colliders_.size(); ++c) {
     const ContactLaw& L = colliders_[c].law;
     if (L.damping <= 0 && L.friction <= 0) continue;
@@ -77,6 +78,7 @@ void ExternalPotential::add_damping(const Points& x, const Eigen::VectorXd& xdot
 void ExternalPotential::add_damping_jacobians(const Points& x, const Eigen::VectorXd& xdot, double* neg_dfdx,
                                               double* neg_dfdv) const {
   if (!damped_ || (!neg_dfdx && !neg_dfdv)) return;
+  if (self_) self_->add_damping_jacobian(x, neg_dfdv);
   for (std::size_t c = 0; c < colliders_.size(); ++c) {
     const ContactLaw& L = colliders_[c].law;
     if (L.damping <= 0 && L.friction <= 0) continue;
@@ -107,7 +109,7 @@ void ExternalPotential::contact_forces(const Points& x, const Eigen::VectorXd* x
                                             xdot->segment<3>(3 * i) - P.velocity_at(x.col(i)), -skew(P.omega), nullptr, nullptr);
     });
   }
-  if (self_) self_->add_forces(x, out);
+  if (self_) self_->add_forces(x, xdot, out);
 }
 
 double ExternalPotential::energy(const Points& x) const {

@@ -523,8 +523,7 @@ void parse_colliders(const Section& root, Scene& sc) {
     ContactLaw plain = defaults;  // the ground's damping and friction are not inherited
     plain.damping = plain.friction = 0;
     sc.self_contact.law = parse_contact_law(self, plain);
-    if (sc.self_contact.law.damping > 0 || sc.self_contact.law.friction > 0)
-      self.fail(self.has("damping") ? "damping" : "friction", "contact between body parts has no damping or friction (expected 0)");
+    if (sc.self_contact.law.friction > 0) self.fail("friction", "contact between body parts has no friction (expected 0)");
     // The default neighbourhood: three mean surface edges.
     const Points& X = sc.mesh.rest_positions();
     double edges = 0;

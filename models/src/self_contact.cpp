@@ -78,9 +78,10 @@ double SelfContact::add_gradient(const Points& x, Eigen::VectorXd& grad) const {
   return E;
 }
 
-void SelfContact::add_forces(const Points& x, Points& out) const {
+void SelfContact::add_forces(const Points& x, const Eigen::VectorXd* xdot, Points& out) const {
   Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
   add_gradient(x, g);
+  if (xdot) add_damping(x, *xdot, g);
   out -= Eigen::Map<const Points>(g.data(), 3, x.cols());
 }
 
@@ -95,6 +96,33 @@ void SelfContact::add_hessian(const Points& x, double scale, double* values) con
     const double k = law_.per_area ? law_.stiffness * area_[c.node] : law_.stiffness, p = law_.thickness - c.d;
     add(c.node, 1.0, k, p, c.n);
     for (int i = 0; i < 3; ++i) add(c.tri[i], c.weights[i] * c.weights[i], k, p, c.n);
+  }
+}
+
+void SelfContact::add_damping(const Points& x, const Eigen::VectorXd& xdot, Eigen::VectorXd& grad) const {
+  if (law_.damping <= 0) return;
+  for (const Pair& c : pairs(x)) {
+    const double k = law_.per_area ? law_.stiffness * area_[c.node] : law_.stiffness, p = law_.thickness - c.d;
+    Vec3 v = xdot.segment<3>(3 * c.node);
+    for (int i = 0; i < 3; ++i) v -= c.weights[i] * xdot.segment<3>(3 * c.tri[i]);
+    const Vec3 f = -k * law_.damping * p * p * c.n.dot(v) * c.n;  // on the node
+    grad.segment<3>(3 * c.node) -= f;
+    for (int i = 0; i < 3; ++i) grad.segment<3>(3 * c.tri[i]) += c.weights[i] * f;
+  }
+}
+
+void SelfContact::add_damping_jacobian(const Points& x, double* neg_dfdv) const {
+  if (law_.damping <= 0 || !neg_dfdv) return;
+  for (const Pair& c : pairs(x)) {
+    const double k = law_.per_area ? law_.stiffness * area_[c.node] : law_.stiffness, p = law_.thickness - c.d;
+    auto add = [&](int node, double w2) {
+      const int f = dofs_.free_index[node];
+      if (f < 0) return;
+      const Mat3 D = k * law_.damping * p * p * w2 * c.n * c.n.transpose();
+      for (int e = 0; e < 9; ++e) neg_dfdv[diag_slots_[9 * f + e]] += D(e / 3, e % 3);
+    };
+    add(c.node, 1.0);
+    for (int i = 0; i < 3; ++i) add(c.tri[i], c.weights[i] * c.weights[i]);
   }
 }
 

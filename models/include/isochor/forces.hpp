@@ -89,7 +89,10 @@ class ExternalPotential {
   bool has_contact() const { return !colliders_.empty() || self_; }
   // Contact between parts of the body (self_contact.hpp): in the energy, gradient, Hessian and
   // contact forces from now on.
-  void set_self_contact(std::unique_ptr<SelfContact> s) { self_ = std::move(s); }
+  void set_self_contact(std::unique_ptr<SelfContact> s) {
+    self_ = std::move(s);
+    damped_ = damped_ || self_->damped();
+  }
   const SelfContact* self_contact() const { return self_.get(); }
   // The force of every collider on every node (N, 3 x N): the contact's elastic force, plus its
   // damping and friction for velocities xdot (if given).

@@ -28,8 +28,16 @@ class SelfContact {
   double add_gradient(const Points& x, Eigen::VectorXd& grad) const;
   // values += scale * the Gauss-Newton diagonal blocks (free nodes).
   void add_hessian(const Points& x, double scale, double* values) const;
-  // out += the contact force on every node.
-  void add_forces(const Points& x, Points& out) const;
+  // out += the contact force on every node (with the damping's for velocities xdot, if given).
+  void add_forces(const Points& x, const Eigen::VectorXd* xdot, Points& out) const;
+  // Normal damping (law.damping = alpha > 0, Hunt & Crossley's form as the ground's): with the
+  // approach rate sdot = n . (v_node - sum_i w_i v_corner_i), the force -k alpha p^2 sdot n on
+  // the node and its opposite, times w_i, on the corners. grad += -f (every node, 3 N).
+  void add_damping(const Points& x, const Eigen::VectorXd& xdot, Eigen::VectorXd& grad) const;
+  // -df/dv into the free nodes' own 3x3 blocks (k alpha p^2 n n^T on the node, times w_i^2 on the
+  // corners); -df/dx is left out (an approximate Jacobian, as the elastic part's corners).
+  void add_damping_jacobian(const Points& x, double* neg_dfdv) const;
+  bool damped() const { return law_.damping > 0; }
   // The deepest approach: the smallest d over nodes in contact (m; +inf if none), at x.
   double closest(const Points& x) const;
 
