@@ -39,7 +39,8 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
   external_->set_loads(scene.loads);
   if (scene.self_contact.enabled)
     external_->set_self_contact(std::make_unique<SelfContact>(scene.mesh, scene.self_contact.law, scene.self_contact.exclude, dofs_,
-                                                              elastic_->pattern(), surface_areas(scene.mesh)));
+                                                              elastic_->pattern(), surface_areas(scene.mesh),
+                                                              scene.self_contact.smoothing));
   pressure_loads_ = std::make_unique<PressureLoads>(scene.pressure_loads, dofs_, elastic_->pattern());
   damping_ = scene.damping;
   const auto all_zones = scene_zone_tets(scene);

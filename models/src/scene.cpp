@@ -531,6 +531,7 @@ void parse_colliders(const Section& root, Scene& sc) {
       for (int e = 0; e < 3; ++e) edges += (X.col(t[e]) - X.col(t[(e + 1) % 3])).norm();
     const double mean = sc.mesh.surface().empty() ? 0.0 : edges / (3.0 * static_cast<double>(sc.mesh.surface().size()));
     sc.self_contact.exclude = self.number("exclude", 3 * mean, Range::positive());
+    sc.self_contact.smoothing = self.number("smoothing", 0.1 * sc.self_contact.law.thickness, Range::positive());
     if (sc.self_contact.exclude <= sc.self_contact.law.thickness)
       self.fail("exclude", "expected more than the contact thickness (" + std::to_string(sc.self_contact.law.thickness) + " m)");
   }

@@ -16,8 +16,9 @@ using KdTree = nanoflann::KDTreeEigenMatrixAdaptor<Points, 3, nanoflann::metric_
 }  // namespace
 
 SelfContact::SelfContact(const Mesh& mesh, const ContactLaw& law, double exclude, const DofMap& dofs, const Pattern& pattern,
-                         Eigen::VectorXd area)
-    : mesh_(mesh), law_(law), exclude2_(exclude * exclude), dofs_(dofs), area_(std::move(area)) {
+                         Eigen::VectorXd area, double smoothing)
+    : mesh_(mesh), law_(law), exclude2_(exclude * exclude), dofs_(dofs), area_(std::move(area)),
+      tau_(smoothing > 0 ? smoothing : 0.1 * law.thickness) {
   diag_slots_.resize(9 * static_cast<std::size_t>(dofs.num_free()));
   for (int f = 0; f < dofs.num_free(); ++f)
     for (int a = 0; a < 3; ++a)
@@ -31,6 +32,27 @@ SelfContact::SelfContact(const Mesh& mesh, const ContactLaw& law, double exclude
 
 SelfContact::~SelfContact() = default;
 
+namespace {
+// The Hessian of the distance from p to its closest point q on the triangle (a, b, c), with
+// respect to p: 0 in the face's region, (I - e e^T - n n^T) / d beside an edge e, (I - n n^T) / d
+// at a corner.
+Mat3 distance_hessian(const Vec3& p, const Vec3& q, const Vec3& w, const Vec3* corner[3]) {
+  const double d = (p - q).norm();
+  const Vec3 n = (p - q) / d;
+  const double eps = 1e-12;
+  int zeros = 0, zero = -1;
+  for (int i = 0; i < 3; ++i)
+    if (w[i] < eps) ++zeros, zero = i;
+  if (zeros == 0) return Mat3::Zero();
+  Mat3 H = Mat3::Identity() - n * n.transpose();
+  if (zeros == 1) {
+    const Vec3 e = (*corner[(zero + 2) % 3] - *corner[(zero + 1) % 3]).normalized();
+    H -= e * e.transpose();
+  }
+  return H / d;
+}
+}  // namespace
+
 std::vector<SelfContact::Pair> SelfContact::pairs(const Points& x) const {
   const auto& S = mesh_.surface();
   const Points& X = mesh_.rest_positions();
@@ -41,27 +63,40 @@ std::vector<SelfContact::Pair> SelfContact::pairs(const Points& x) const {
     for (int v : S[f]) reach = std::max(reach, (x.col(v) - centroid.col(f)).norm());
   }
   KdTree tree(3, std::cref(centroid), 10);
-  const double r = law_.thickness + reach;
+  // Triangles farther than delta + 12 tau weigh less than e^-12 in the smoothed minimum of a node
+  // in contact: they are left out.
+  const double cutoff = law_.thickness + 12 * tau_, r = cutoff + reach;
   std::vector<Pair> out;
   std::vector<std::pair<Eigen::Index, double>> found;
   for (int p : mesh_.surface_nodes()) {
     found.clear();
     tree.index->radiusSearch(x.col(p).data(), r * r, found, nanoflann::SearchParams(32, 0, false));
-    Pair best{p, {}, Vec3::Zero(), Vec3::Zero(), law_.thickness};
-    bool any = false;
+    Pair c{p, 0.0, Vec3::Zero(), {}};
+    double dmin = cutoff;
     for (const auto& item : found) {
       const Tri& t = S[static_cast<std::size_t>(item.first)];
       bool near = false;  // the node's own neighbourhood at rest
       for (int v : t) near = near || (X.col(v) - X.col(p)).squaredNorm() < exclude2_;
       if (near) continue;
-      const Vec3 q = closest_on_triangle(x.col(p), x.col(t[0]), x.col(t[1]), x.col(t[2]));
+      const Vec3 a = x.col(t[0]), b = x.col(t[1]), cc = x.col(t[2]);
+      const Vec3 q = closest_on_triangle(x.col(p), a, b, cc);
       const double d = (x.col(p) - q).norm();
-      if (d < best.d && d > 0) {
-        best = {p, t, barycentric(q, x.col(t[0]), x.col(t[1]), x.col(t[2])), (x.col(p) - q) / d, d};
-        any = true;
-      }
+      if (d >= cutoff || !(d > 0)) continue;
+      const Vec3 w = barycentric(q, a, b, cc);
+      const Vec3* corner[3] = {&a, &b, &cc};
+      c.terms.push_back({t, w, (x.col(p) - q) / d, d, 0.0, distance_hessian(x.col(p), q, w, corner)});
+      dmin = std::min(dmin, d);
     }
-    if (any) out.push_back(best);
+    if (c.terms.empty()) continue;
+    double sum = 0;
+    for (Term& t : c.terms) sum += t.omega = std::exp(-(t.d - dmin) / tau_);
+    c.d = dmin - tau_ * std::log(sum);
+    if (c.d >= law_.thickness) continue;
+    for (Term& t : c.terms) {
+      t.omega /= sum;
+      c.n += t.omega * t.n;
+    }
+    out.push_back(std::move(c));
   }
   return out;
 }
@@ -71,9 +106,10 @@ double SelfContact::add_gradient(const Points& x, Eigen::VectorXd& grad) const {
   for (const Pair& c : pairs(x)) {
     const double k = law_.per_area ? law_.stiffness * area_[c.node] : law_.stiffness, p = law_.thickness - c.d;
     E += k / 3.0 * p * p * p;
-    // dE/dd = -k p^2; dd/dx_node = n, dd/dx_corner_i = -w_i n.
+    // dE/dd = -k p^2; dd/dx_node = sum omega_i n_i, dd/dx_corner_j of triangle i = -omega_i w_ij n_i.
     grad.segment<3>(3 * c.node) -= k * p * p * c.n;
-    for (int i = 0; i < 3; ++i) grad.segment<3>(3 * c.tri[i]) += k * p * p * c.weights[i] * c.n;
+    for (const Term& t : c.terms)
+      for (int j = 0; j < 3; ++j) grad.segment<3>(3 * t.tri[j]) += k * p * p * t.omega * t.weights[j] * t.n;
   }
   return E;
 }
@@ -86,16 +122,23 @@ void SelfContact::add_forces(const Points& x, const Eigen::VectorXd* xdot, Point
 }
 
 void SelfContact::add_hessian(const Points& x, double scale, double* values) const {
-  auto add = [&](int node, double w2, double k, double p, const Vec3& n) {
+  auto add = [&](int node, const Mat3& H) {
     const int f = dofs_.free_index[node];
     if (f < 0) return;
-    const Mat3 H = scale * 2.0 * k * p * w2 * n * n.transpose();
-    for (int e = 0; e < 9; ++e) values[diag_slots_[9 * f + e]] += H(e / 3, e % 3);
+    for (int e = 0; e < 9; ++e) values[diag_slots_[9 * f + e]] += scale * H(e / 3, e % 3);
   };
   for (const Pair& c : pairs(x)) {
     const double k = law_.per_area ? law_.stiffness * area_[c.node] : law_.stiffness, p = law_.thickness - c.d;
-    add(c.node, 1.0, k, p, c.n);
-    for (int i = 0; i < 3; ++i) add(c.tri[i], c.weights[i] * c.weights[i], k, p, c.n);
+    // The node's block, exact: 2 k p g g^T - k p^2 d2s, with the smoothed minimum's
+    // d2s = sum omega_i H_i - (sum omega_i n_i n_i^T - g g^T) / tau.
+    Mat3 d2s = c.n * c.n.transpose() / tau_;
+    for (const Term& t : c.terms) d2s += t.omega * (t.H - t.n * t.n.transpose() / tau_);
+    add(c.node, 2.0 * k * p * c.n * c.n.transpose() - k * p * p * d2s);
+    for (const Term& t : c.terms)  // the corners': Gauss-Newton
+      for (int j = 0; j < 3; ++j) {
+        const double w = t.omega * t.weights[j];
+        add(t.tri[j], 2.0 * k * p * w * w * t.n * t.n.transpose());
+      }
   }
 }
 
@@ -103,11 +146,14 @@ void SelfContact::add_damping(const Points& x, const Eigen::VectorXd& xdot, Eige
   if (law_.damping <= 0) return;
   for (const Pair& c : pairs(x)) {
     const double k = law_.per_area ? law_.stiffness * area_[c.node] : law_.stiffness, p = law_.thickness - c.d;
-    Vec3 v = xdot.segment<3>(3 * c.node);
-    for (int i = 0; i < 3; ++i) v -= c.weights[i] * xdot.segment<3>(3 * c.tri[i]);
-    const Vec3 f = -k * law_.damping * p * p * c.n.dot(v) * c.n;  // on the node
-    grad.segment<3>(3 * c.node) -= f;
-    for (int i = 0; i < 3; ++i) grad.segment<3>(3 * c.tri[i]) += c.weights[i] * f;
+    // The approach rate: sdot = g . v_node - sum_i omega_i n_i . sum_j w_ij v_corner_ij.
+    double sdot = c.n.dot(xdot.segment<3>(3 * c.node));
+    for (const Term& t : c.terms)
+      for (int j = 0; j < 3; ++j) sdot -= t.omega * t.weights[j] * t.n.dot(xdot.segment<3>(3 * t.tri[j]));
+    const double m = k * law_.damping * p * p * sdot;  // the force is -m times d(sdot)/dv
+    grad.segment<3>(3 * c.node) += m * c.n;
+    for (const Term& t : c.terms)
+      for (int j = 0; j < 3; ++j) grad.segment<3>(3 * t.tri[j]) -= m * t.omega * t.weights[j] * t.n;
   }
 }
 
@@ -115,14 +161,15 @@ void SelfContact::add_damping_jacobian(const Points& x, double* neg_dfdv) const 
   if (law_.damping <= 0 || !neg_dfdv) return;
   for (const Pair& c : pairs(x)) {
     const double k = law_.per_area ? law_.stiffness * area_[c.node] : law_.stiffness, p = law_.thickness - c.d;
-    auto add = [&](int node, double w2) {
+    auto add = [&](int node, const Vec3& g) {
       const int f = dofs_.free_index[node];
       if (f < 0) return;
-      const Mat3 D = k * law_.damping * p * p * w2 * c.n * c.n.transpose();
+      const Mat3 D = k * law_.damping * p * p * g * g.transpose();
       for (int e = 0; e < 9; ++e) neg_dfdv[diag_slots_[9 * f + e]] += D(e / 3, e % 3);
     };
-    add(c.node, 1.0);
-    for (int i = 0; i < 3; ++i) add(c.tri[i], c.weights[i] * c.weights[i]);
+    add(c.node, c.n);
+    for (const Term& t : c.terms)
+      for (int j = 0; j < 3; ++j) add(t.tri[j], t.omega * t.weights[j] * t.n);
   }
 }
 

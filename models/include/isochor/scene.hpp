@@ -88,7 +88,8 @@ struct Scene {
   struct SelfContactSpec {
     bool enabled = false;
     ContactLaw law;
-    double exclude = 0;  // m
+    double exclude = 0;    // m
+    double smoothing = 0;  // m: tau of the smoothed minimum distance
   } self_contact;
   std::vector<NodeLoad> loads;     // [[load]]: point loads and tractions (dead loads)
   std::vector<PressureLoad> pressure_loads;  // [[load]] kind = "pressure" (follower loads)

@@ -1,14 +1,15 @@
 // Contact between parts of one body (issue 17): every surface node against the deformed surface
 // of the body away from itself. Its energy is the ground's law on the node's distance d to the
-// nearest surface triangle that is not near it at rest (no vertex within `exclude` of the node
-// in the rest state, so a node does not touch its own neighbourhood):
-//   k/3 (delta - d)^3 when d < delta (per node, or times the node's rest surface area).
-// The distance to a union of triangles is their smallest, so one term per node (a node near an
-// edge is not counted twice). The gradient moves the node and the triangle's corners (by the
-// closest point's barycentric weights); the Jacobian keeps the scene's fixed pattern: only the
-// 3x3 blocks of the node and of each corner on themselves, Gauss-Newton (2 k p w_i^2 n n^T), so
-// Newton's iterations are those of an approximate Jacobian where contact is active
-// (docs/decisions.md measures it). Candidates come from a k-d tree (nanoflann) over the deformed
+// surface triangles that are not near it at rest (no vertex within `exclude` of the node in the
+// rest state, so a node does not touch its own neighbourhood):
+//   k/3 (delta - d)^3 when d < delta (per node, or times the node's rest surface area),
+// d the smoothed minimum of the distances d_i to those triangles, d = -tau log sum exp(-d_i/tau)
+// (tau = `smoothing`): one term per node (a node near an edge is not counted twice), and C^1
+// where the nearest triangle changes in a concave fold (the exact minimum's gradient jumps there).
+// The gradient moves the node and the triangles' corners (by the closest points' barycentric
+// weights); the Jacobian keeps the scene's fixed pattern: only the 3x3 blocks of the node (exact)
+// and of each corner (Gauss-Newton, 2 k p w^2 n n^T) on themselves, so Newton's iterations are
+// those of an approximate Jacobian where contact is active (docs/decisions.md measures it). Candidates come from a k-d tree (nanoflann) over the deformed
 // surface's triangle centroids, rebuilt at each evaluation.
 #pragma once
 #include <memory>
@@ -22,7 +23,7 @@ namespace isochor {
 class SelfContact {
  public:
   SelfContact(const Mesh& mesh, const ContactLaw& law, double exclude, const DofMap& dofs, const Pattern& pattern,
-              Eigen::VectorXd area = {});
+              Eigen::VectorXd area = {}, double smoothing = 0.0);
   ~SelfContact();
   // grad += gradient (every node, 3 N); returns the energy.
   double add_gradient(const Points& x, Eigen::VectorXd& grad) const;
@@ -42,15 +43,24 @@ class SelfContact {
   double closest(const Points& x) const;
 
  private:
-  struct Pair {
-    int node;
+  struct Term {
     Tri tri;
     Vec3 weights;  // of the closest point on the triangle
     Vec3 n;        // unit, from the closest point to the node
-    double d;
+    double d;      // distance
+    double omega;  // its share of the smoothed minimum's gradient
+    Mat3 H;        // d2 d_i / dx_node2
   };
-  // The nearest non-excluded triangle within delta for every surface node.
+  struct Pair {
+    int node;
+    double d;  // the smoothed minimum
+    Vec3 n;    // its gradient with respect to the node, sum omega_i n_i
+    std::vector<Term> terms;
+  };
+  // The non-excluded triangles within reach of every surface node whose smoothed distance is
+  // below delta.
   std::vector<Pair> pairs(const Points& x) const;
+  double tau_ = 0;
   const Mesh& mesh_;
   ContactLaw law_;
   double exclude2_;
