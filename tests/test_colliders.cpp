@@ -13,6 +13,9 @@
 #include "isochor/material.hpp"
 #include "isochor/meshing.hpp"
 #include "isochor/self_contact.hpp"
+#include "isochor/paint.hpp"
+#include <limits>
+#include <sstream>
 #include "isochor/output_reader.hpp"
 #include "run.hpp"
 #include "isochor/scene.hpp"
@@ -487,4 +490,96 @@ TEST(SelfContact, GradientAgainstFiniteDifferencesAndTheNodesOwnBlock) {
   }
   EXPECT_GT(Dn.norm(), 0.0);
   EXPECT_LT((Dn - Dfd).norm(), 1e-8 * Dfd.norm());
+}
+
+namespace {
+// How far the upper block's bottom nodes (rest z = z_bottom, index >= first) are below the lower
+// block's deformed top face (its surface triangles at rest z = z_top, indices < first), measured
+// along z under each node (m; negative: above it).
+double deepest_below(const Mesh& m, const Points& x, int first, double z_top, double z_bottom) {
+  const Points& X = m.rest_positions();
+  double deepest = -std::numeric_limits<double>::infinity();
+  for (const Tri& t : m.surface()) {
+    bool top = true;
+    for (int v : t) top = top && v < first && std::abs(X(2, v) - z_top) < 1e-12;
+    if (!top) continue;
+    for (int p = first; p < m.num_nodes(); ++p) {
+      if (std::abs(X(2, p) - z_bottom) > 1e-12) continue;
+      const Vec3 a(x(0, t[0]), x(1, t[0]), 0), b(x(0, t[1]), x(1, t[1]), 0), c(x(0, t[2]), x(1, t[2]), 0);
+      const Vec3 w = barycentric(Vec3(x(0, p), x(1, p), 0), a, b, c);
+      if (w.minCoeff() < 0) continue;  // not above this triangle
+      deepest = std::max(deepest, w[0] * x(2, t[0]) + w[1] * x(2, t[1]) + w[2] * x(2, t[2]) - x(2, p));
+    }
+  }
+  return deepest;
+}
+}  // namespace
+
+TEST(SelfContact, TwoBlocksPressedTogetherDoNotPassThrough) {
+  // One mesh of two 4 cm blocks 2 cm apart (a TetGen file): the lower one's base held, the upper
+  // one's top driven down by 3.5 cm over 0.5 s. Without contact between parts the upper block
+  // passes about 1.5 cm into the lower one; with it, no bottom node of the upper block goes below
+  // the lower block's top face by more than the contact thickness.
+  const auto dir = test::temp_dir();
+  const Mesh a = make_box(Eigen::Vector3d(0.04, 0.04, 0.04), {2, 2, 2}, Eigen::Vector3d(0, 0, 0.02), 6);
+  std::ostringstream node, ele;
+  node << 2 * a.num_nodes() << " 3 0 0\n";
+  for (int k = 0; k < 2; ++k)
+    for (int i = 0; i < a.num_nodes(); ++i) {
+      const Eigen::Vector3d p = a.rest_positions().col(i) + Eigen::Vector3d(0.003 * k, 0.002 * k, 0.06 * k);
+      node << k * a.num_nodes() + i << " " << p.x() << " " << p.y() << " " << p.z() << "\n";
+    }
+  ele << 2 * a.num_tets() << " 4 0\n";
+  for (int k = 0; k < 2; ++k)
+    for (int e = 0; e < a.num_tets(); ++e) {
+      ele << k * a.num_tets() + e;
+      for (int v : a.tets()[e]) ele << " " << v + k * a.num_nodes();
+      ele << "\n";
+    }
+  test::write_file(dir / "blocks.node", node.str());
+  test::write_file(dir / "blocks.ele", ele.str());
+  const std::string scene = R"(
+[mesh]
+file = "blocks.node"
+[material]
+model = "snh"
+mu = 2000.0
+lambda = 8000.0
+[forces]
+gravity = [0.0, 0.0, 0.0]
+[damping]
+beta = 2e-3
+[[boundary]]
+select = { kind = "box", min = [-1.0, -1.0, -0.001], max = [1.0, 1.0, 0.001] }
+[[boundary]]
+select = { kind = "box", min = [-1.0, -1.0, 0.099], max = [1.0, 1.0, 0.101] }
+kind = "keyframes"
+times = [0.0, 0.5]
+values = [0.0, 0.0, 0.0, 0.0, 0.0, -0.035]
+interpolation = "cubic"
+[contact.self]
+law = "area"
+stiffness = 1e11
+thickness = 2e-3
+exclude = 0.015
+[integrator]
+rtol = 1e-4
+atol = 1e-7
+[frames]
+rate = 10.0
+duration = 0.5
+)";
+  for (bool on : {false, true}) {
+    const Scene sc = parse_scene(SceneFile::parse(scene, "blocks.toml", {on ? "contact.self.enabled=true" : "contact.self.enabled=false"},
+                                                  dir.string()));
+    RunFile f(run_scene(sc, (dir / (on ? "on.h5" : "off.h5")).string(), false).output);
+    ASSERT_EQ(f.num_frames(), 6);
+    const double deepest = deepest_below(sc.mesh, f.positions(5), sc.mesh.num_nodes() / 2, 0.04, 0.06);
+    if (on) {
+      EXPECT_LE(deepest, 2e-3);
+    } else {
+      EXPECT_GT(deepest, 0.01);  // the check sees a block passing into the other
+    }
+    std::printf("contact between parts %s: deepest penetration %.2f mm\n", on ? "on" : "off", 1000 * deepest);
+  }
 }
