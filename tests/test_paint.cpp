@@ -184,6 +184,14 @@ TEST(Paint, PaintThatDoesNotFitStopsWithAMessage) {
   EXPECT_NE(err("file = \"ends.csv\"\nlabels = { ends = 7 }\nweights = { x = \"label\" }\n").find("expected exactly one of labels, colors or weights"),
             std::string::npos);
   EXPECT_NE(err("file = \"missing.ply\"\nlabels = { a = 1 }\n").find("zones.paint[0].file: "), std::string::npos);
+  // Malformed PLY: a vertex that is not a number, a list whose count is not a count.
+  test::write_file(dir / "nan.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                                    "property int label\nend_header\n0 0 0 1\nnan 0 0 1\n");
+  EXPECT_NE(err("file = \"nan.ply\"\nlabels = { a = 1 }\n").find("vertex 1 has a position that is not a finite number"),
+            std::string::npos);
+  test::write_file(dir / "list.ply", "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                     "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\nnan 1 2 3\n0 0 0\n");
+  EXPECT_NE(err("file = \"list.ply\"\nlabels = { a = 1 }\n").find("a PLY list of nan items"), std::string::npos);
   // The paint of another surface: the box's nodes moved by 0.5 m.
   std::ostringstream far;
   far << "x,y,z,label\n";

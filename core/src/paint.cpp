@@ -138,7 +138,7 @@ PaintedPoints read_ply(const std::string& path) {
         const PlyProperty& p = e.props[k];
         if (p.list) {
           const double n = read_value(p.count_type);
-          if (n < 0 || n > 1e6) throw Error(path + ": a PLY list of " + std::to_string(n) + " items");
+          if (!(n >= 0 && n <= 1e6) || n != std::floor(n)) throw Error(path + ": a PLY list of " + std::to_string(n) + " items");
           for (long j = 0; j < static_cast<long>(n); ++j) read_value(p.type);
         } else {
           const double v = read_value(p.type);
@@ -285,6 +285,8 @@ PaintedPoints read_paint(const std::string& path, const Points* nodes) {
   else if (ext == ".csv") p = read_csv_paint(path, nodes);
   else throw Error(path + ": unknown paint file type (expected .ply, .obj or .csv)");
   if (p.x.cols() == 0) throw Error(path + ": no painted vertices");
+  for (Eigen::Index i = 0; i < p.x.cols(); ++i)
+    if (!p.x.col(i).allFinite()) throw Error(path + ": vertex " + std::to_string(i) + " has a position that is not a finite number");
   return p;
 }
 
