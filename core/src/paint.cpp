@@ -36,11 +36,9 @@ int ply_size(const std::string& t, const std::string& path) {
   throw Error(path + ": unknown PLY property type \"" + t + "\"");
 }
 
-double ply_binary(const char* p, const std::string& t, bool swap) {
+double ply_binary(const char* p, const std::string& t, bool swap, const std::string& path) {
   char b[8];
-  const int n = t == "char" || t == "uchar" || t == "int8" || t == "uint8" ? 1
-                : t == "short" || t == "ushort" || t == "int16" || t == "uint16" ? 2
-                : t == "double" || t == "float64" ? 8 : 4;
+  const int n = ply_size(t, path);
   for (int i = 0; i < n; ++i) b[i] = swap ? p[n - 1 - i] : p[i];
   auto get = [&](auto v) {
     std::memcpy(&v, b, sizeof v);
@@ -127,7 +125,7 @@ PaintedPoints read_ply(const std::string& path) {
     char b[8];
     const int n = ply_size(type, path);
     if (!in.read(b, n)) throw Error(path + ": the PLY data end before the header's elements");
-    return ply_binary(b, type, swap);
+    return ply_binary(b, type, swap, path);
   };
   bool found = false;
   for (const PlyElement& e : elements) {

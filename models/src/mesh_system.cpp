@@ -34,13 +34,13 @@ MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(sce
   elastic_ = std::make_unique<ElasticAssembly>(scene.mesh, material_, dofs_,
                                                EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
   node_mass_ = lumped_mass(scene.mesh, scene.material.density);
-  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.colliders, dofs_, elastic_->pattern(),
-                                                  surface_areas(scene.mesh), scene.skeleton);
+  const Eigen::VectorXd area = surface_areas(scene.mesh);
+  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.colliders, dofs_, elastic_->pattern(), area,
+                                                  scene.skeleton);
   external_->set_loads(scene.loads);
   if (scene.self_contact.enabled)
     external_->set_self_contact(std::make_unique<SelfContact>(scene.mesh, scene.self_contact.law, scene.self_contact.exclude, dofs_,
-                                                              elastic_->pattern(), surface_areas(scene.mesh),
-                                                              scene.self_contact.smoothing));
+                                                              elastic_->pattern(), area, scene.self_contact.smoothing));
   pressure_loads_ = std::make_unique<PressureLoads>(scene.pressure_loads, dofs_, elastic_->pattern());
   damping_ = scene.damping;
   const auto all_zones = scene_zone_tets(scene);

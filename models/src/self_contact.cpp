@@ -3,7 +3,6 @@
 #include <nanoflann.hpp>
 
 #include <cmath>
-#include <limits>
 
 #include "isochor/elements.hpp"
 #include "isochor/paint.hpp"
@@ -23,11 +22,6 @@ SelfContact::SelfContact(const Mesh& mesh, const ContactLaw& law, double exclude
   for (int f = 0; f < dofs.num_free(); ++f)
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) diag_slots_[9 * f + 3 * a + b] = pattern.find(3 * Index(f) + a, 3 * Index(f) + b);
-  const Points& X = mesh.rest_positions();
-  for (const Tri& t : mesh.surface()) {
-    const Vec3 c = (X.col(t[0]) + X.col(t[1]) + X.col(t[2])) / 3.0;
-    for (int v : t) reach_ = std::max(reach_, (X.col(v) - c).norm());
-  }
 }
 
 SelfContact::~SelfContact() = default;
@@ -53,7 +47,8 @@ Mat3 distance_hessian(const Vec3& p, const Vec3& q, const Vec3& w, const Vec3* c
 }
 }  // namespace
 
-std::vector<SelfContact::Pair> SelfContact::pairs(const Points& x) const {
+const std::vector<SelfContact::Pair>& SelfContact::pairs(const Points& x) const {
+  if (cached_x_.cols() == x.cols() && cached_x_ == x) return cached_;
   const auto& S = mesh_.surface();
   const Points& X = mesh_.rest_positions();
   Points centroid(3, static_cast<Eigen::Index>(S.size()));
@@ -98,7 +93,9 @@ std::vector<SelfContact::Pair> SelfContact::pairs(const Points& x) const {
     }
     out.push_back(std::move(c));
   }
-  return out;
+  cached_x_ = x;
+  cached_ = std::move(out);
+  return cached_;
 }
 
 double SelfContact::add_gradient(const Points& x, Eigen::VectorXd& grad) const {
@@ -173,10 +170,5 @@ void SelfContact::add_damping_jacobian(const Points& x, double* neg_dfdv) const 
   }
 }
 
-double SelfContact::closest(const Points& x) const {
-  double d = std::numeric_limits<double>::infinity();
-  for (const Pair& c : pairs(x)) d = std::min(d, c.d);
-  return d;
-}
 
 }  // namespace isochor

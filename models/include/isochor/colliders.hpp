@@ -77,7 +77,6 @@ struct Collider {
   // rounding stay). Not with damping or friction (their velocity would need the radius' rate).
   Driver resize;
 
-  bool moves() const { return bone >= 0 || motion.kind != Driver::Kind::fixed || resize.kind != Driver::Kind::fixed; }
   // The pose at t (a bone's needs the skeleton, realized at t by this call).
   ColliderPose pose(double t, const Skeleton* skeleton) const;
   // Signed distance of the world point x at this pose; world gradient and Hessian if asked.

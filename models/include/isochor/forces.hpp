@@ -93,12 +93,9 @@ class ExternalPotential {
     self_ = std::move(s);
     damped_ = damped_ || self_->damped();
   }
-  const SelfContact* self_contact() const { return self_.get(); }
   // The force of every collider on every node (N, 3 x N): the contact's elastic force, plus its
   // damping and friction for velocities xdot (if given).
   void contact_forces(const Points& x, const Eigen::VectorXd* xdot, Points& out) const;
-  const std::vector<Collider>& colliders() const { return colliders_; }
-  const std::vector<ColliderPose>& poses() const { return poses_; }
   // The poses as 12 numbers each: A row-major, then b.
   void pose_numbers(std::vector<double>& out) const;
 

@@ -39,8 +39,6 @@ class SelfContact {
   // corners); -df/dx is left out (an approximate Jacobian, as the elastic part's corners).
   void add_damping_jacobian(const Points& x, double* neg_dfdv) const;
   bool damped() const { return law_.damping > 0; }
-  // The deepest approach: the smallest d over nodes in contact (m; +inf if none), at x.
-  double closest(const Points& x) const;
 
  private:
   struct Term {
@@ -58,16 +56,18 @@ class SelfContact {
     std::vector<Term> terms;
   };
   // The non-excluded triangles within reach of every surface node whose smoothed distance is
-  // below delta.
-  std::vector<Pair> pairs(const Points& x) const;
-  double tau_ = 0;
+  // below delta. A residual and its Jacobian (gradient, Hessian, damping) ask at the same x: the
+  // search is done once per configuration and kept.
+  const std::vector<Pair>& pairs(const Points& x) const;
   const Mesh& mesh_;
   ContactLaw law_;
   double exclude2_;
   DofMap dofs_;
   std::vector<Index> diag_slots_;  // 9 per free node
   Eigen::VectorXd area_;
-  double reach_ = 0;  // largest rest centroid-to-corner distance of a surface triangle
+  double tau_ = 0;  // smoothing of the minimum distance, m
+  mutable Points cached_x_;
+  mutable std::vector<Pair> cached_;
 };
 
 }  // namespace isochor
