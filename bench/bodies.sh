@@ -4,7 +4,9 @@
 #   demos/waistband_dynamic.toml (~12.7K tets, a band tightening by 10% over 1 s, IDA): CNH with
 #     its 9 zones, UNH nu = 0.4545 and UNH nu = 0.499 (zones measured only);
 #   demos/squeeze_cylinders.toml (~5.8K tets, two cylinders pressing a jelly, IDA): CNH with its
-#     global zone (lambda 60, beta 12) and SNH (lambda 400), the CNH paper's Table 1.
+#     global zone (lambda 60, beta 12) and SNH (lambda 400), the CNH paper's Table 1;
+#   demos/ball_on_torso.toml (~1.5K tets, a ball dropped on a rigid triangle-mesh torso, IDA):
+#     CNH with its zone (the wall time includes sampling the torso's distance, ~4 s).
 #   bench/bodies.sh [build] [rounds]
 set -euo pipefail
 build=${1:-build}
@@ -23,6 +25,7 @@ for r in $(seq 1 "$rounds"); do
   done
   run "squeeze_cnh_r$r" demos/squeeze_cylinders.toml
   run "squeeze_snh_r$r" demos/squeeze_cylinders.toml --set material.model=snh --set material.lambda=400.0 --set zones.global=false
+  run "torso_ball_r$r" demos/ball_on_torso.toml
 done
 /usr/bin/python3 - "$rounds" <<'PY'
 import sys, h5py, numpy as np
@@ -31,7 +34,7 @@ print(f"bodies, medians over {rounds} round(s), one thread")
 print(f"{'scene':10s} {'model':12s} {'s/frame':>9s} {'wall s':>8s} {'steps':>7s} {'Jacobians':>9s} {'largest volume change':>22s}")
 for scene, name, tag in (("waistband", "CNH, zones", "waist_cnh"), ("waistband", "UNH 0.4545", "waist_unh0.4545"),
                          ("waistband", "UNH 0.499", "waist_unh0.499"), ("squeeze", "CNH, zone", "squeeze_cnh"),
-                         ("squeeze", "SNH", "squeeze_snh")):
+                         ("squeeze", "SNH", "squeeze_snh"), ("torso ball", "CNH, zone", "torso_ball")):
     per_frame, wall, steps, jac, dv = [], [], [], [], []
     for r in range(1, rounds + 1):
         f = h5py.File(f"out/bench/{tag}_r{r}.h5", "r")

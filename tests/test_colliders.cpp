@@ -6,6 +6,8 @@
 
 #include <Eigen/Geometry>
 #include <functional>
+#include <fstream>
+#include <map>
 #include <random>
 
 #include "isochor/colliders.hpp"
@@ -43,6 +45,51 @@ void check_fd(const std::function<double(const Vec3&, Vec3*, Mat3*)>& f, const V
   EXPECT_LT((H - Hfd).norm(), tol * std::max(1.0, Hfd.norm())) << what << " at " << x.transpose();
 }
 
+// An icosahedron subdivided `levels` times (each triangle into four), its vertices on the sphere
+// of radius R about the origin; outward oriented.
+void icosphere(double R, int levels, Points& x, std::vector<Tri>& tris) {
+  const double t = (1 + std::sqrt(5.0)) / 2;
+  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  tris = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+          {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8}, {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  for (Vec3& p : v) p.normalize();
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    auto middle = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      v.push_back((v[a] + v[b]).normalized());
+      return mid[key] = static_cast<int>(v.size()) - 1;
+    };
+    std::vector<Tri> finer;
+    for (const Tri& T : tris) {
+      const int a = middle(T[0], T[1]), b = middle(T[1], T[2]), c = middle(T[2], T[0]);
+      finer.insert(finer.end(), {Tri{T[0], a, c}, Tri{T[1], b, a}, Tri{T[2], c, b}, Tri{a, b, c}});
+    }
+    tris = finer;
+  }
+  x.resize(3, static_cast<Eigen::Index>(v.size()));
+  for (std::size_t i = 0; i < v.size(); ++i) x.col(i) = R * v[i];
+}
+
+// The surface of the box |x_i| <= half_i: 8 corners, 12 outward triangles.
+void box_surface(const Vec3& half, Points& x, std::vector<Tri>& tris) {
+  x.resize(3, 8);
+  for (int c = 0; c < 8; ++c) x.col(c) = Vec3(c & 4 ? 1 : -1, c & 2 ? 1 : -1, c & 1 ? 1 : -1).cwiseProduct(half);
+  const int faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+  tris.clear();
+  for (const auto& q : faces) tris.insert(tris.end(), {Tri{q[0], q[1], q[2]}, Tri{q[0], q[2], q[3]}});
+}
+
+std::shared_ptr<const MeshSdf> sphere_sdf(double R, double cell) {
+  Points x;
+  std::vector<Tri> tris;
+  icosphere(R, 4, x, tris);
+  return std::make_shared<const MeshSdf>(x, tris, cell, 0.05, "icosphere");
+}
+
 // A collider of every shape, placed off the origin and turned.
 std::vector<Collider> shapes() {
   std::vector<Collider> all;
@@ -61,6 +108,9 @@ std::vector<Collider> shapes() {
   add({K::box, 0, 0, Vec3(0.2, 0.1, 0.15), 0.03});
   add({K::cylinder, 0.2, 0.1, Vec3::Zero(), 0.02});         // solid
   add({K::cylinder, 0.2, 0.05, Vec3::Zero(), 0.01, 0.04});  // hollow: a band
+  ColliderShape mesh{K::mesh};
+  mesh.mesh = sphere_sdf(0.2, 0.02);
+  add(mesh);
   return all;
 }
 
@@ -109,7 +159,8 @@ TEST(Colliders, GradientAndHessianOfEveryShapeAgainstFiniteDifferences) {
       check_fd([&](const Vec3& y, Vec3* g, Mat3* H) { return c.distance(P, y, g, H); }, x, c.name, 1e-5);
       Vec3 g;
       c.distance(P, x, &g, nullptr);
-      EXPECT_NEAR(g.norm(), 1.0, 1e-12) << c.name;  // a distance: |grad s| = 1
+      if (c.shape.kind != ColliderShape::Kind::mesh)  // (a mesh's is a smoothed distance)
+        EXPECT_NEAR(g.norm(), 1.0, 1e-12) << c.name;    // a distance: |grad s| = 1
     }
   }
 }
@@ -160,6 +211,74 @@ TEST(Colliders, ContactEnergyDampingAndFrictionAgainstFiniteDifferences) {
       EXPECT_LE(force(x, v, nullptr, nullptr).dot(v - P.velocity_at(x)), 0.0) << c.name;
     }
   }
+}
+
+TEST(MeshCollider, AFaceIsItsPlaneAndASphereItsClosedFormToTheSplinesError) {
+  // A box's surface: more than two cells from its edges the spline reproduces the face's linear
+  // distance exactly (a cubic B-spline reproduces linear functions).
+  Points x;
+  std::vector<Tri> tris;
+  box_surface(Vec3(0.2, 0.1, 0.15), x, tris);
+  const MeshSdf box(x, tris, 0.01, 0.02, "box");
+  for (const double dz : {0.004, -0.01}) {
+    Vec3 g;
+    Mat3 H;
+    EXPECT_NEAR(box.distance(Vec3(0.03, 0.01, 0.15 + dz), &g, &H), dz, 1e-12);
+    EXPECT_LT((g - Vec3::UnitZ()).norm(), 1e-10);
+    EXPECT_LT(H.norm(), 1e-7);
+  }
+  // The exact distance through the tree: beyond an edge, beyond a corner, inside.
+  EXPECT_NEAR(box.exact_distance(Vec3(0.23, 0.0, 0.19)), std::hypot(0.03, 0.04), 1e-14);
+  EXPECT_NEAR(box.exact_distance(Vec3(0.22, 0.12, -0.17)), std::sqrt(3) * 0.02, 1e-14);
+  EXPECT_NEAR(box.exact_distance(Vec3(0.0, 0.09, 0.0)), -0.01, 1e-14);
+  // A triangulated sphere: its triangles lie between the radii R - sag and R, so the exact
+  // distance is |x| - R within sag; the spline adds (h^2 / 6) Laplacian(|x| - R) = h^2 / (3 |x|)
+  // to first order, so what is left after that term is of higher order in h.
+  const double R = 0.2;
+  icosphere(R, 6, x, tris);
+  double sag = 0;
+  for (const Tri& T : tris) {
+    const Vec3 a = x.col(T[0]), b = x.col(T[1]), c = x.col(T[2]);
+    sag = std::max(sag, R - std::abs((b - a).cross(c - a).normalized().dot(a)));
+  }
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (const double h : {0.02, 0.01}) {
+    const MeshSdf sphere(x, tris, h, 0.03, "sphere");
+    double worst_exact = 0, worst_first = 0, worst_rest = 0;
+    for (int i = 0; i < 200; ++i) {
+      const Vec3 p = Vec3(u(rng), u(rng), u(rng)).normalized() * (R + 0.02 * u(rng));
+      const double closed = p.norm() - R, first = h * h / (3 * p.norm());
+      worst_exact = std::max(worst_exact, std::abs(sphere.exact_distance(p) - closed));
+      worst_first = std::max(worst_first, first);
+      worst_rest = std::max(worst_rest, std::abs(sphere.distance(p, nullptr, nullptr) - closed - first));
+    }
+    EXPECT_LE(worst_exact, sag + 1e-15) << h;
+    EXPECT_LT(worst_rest, sag + 0.1 * worst_first) << "cell " << h << ": the spline's error is not h^2 / (3 r) to first order";
+  }
+}
+
+TEST(MeshCollider, ItsOrientationDoesNotMatterAndBadSurfacesAreNamed) {
+  Points x;
+  std::vector<Tri> tris;
+  box_surface(Vec3(0.2, 0.1, 0.15), x, tris);
+  const MeshSdf out(x, tris, 0.02, 0.02, "box");
+  for (Tri& T : tris) std::swap(T[1], T[2]);  // every triangle turned inwards
+  const MeshSdf in(x, tris, 0.02, 0.02, "box");
+  for (const Vec3& p : {Vec3(0.0, 0.0, 0.0), Vec3(0.21, 0.0, 0.0), Vec3(0.1, 0.05, 0.149)})
+    EXPECT_EQ(out.distance(p, nullptr, nullptr), in.distance(p, nullptr, nullptr));
+  tris.pop_back();
+  EXPECT_NE(test::error_of([&] { MeshSdf(x, tris, 0.02, 0.02, "holed.obj"); }).find("holed.obj: the surface is not closed (3 edges"),
+            std::string::npos);
+  const std::string mesh = "[mesh]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = 1\ncenter = [0, 0, 0.2]\n[material]\nmu = 1.0\nlambda = 1.0\n";
+  auto err = [&](const std::string& collider) {
+    return test::error_of([&] { parse_scene(SceneFile::parse(mesh + "[[collider]]\nshape = \"mesh\"\n" + collider, "c.toml")); });
+  };
+  EXPECT_NE(err("").find("collider[0].file: missing"), std::string::npos);
+  EXPECT_NE(err("file = \"" ISOCHOR_SOURCE_DIR "/tests/data/open_box.obj\"\n").find("collider[0].file: " ISOCHOR_SOURCE_DIR "/tests/data/open_box.obj: the surface is not closed"),
+            std::string::npos);
+  EXPECT_NE(err("file = \"" ISOCHOR_SOURCE_DIR "/tests/data/good_box.toml\"\n").find("collider[0].file: \"" ISOCHOR_SOURCE_DIR "/tests/data/good_box.toml\" has an unknown extension"),
+            std::string::npos);
 }
 
 TEST(Colliders, RelativeVelocityIsTheRateOfTheDistance) {
@@ -270,7 +389,7 @@ namespace {
 // A stiff 0.1 m block (1 kg) resting on the top face (z = 0) of a box collider under gravity
 // tilted by `tilt` degrees about y (a slope), with the given friction. It starts at the
 // penetration p where its 9 bottom nodes carry its weight, 9 k p^2 = m g cos(tilt).
-Scene block_on_box(double tilt, double friction, const std::string& kind) {
+Scene block_on_box(double tilt, double friction, const std::string& kind, const std::string& mesh_file = "") {
   const double a = tilt * M_PI / 180.0, p = std::sqrt(9.81 * std::cos(a) / 9 / 1e8);
   char text[2048];
   std::snprintf(text, sizeof text, R"(
@@ -290,16 +409,17 @@ stiffness = 1e8
 thickness = 1e-3
 damping = 100.0
 [[collider]]
-shape = "box"
-center = [0.0, 0.0, -0.05]
-size = [2.0, 2.0, 0.1]
+%s
 friction = %.17g
 slip_speed = 1e-3
 [integrator]
 kind = "%s"
 %s
 )",
-                0.05 + 1e-3 - p, 9.81 * std::sin(a), -9.81 * std::cos(a), friction, kind.c_str(),
+                0.05 + 1e-3 - p, 9.81 * std::sin(a), -9.81 * std::cos(a),
+                (mesh_file.empty() ? std::string("shape = \"box\"\ncenter = [0.0, 0.0, -0.05]\nsize = [2.0, 2.0, 0.1]")
+                                   : "shape = \"mesh\"\nfile = \"" + mesh_file + "\"").c_str(),
+                friction, kind.c_str(),
                 kind == "static" ? "[frames]\ncount = 3" : "rtol = 1e-6\natol = 1e-9\n[damping]\nbeta = 1e-3\n[frames]\nrate = 20\nduration = 0.3");
   return parse_scene(SceneFile::parse(text, "block.toml"));
 }
@@ -317,6 +437,27 @@ TEST(Colliders, ABlockRestsOnABoxWithItsWeight) {
   int touching = 0;
   for (int i = 0; i < F.cols(); ++i) touching += F.col(i).norm() > 0;
   EXPECT_EQ(touching, 9);  // the bottom face's 3 x 3 nodes
+}
+
+TEST(MeshCollider, ABlockRestsOnATriangulatedBoxWithItsWeight) {
+  // As ABlockRestsOnABoxWithItsWeight, the box given as 12 triangles: under the block, far from
+  // the box's edges, the mesh's smoothed distance is the plane's, so the same m g.
+  const auto dir = test::temp_dir();
+  Points x;
+  std::vector<Tri> tris;
+  box_surface(Vec3(1.0, 1.0, 0.05), x, tris);
+  const std::string file = (dir / "slab.obj").string();
+  {
+    std::ofstream obj(file);
+    for (int i = 0; i < x.cols(); ++i) obj << "v " << x(0, i) << " " << x(1, i) << " " << x(2, i) - 0.05 << "\n";
+    for (const Tri& T : tris) obj << "f " << T[0] + 1 << " " << T[1] + 1 << " " << T[2] + 1 << "\n";
+  }
+  RunFile f(run_scene(block_on_box(0.0, 0.0, "static", file), (dir / "rest.h5").string(), false).output);
+  const Points F = f.contact(f.num_frames() - 1);
+  EXPECT_NEAR(F.row(2).sum(), 1000.0 * 1e-3 * 9.81, 1e-6 * 9.81);
+  int touching = 0;
+  for (int i = 0; i < F.cols(); ++i) touching += F.col(i).norm() > 0;
+  EXPECT_EQ(touching, 9);
 }
 
 TEST(Colliders, ABlockSlidesDownATiltedBoxAtCoulombsAcceleration) {

@@ -128,10 +128,29 @@ def band(r0, r1, m=32):
     return np.concatenate([np.stack([r0[i], r0[j], r1[j]], 1), np.stack([r0[i], r1[j], r1[i]], 1)])
 
 
-def shape_triangles(c):
-    """A collider's surface as triangles (T, 3, 3) in its own frame (axis z), for drawing; None for
-    a plane. Rounded edges are drawn sharp."""
+def mesh_triangles(c, scene_file):
+    """A mesh collider's triangles (T, 3, 3) in its frame (its file's coordinates times `scale`);
+    none, with a warning, when the file cannot be read here."""
+    path = str(c.get("file", ""))
+    if not os.path.isabs(path):
+        path = os.path.join(os.path.dirname(scene_file), path)
+    try:
+        import meshio  # noqa: PLC0415 - only runs with mesh colliders need it
+        m = meshio.read(path)
+        tris = [b.data for b in m.cells if b.type == "triangle"]
+        tris += [b.data[:, k] for b in m.cells if b.type == "quad" for k in ([0, 1, 2], [0, 2, 3])]
+        return float(c.get("scale", 1.0)) * m.points[np.concatenate(tris)]
+    except Exception as e:  # noqa: BLE001 - the run is still drawn, without this collider
+        print(f"{path}: mesh collider not drawn ({e})", file=sys.stderr)
+        return np.zeros((0, 3, 3))
+
+
+def shape_triangles(c, scene_file=""):
+    """A collider's surface as triangles (T, 3, 3) in its own frame (axis z; a mesh's: its file's),
+    for drawing; None for a plane. Rounded edges are drawn sharp."""
     kind = c.get("shape")
+    if kind == "mesh":
+        return mesh_triangles(c, scene_file)
     if kind in ("sphere", "capsule"):
         r, half = float(c["radius"]), (0.5 * float(c["length"]) if kind == "capsule" else 0.0)
         polar = np.linspace(0, np.pi, 13)
@@ -329,9 +348,11 @@ def main():
     for i, c in colliders_of(scene):
         if "/frames/collider_pose" not in f:
             break
-        tri = shape_triangles(c)
+        sf = f.attrs.get("scene_file", "")
+        tri = shape_triangles(c, sf.decode() if isinstance(sf, bytes) else str(sf))
         if tri is not None:
-            colliders.append((i, tri))
+            if len(tri):
+                colliders.append((i, tri))
         else:
             pose = f["/frames/collider_pose"][0][i]
             planes.append({"point": pose[9:], "normal": pose[:9].reshape(3, 3)[:, 2], "ground": False,

@@ -43,6 +43,7 @@ const char* ColliderShape::name() const {
     case Kind::capsule: return "capsule";
     case Kind::box: return "box";
     case Kind::cylinder: return wall > 0 ? "hollow cylinder" : "cylinder";
+    case Kind::mesh: return "mesh";
   }
   return "?";
 }
@@ -54,6 +55,7 @@ double ColliderShape::bound() const {
     case Kind::capsule: return half_length + radius;
     case Kind::box: return half_extents.norm();
     case Kind::cylinder: return std::hypot(radius + wall, half_length);
+    case Kind::mesh: return mesh->bound();
   }
   return 0;
 }
@@ -111,6 +113,7 @@ double ColliderShape::distance(const Vec3& l, Vec3* grad, Mat3* hess) const {
       }
       break;
     }
+    case Kind::mesh: s = mesh->distance(l, &g, hess ? &H : nullptr); break;
   }
   if (grad) *grad = g;
   if (hess) *hess = H;

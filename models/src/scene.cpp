@@ -419,18 +419,48 @@ double required_positive(const Section& s, std::string_view key, const std::stri
   return s.number(key, 0.0, Range::positive());
 }
 
+// A [[collider]] with shape = "mesh": its closed surface (`file`, scaled by `scale`) and the smoothed
+// signed distance sampled on cells of `cell` (default: a 64th of the surface's longest side).
+std::shared_ptr<const MeshSdf> parse_mesh_shape(const Section& c, const SceneFile& file, double thickness) {
+  if (!c.has("file")) c.fail("file", "missing, a mesh collider needs a closed triangle surface (.obj or .stl)");
+  const std::string path = file.resolve_path(c.string("file", ""));
+  const double scale = c.number("scale", 1.0, Range::positive());
+  Points x;
+  std::vector<Tri> tris;
+  try {
+    const std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
+    if (ext == ".obj") read_obj_surface(path, x, tris);
+    else if (ext == ".stl") read_stl_surface(path, x, tris);
+    else c.fail("file", "\"" + path + "\" has an unknown extension, expected .obj or .stl");
+  } catch (const Error& e) {
+    c.fail("file", e.what());
+  }
+  x *= scale;
+  const double longest = x.cols() ? (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).maxCoeff() : 0.0;
+  const double cell = c.number("cell", longest / 64, Range::positive());
+  try {
+    // The samples reach past the contact thickness by four cells (the spline's support and more).
+    return std::make_shared<const MeshSdf>(x, tris, cell, thickness + 4 * cell, path);
+  } catch (const Error& e) {
+    c.fail(c.has("cell") ? "cell" : "file", e.what());
+  }
+  return nullptr;
+}
+
 // One [[collider]]: its shape, pose, law and motion (docs/scenes.md).
-Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& defaults) {
+Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& defaults, const SceneFile& file) {
   Collider C;
   C.name = c.path();
   using K = ColliderShape::Kind;
-  if (!c.has("shape")) c.fail("shape", "missing, expected one of \"plane\", \"sphere\", \"capsule\", \"box\", \"cylinder\"");
+  if (!c.has("shape")) c.fail("shape", "missing, expected one of \"plane\", \"sphere\", \"capsule\", \"box\", \"cylinder\", \"mesh\"");
   C.shape.kind = parse_choice<K>(c, "shape", K::plane,
-                                 {{"plane", K::plane}, {"sphere", K::sphere}, {"capsule", K::capsule}, {"box", K::box}, {"cylinder", K::cylinder}});
+                                 {{"plane", K::plane}, {"sphere", K::sphere}, {"capsule", K::capsule}, {"box", K::box}, {"cylinder", K::cylinder}, {"mesh", K::mesh}});
   ColliderShape& S = C.shape;
   C.center = c.vec3("center", Eigen::Vector3d::Zero());
   const Eigen::Vector3d axis = nonzero_vec3(c, "axis", Eigen::Vector3d::UnitZ());
-  C.rotation = frame_with_axis(axis, c.number("angle", 0.0) * M_PI / 180.0);
+  const double angle = c.number("angle", 0.0) * M_PI / 180.0;
+  // A mesh keeps its file's frame, turned by `angle` about `axis`; the other shapes' axis is `axis`.
+  C.rotation = S.kind == K::mesh ? Mat3(Eigen::AngleAxisd(angle, axis)) : frame_with_axis(axis, angle);
   double smallest = 0;  // the smallest half dimension (bounds the rounding)
   switch (S.kind) {
     case K::plane: break;
@@ -453,6 +483,7 @@ Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& def
       S.wall = c.number("wall", 0.0, Range::non_negative());
       smallest = std::min(S.half_length, S.wall > 0 ? 0.5 * S.wall : S.radius);
       break;
+    case K::mesh: S.mesh = parse_mesh_shape(c, file, parse_contact_law(c, defaults).thickness); break;
   }
   if (S.kind == K::box || S.kind == K::cylinder) {
     S.rounding = c.number("rounding", 0.1 * smallest, Range::non_negative());
@@ -516,7 +547,7 @@ void parse_colliders(const Section& root, Scene& sc) {
     }
     sc.colliders.push_back(C);
   }
-  for (const Section& c : root.tables("collider")) sc.colliders.push_back(parse_collider(c, sc, defaults));
+  for (const Section& c : root.tables("collider")) sc.colliders.push_back(parse_collider(c, sc, defaults, sc.file));
   const Section self = contact.table("self");
   if (self.exists()) {
     sc.self_contact.enabled = self.boolean("enabled", true);

@@ -8,6 +8,9 @@
 // w(x) = omega x (x - tm) + tm'. Contact acts on nodes through the node's s (elements.hpp:
 // contact_energy, contact_damping_force).
 //
+// A closed triangle mesh's s is the cubic B-spline of its exact signed distance sampled on a grid
+// (mesh_sdf.hpp): C^2 everywhere, edges and corners rounded over about two cells.
+//
 // Smoothness: s is C^1 near every shape's surface where the surface is C^1 (the box's and the
 // cylinder's edges are rounded by `rounding` for that; a penetration deeper than the rounding
 // radius meets the inner box's medial axis, where the gradient jumps); s is C^2 (and the force
@@ -21,19 +24,21 @@
 
 #include "isochor/drivers.hpp"
 #include "isochor/elements.hpp"
+#include "isochor/mesh_sdf.hpp"
 
 namespace isochor {
 
 class Skeleton;
 
 struct ColliderShape {
-  enum class Kind { plane, sphere, capsule, box, cylinder };
+  enum class Kind { plane, sphere, capsule, box, cylinder, mesh };
   Kind kind = Kind::plane;
   double radius = 0;          // sphere, capsule; cylinder: the outer radius (solid) or the hole's (hollow)
   double half_length = 0;     // capsule: half its axis segment; cylinder: half its height
   Vec3 half_extents = Vec3::Zero();  // box
   double rounding = 0;        // box, cylinder: radius of the rounded edges
   double wall = 0;            // cylinder: > 0 makes it hollow (a band, a sleeve) with this wall thickness
+  std::shared_ptr<const MeshSdf> mesh;  // mesh: the closed surface's smoothed signed distance
 
   // Signed distance at the local point l; gradient and Hessian (local frame) if asked.
   double distance(const Vec3& l, Vec3* grad, Mat3* hess) const;
