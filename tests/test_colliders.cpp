@@ -159,8 +159,9 @@ TEST(Colliders, GradientAndHessianOfEveryShapeAgainstFiniteDifferences) {
       check_fd([&](const Vec3& y, Vec3* g, Mat3* H) { return c.distance(P, y, g, H); }, x, c.name, 1e-5);
       Vec3 g;
       c.distance(P, x, &g, nullptr);
-      if (c.shape.kind != ColliderShape::Kind::mesh)  // (a mesh's is a smoothed distance)
-        EXPECT_NEAR(g.norm(), 1.0, 1e-12) << c.name;    // a distance: |grad s| = 1
+      if (c.shape.kind != ColliderShape::Kind::mesh) {  // (a mesh's is a smoothed distance)
+        EXPECT_NEAR(g.norm(), 1.0, 1e-12) << c.name;      // a distance: |grad s| = 1
+      }
     }
   }
 }

@@ -1,4 +1,6 @@
 #include "isochor/statics.hpp"
+
+#include <functional>
 #include "bordered.hpp"
 #include "kkt.hpp"
 #include "klu_order.hpp"
@@ -166,17 +168,17 @@ RunStats StaticSolver::run(const std::vector<double>& times, const FrameCallback
   }
   check(KINSetLinearSolver(mem, LS, J), "KINSetLinearSolver", t0);
   check(KINSetJacFn(mem, kin_jac), "KINSetJacFn", t0);
-  for (std::size_t k = 0; k < times.size(); ++k) {
-    step_boundary(k > 0 ? times[k - 1] : t0);
-    s.t = times[k];
-    // Full Newton steps first: the merit function |F| of a KKT system often rises on a step
-    // that converges (measured: the cantilever's first load increment takes 4 full steps and
-    // 116 line-searched ones). If they fail, start over from the last frame with a line search.
+  // Equilibrium at pseudo-time `to` from the one in u: full Newton steps first (the merit function
+  // |F| of a KKT system often rises on a step that converges; measured: the cantilever's first
+  // load increment takes 4 full steps and 116 line-searched ones), then from the same start with
+  // KINSOL's line search. Returns KINSOL's flag and the residual norm; u is the start again on
+  // failure.
+  auto solve_at = [&](double to, double& fnorm) {
+    s.t = to;
     const VectorXd start = Eigen::Map<const VectorXd>(N_VGetArrayPointer(u), N);
     check(KINSetNumMaxIters(mem, std::min<long>(s.opt.max_iterations, 40)), "KINSetNumMaxIters", s.t);
     int flag = KINSol(mem, u, KIN_NONE, uscale, fscale);
     long iters = 0;
-    double fnorm = 0;
     check(KINGetNumNonlinSolvIters(mem, &iters), "KINGetNumNonlinSolvIters", s.t);
     s.stats.newton_iterations += iters;
     if (flag < 0 || !Eigen::Map<const VectorXd>(N_VGetArrayPointer(u), N).allFinite()) {
@@ -189,14 +191,36 @@ RunStats StaticSolver::run(const std::vector<double>& times, const FrameCallback
     }
     check(KINGetFuncNorm(mem, &fnorm), "KINGetFuncNorm", s.t);
     s.stats.steps++;
-    if (flag < 0) {
-      char* name = KINGetReturnFlagName(flag);
-      std::string reason = std::string(name ? name : "KINSOL failure") + " after " + std::to_string(iters) +
-                           " iterations, scaled residual " + std::to_string(fnorm);
-      free(name);
-      s.stats.wall_seconds = seconds_since(wall0);
-      throw IntegrationError(s.t, reason);
+    if (flag < 0 || !Eigen::Map<const VectorXd>(N_VGetArrayPointer(u), N).allFinite()) {
+      Eigen::Map<VectorXd>(N_VGetArrayPointer(u), N) = start;
+      if (flag >= 0) flag = KIN_SYSFUNC_FAIL;
     }
+    return flag;
+  };
+  // The increment from `from` to `to`, halved on failure up to substeps_on_failure levels.
+  std::function<void(double, double, int)> increment = [&](double from, double to, int depth) {
+    double fnorm = 0;
+    const int flag = solve_at(to, fnorm);
+    if (flag >= 0) return;
+    if (depth < s.opt.substeps_on_failure) {
+      s.stats.step_halvings++;
+      increment(from, 0.5 * (from + to), depth + 1);
+      increment(0.5 * (from + to), to, depth + 1);
+      return;
+    }
+    char* name = KINGetReturnFlagName(flag);
+    std::string reason = std::string(name ? name : "KINSOL failure") + ", scaled residual " + std::to_string(fnorm);
+    if (s.opt.substeps_on_failure > 0)
+      reason += " (from pseudo-time " + std::to_string(from) + ", after " + std::to_string(depth) + " halvings of the increment)";
+    free(name);
+    s.stats.wall_seconds = seconds_since(wall0);
+    throw IntegrationError(to, reason);
+  };
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    step_boundary(k > 0 ? times[k - 1] : t0);
+    increment(k > 0 ? times[k - 1] : t0, times[k], 0);
+    double fnorm = 0;
+    check(KINGetFuncNorm(mem, &fnorm), "KINGetFuncNorm", s.t);
     s.stats.frames.push_back({s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 0, fnorm});
     const double* y = N_VGetArrayPointer(u);
     on_frame(static_cast<int>(k), s.t, Eigen::Map<const VectorXd>(y, s.n), s.v0,

@@ -18,6 +18,9 @@ struct StaticOptions {
   double residual_tol = 1e-9;  // KINSOL's scaled residual norm (forces over the system's force scale)
   long max_iterations = 200;   // Newton iterations per frame
   LinearSolverKind linear_solver = LinearSolverKind::klu;
+  // A load increment (frame to frame) that fails is solved as two halves from the last
+  // equilibrium, each halved again on failure, up to this many levels (0: the frame fails).
+  int substeps_on_failure = 0;
 };
 
 class StaticSolver : public Integrator {

@@ -38,7 +38,7 @@ struct ColliderShape {
   Vec3 half_extents = Vec3::Zero();  // box
   double rounding = 0;        // box, cylinder: radius of the rounded edges
   double wall = 0;            // cylinder: > 0 makes it hollow (a band, a sleeve) with this wall thickness
-  std::shared_ptr<const MeshSdf> mesh;  // mesh: the closed surface's smoothed signed distance
+  std::shared_ptr<const MeshSdf> mesh = nullptr;  // mesh: the closed surface's smoothed signed distance
 
   // Signed distance at the local point l; gradient and Hessian (local frame) if asked.
   double distance(const Vec3& l, Vec3* grad, Mat3* hess) const;

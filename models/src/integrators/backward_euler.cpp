@@ -28,7 +28,8 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
   o.line_search = in.boolean("line_search", true);
   o.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 0, 0, 30));
   for (const char* key : {"line_search", "substeps_on_failure"})
-    if (in.has(key) && kind != IntegratorKind::backward_euler) in.fail(key, "is an option of the backward_euler integrator");
+    if (in.has(key) && kind != IntegratorKind::backward_euler)
+      in.fail(key, std::string("is an option of the backward_euler") + (key[0] == 's' ? " and static integrators" : " integrator"));
   if (in.has("max_newton") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::ida)
     in.fail("max_newton", "is an option of the backward_euler and ida integrators");
 }

@@ -7,6 +7,8 @@ namespace isochor {
 
 void parse_statics(const Section& in, IntegratorKind, IntegratorSpec& spec) {
   spec.statics.linear_solver = parse_linear_solver(in, LinearSolverKind::klu);
+  // Load increments are pseudo-time: halving a failed one changes no accuracy, so it is on.
+  spec.statics.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 5, 0, 30));
 }
 
 std::unique_ptr<Integrator> make_statics(const Scene& scene, SceneSystem& system) {
