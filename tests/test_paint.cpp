@@ -212,3 +212,39 @@ TEST(Paint, PaintThatDoesNotFitStopsWithAMessage) {
     for (int e : tets) EXPECT_EQ(centroid(s.mesh, e).x() < 1.5, centroid(s.mesh, tets[0]).x() < 1.5) << name;  // one end each
   EXPECT_NE(centroid(s.mesh, s.zones[0].second[0]).x() < 1.5, centroid(s.mesh, s.zones[1].second[0]).x() < 1.5);
 }
+
+TEST(Paint, AGmshSurfaceGroupPaintsTheTetsNearestIt) {
+  // tests/data/two_boxes.geo: the slab [0, 2] x [0, 1] x [0, 1] with its bottom face (z = 0) a 2-D
+  // physical group. Painted by that group, a tet is in the zone when the surface point nearest
+  // its centroid is on the bottom face: z < x, 2 - x, y, 1 - y, 1 - z. Away (by a cell) from where
+  // the bottom face stops being the nearest, membership must follow that rule exactly; the paint's
+  // interpolation and the tets' size decide only within a cell of it.
+  const auto dir = test::temp_dir();
+  const double h = 0.15;
+  const std::string msh = (dir / "slab.msh").string();
+  const std::string cmd = "gmsh -3 -v 0 " + std::string(ISOCHOR_SOURCE_DIR) + "/tests/data/two_boxes.geo -clmax " +
+                          std::to_string(h) + " -o " + msh;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string scene = "[mesh]\nfile = \"" + msh + "\"\n[material]\nmu = 1.0\nlambda = 1.0\n[zones]\nglobal = false\n";
+  const Scene sc = parse_scene(SceneFile::parse(scene + "[[zones.paint]]\ngroups = [\"bottom\"]\n", "slab.toml"));
+  ASSERT_EQ(sc.zones.size(), 1u);
+  EXPECT_EQ(sc.zones[0].first, "bottom");
+  std::vector<char> in(sc.mesh.num_tets(), 0);
+  for (int e : sc.zones[0].second) in[e] = 1;
+  int decided = 0;
+  for (int e = 0; e < sc.mesh.num_tets(); ++e) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int n : sc.mesh.tets()[e]) c += 0.25 * sc.mesh.rest_positions().col(n);
+    const double others = std::min({c.x(), 2 - c.x(), c.y(), 1 - c.y(), 1 - c.z()});
+    if (c.z() < others - h) {
+      EXPECT_TRUE(in[e]) << "tet " << e << " at " << c.transpose();
+      ++decided;
+    } else if (c.z() > others + h) {
+      EXPECT_FALSE(in[e]) << "tet " << e << " at " << c.transpose();
+      ++decided;
+    }
+  }
+  EXPECT_GT(decided, sc.mesh.num_tets() / 2);
+  const std::string err = test::error_of([&] { parse_scene(SceneFile::parse(scene + "[[zones.paint]]\ngroups = [\"belly\"]\n", "slab.toml")); });
+  EXPECT_NE(err.find("zones.paint[0].groups: the mesh has no group \"belly\" (its groups: bottom"), std::string::npos) << err;
+}

@@ -298,9 +298,45 @@ void check_zone_name(const Section& z, std::string_view key, const std::string& 
 
 // [[zones.paint]]: zones painted on the surface (paint.hpp), one per entry of labels, colors or
 // weights.
+// Zones painted by the mesh file's own surface groups (Gmsh 2-D physical groups, node sets of
+// the mesh): `groups = [names]`, each a zone of that name, its paint 1 on the group's nodes.
+void parse_group_paint(const Section& p, const Mesh& mesh, std::vector<std::pair<std::string, std::vector<int>>>& zones) {
+  for (const char* key : {"file", "labels", "colors", "weights", "property"})
+    if (p.has(key)) p.fail(key, "not with groups (the mesh's surface groups are the paint)");
+  const std::vector<std::string> groups = p.strings("groups");
+  if (groups.empty()) p.fail("groups", "expected a list of the mesh's surface groups, e.g. [\"belly\", \"back\"]");
+  std::vector<int> nodes;
+  for (const Tri& t : mesh.surface()) nodes.insert(nodes.end(), t.begin(), t.end());
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  PaintedPoints painted;
+  painted.path = "the mesh's groups";
+  painted.x.resize(3, static_cast<Eigen::Index>(nodes.size()));
+  for (std::size_t i = 0; i < nodes.size(); ++i) painted.x.col(i) = mesh.rest_positions().col(nodes[i]);
+  std::vector<std::vector<double>> membership;
+  for (const std::string& g : groups) {
+    check_zone_name(p, "groups", g, zones);
+    const auto it = mesh.node_sets.find(g);
+    if (it == mesh.node_sets.end()) {
+      std::string known;
+      for (const auto& [name, set] : mesh.node_sets) known += (known.empty() ? "" : ", ") + name;
+      p.fail("groups", "the mesh has no group \"" + g + "\" (its groups: " + (known.empty() ? "none" : known) + ")");
+    }
+    std::vector<double> m(nodes.size(), 0.0);
+    for (std::size_t i = 0; i < nodes.size(); ++i) m[i] = std::binary_search(it->second.begin(), it->second.end(), nodes[i]);
+    membership.push_back(std::move(m));
+  }
+  std::vector<std::vector<int>> tets = painted_zones(mesh, painted, membership, std::numeric_limits<double>::infinity());
+  for (std::size_t z = 0; z < groups.size(); ++z) {
+    if (tets[z].empty()) p.fail("groups", "no tet is painted by group \"" + groups[z] + "\" (expected a group of surface triangles)");
+    zones.emplace_back(groups[z], std::move(tets[z]));
+  }
+}
+
 void parse_paint(const Section& p, const Mesh& mesh, const SceneFile& file,
                  std::vector<std::pair<std::string, std::vector<int>>>& zones) {
-  if (!p.has("file")) p.fail("file", "missing, expected a paint file (.ply, .obj or .csv)");
+  if (p.has("groups")) return parse_group_paint(p, mesh, zones);
+  if (!p.has("file")) p.fail("file", "missing, expected a paint file (.ply, .obj or .csv) or the mesh's surface groups (groups)");
   const std::string path = file.resolve_path(p.string("file", ""));
   PaintRule rule;
   const int given = p.has("labels") + p.has("colors") + p.has("weights");
