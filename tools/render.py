@@ -348,8 +348,11 @@ def main():
     for i, c in colliders_of(scene):
         if "/frames/collider_pose" not in f:
             break
-        sf = f.attrs.get("scene_file", "")
-        tri = shape_triangles(c, sf.decode() if isinstance(sf, bytes) else str(sf))
+        where = {k: f.attrs.get(k, "") for k in ("scene_directory", "scene_file")}
+        where = {k: v.decode() if isinstance(v, bytes) else str(v) for k, v in where.items()}
+        # the scene's own directory (runs since issue 17), else the scene file's as run
+        base = os.path.join(where["scene_directory"], "x") if where["scene_directory"] else where["scene_file"]
+        tri = shape_triangles(c, base)
         if tri is not None:
             if len(tri):
                 colliders.append((i, tri))

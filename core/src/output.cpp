@@ -579,6 +579,13 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh,
 
   string_attribute(m.file, "scene", info.scene_text);
   string_attribute(m.file, "scene_file", info.scene_file);
+  // Where the scene's relative file names (meshes, paint, mesh colliders) resolve, for tools that
+  // read the run from another directory (render.py draws mesh colliders from their files).
+  if (!info.scene_file.empty()) {
+    std::error_code ec;
+    const std::filesystem::path dir = std::filesystem::absolute(info.scene_file, ec).parent_path();
+    string_attribute(m.file, "scene_directory", ec ? std::string() : dir.string());
+  }
   string_attribute(m.file, "command", info.command);
   string_attribute(m.file, "isochor_version", isochor_version());
   string_attribute(m.file, "git_revision", isochor_git_revision());
