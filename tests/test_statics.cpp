@@ -195,3 +195,47 @@ TEST(Statics, GravityRampAppliesTheLoadInIncrements) {
   for (int k = 1; k < 5; ++k) EXPECT_NEAR(tip[k] / tip[4], k / 4.0, 1e-3) << k;
   EXPECT_GT(tip[4], 1e-5);
 }
+
+// A load increment that KINSOL cannot solve in one piece (a bar stretched to 3 times its length
+// in one frame) is solved by halving it (integrator.substeps_on_failure, 5 levels by default for
+// statics); an equilibrium of a stable stretch is unique, so the result is the one reached in
+// 20 increments, to the solver's tolerance.
+TEST(Statics, AFailedLoadIncrementIsHalvedToTheSameEquilibrium) {
+  const auto dir = test::temp_dir();
+  const std::string text = R"(
+[mesh]
+shape = "box"
+size = [0.2, 0.2, 1.0]
+cells = [2, 2, 8]
+center = [0.0, 0.0, 0.5]
+[material]
+model = "snh"
+E = 1.0e5
+nu = 0.45
+[zones]
+global = false
+[[boundary]]
+select = { kind = "set", name = "zmin" }
+[[boundary]]
+select = { kind = "set", name = "zmax" }
+kind = "ramp"
+displacement = [0.0, 0.0, 2.0]
+t0 = 0.0
+t1 = 1.0
+[forces]
+gravity = [0.0, 0.0, 0.0]
+[integrator]
+kind = "static"
+)";
+  auto scene = [&](const std::string& extra) { return parse_scene(SceneFile::parse(text + extra, "stretch.toml")); };
+  const std::string err = test::error_of([&] {
+    run_scene(scene("substeps_on_failure = 0\n[frames]\ncount = 2\n"), (dir / "whole.h5").string(), false);
+  });
+  EXPECT_NE(err.find("integration failed at t = 1"), std::string::npos) << err;
+  const RunSummary halved = run_scene(scene("[frames]\ncount = 2\n"), (dir / "halved.h5").string(), false);
+  EXPECT_GT(halved.stats.step_halvings, 0);
+  const RunFile h(halved.output), f(run_scene(scene("[frames]\ncount = 21\n"), (dir / "fine.h5").string(), false).output);
+  ASSERT_EQ(h.num_frames(), 2);
+  EXPECT_LT((h.positions(1) - f.positions(20)).cwiseAbs().maxCoeff(), 1e-8);
+  EXPECT_NEAR(h.positions(1).row(2).maxCoeff(), 3.0, 1e-12);  // the top face, driven to z = 3
+}

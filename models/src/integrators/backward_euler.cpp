@@ -27,9 +27,9 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
   o.max_newton = static_cast<int>(in.integer("max_newton", 30, 1, 100000));
   o.line_search = in.boolean("line_search", true);
   o.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 0, 0, 30));
-  for (const char* key : {"line_search", "substeps_on_failure"})
-    if (in.has(key) && kind != IntegratorKind::backward_euler)
-      in.fail(key, std::string("is an option of the backward_euler") + (key[0] == 's' ? " and static integrators" : " integrator"));
+  if (in.has("line_search") && kind != IntegratorKind::backward_euler) in.fail("line_search", "is an option of the backward_euler integrator");
+  if (in.has("substeps_on_failure") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::statics)
+    in.fail("substeps_on_failure", "is an option of the backward_euler and static integrators");
   if (in.has("max_newton") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::ida)
     in.fail("max_newton", "is an option of the backward_euler and ida integrators");
 }
