@@ -447,10 +447,7 @@ Mesh mesh_closed_surface(const std::string& path, double edge_length) {
   check_readable(path, "a closed triangle surface (.obj or .stl)");
   Points x;
   std::vector<Tri> tris;
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-  if (ext == ".obj") read_obj_surface(path, x, tris);
-  else read_stl_surface(path, x, tris);
+  read_surface(path, x, tris);
   if (tris.empty()) throw Error(path + ": has no triangles (expected a closed surface)");
   SurfaceCheck sc = check_surface(tris);
   if (!sc.closed)

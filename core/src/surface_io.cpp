@@ -1,4 +1,5 @@
 // Triangle surfaces: Wavefront OBJ (polygons fan-triangulated) and STL (ASCII or binary).
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -98,6 +99,14 @@ void read_stl_surface(const std::string& path, Points& x, std::vector<Tri>& tris
   }
   x.resize(3, static_cast<Eigen::Index>(v.size()));
   for (std::size_t i = 0; i < v.size(); ++i) x.col(i) = v[i];
+}
+
+void read_surface(const std::string& path, Points& x, std::vector<Tri>& tris) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+  if (ext == ".obj") read_obj_surface(path, x, tris);
+  else if (ext == ".stl") read_stl_surface(path, x, tris);
+  else throw Error("\"" + path + "\" has an unknown extension, expected .obj or .stl");
 }
 
 }  // namespace isochor

@@ -197,8 +197,10 @@ RunStats StaticSolver::run(const std::vector<double>& times, const FrameCallback
     }
     return flag;
   };
-  // The increment from `from` to `to`, halved on failure up to substeps_on_failure levels.
+  // The increment from `from` to `to`, halved on failure up to substeps_on_failure levels (an
+  // interrupt is taken before each part, so a long halving does not hold it up).
   std::function<void(double, double, int)> increment = [&](double from, double to, int depth) {
+    step_boundary(from);
     double fnorm = 0;
     const int flag = solve_at(to, fnorm);
     if (flag >= 0) return;
@@ -217,7 +219,6 @@ RunStats StaticSolver::run(const std::vector<double>& times, const FrameCallback
     throw IntegrationError(to, reason);
   };
   for (std::size_t k = 0; k < times.size(); ++k) {
-    step_boundary(k > 0 ? times[k - 1] : t0);
     increment(k > 0 ? times[k - 1] : t0, times[k], 0);
     double fnorm = 0;
     check(KINGetFuncNorm(mem, &fnorm), "KINGetFuncNorm", s.t);

@@ -296,8 +296,6 @@ void check_zone_name(const Section& z, std::string_view key, const std::string& 
     if (other.first == name) z.fail(key, "zone \"" + name + "\" is defined twice");
 }
 
-// [[zones.paint]]: zones painted on the surface (paint.hpp), one per entry of labels, colors or
-// weights.
 // Zones painted by the mesh file's own surface groups (Gmsh 2-D physical groups, node sets of
 // the mesh): `groups = [names]`, each a zone of that name, its paint 1 on the group's nodes.
 void parse_group_paint(const Section& p, const Mesh& mesh, std::vector<std::pair<std::string, std::vector<int>>>& zones) {
@@ -305,10 +303,7 @@ void parse_group_paint(const Section& p, const Mesh& mesh, std::vector<std::pair
     if (p.has(key)) p.fail(key, "not with groups (the mesh's surface groups are the paint)");
   const std::vector<std::string> groups = p.strings("groups");
   if (groups.empty()) p.fail("groups", "expected a list of the mesh's surface groups, e.g. [\"belly\", \"back\"]");
-  std::vector<int> nodes;
-  for (const Tri& t : mesh.surface()) nodes.insert(nodes.end(), t.begin(), t.end());
-  std::sort(nodes.begin(), nodes.end());
-  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  const std::vector<int>& nodes = mesh.surface_nodes();
   PaintedPoints painted;
   painted.path = "the mesh's groups";
   painted.x.resize(3, static_cast<Eigen::Index>(nodes.size()));
@@ -333,6 +328,8 @@ void parse_group_paint(const Section& p, const Mesh& mesh, std::vector<std::pair
   }
 }
 
+// [[zones.paint]]: zones painted on the surface (paint.hpp), one per entry of labels, colors or
+// weights, or one per surface group of the mesh.
 void parse_paint(const Section& p, const Mesh& mesh, const SceneFile& file,
                  std::vector<std::pair<std::string, std::vector<int>>>& zones) {
   if (p.has("groups")) return parse_group_paint(p, mesh, zones);
@@ -464,10 +461,7 @@ std::shared_ptr<const MeshSdf> parse_mesh_shape(const Section& c, const SceneFil
   Points x;
   std::vector<Tri> tris;
   try {
-    const std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
-    if (ext == ".obj") read_obj_surface(path, x, tris);
-    else if (ext == ".stl") read_stl_surface(path, x, tris);
-    else c.fail("file", "\"" + path + "\" has an unknown extension, expected .obj or .stl");
+    read_surface(path, x, tris);
   } catch (const Error& e) {
     c.fail("file", e.what());
   }
@@ -484,7 +478,7 @@ std::shared_ptr<const MeshSdf> parse_mesh_shape(const Section& c, const SceneFil
 }
 
 // One [[collider]]: its shape, pose, law and motion (docs/scenes.md).
-Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& defaults, const SceneFile& file) {
+Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& defaults) {
   Collider C;
   C.name = c.path();
   using K = ColliderShape::Kind;
@@ -492,6 +486,7 @@ Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& def
   C.shape.kind = parse_choice<K>(c, "shape", K::plane,
                                  {{"plane", K::plane}, {"sphere", K::sphere}, {"capsule", K::capsule}, {"box", K::box}, {"cylinder", K::cylinder}, {"mesh", K::mesh}});
   ColliderShape& S = C.shape;
+  C.law = parse_contact_law(c, defaults);
   C.center = c.vec3("center", Eigen::Vector3d::Zero());
   const Eigen::Vector3d axis = nonzero_vec3(c, "axis", Eigen::Vector3d::UnitZ());
   const double angle = c.number("angle", 0.0) * M_PI / 180.0;
@@ -519,14 +514,13 @@ Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& def
       S.wall = c.number("wall", 0.0, Range::non_negative());
       smallest = std::min(S.half_length, S.wall > 0 ? 0.5 * S.wall : S.radius);
       break;
-    case K::mesh: S.mesh = parse_mesh_shape(c, file, parse_contact_law(c, defaults).thickness); break;
+    case K::mesh: S.mesh = parse_mesh_shape(c, sc.file, C.law.thickness); break;
   }
   if (S.kind == K::box || S.kind == K::cylinder) {
     S.rounding = c.number("rounding", 0.1 * smallest, Range::non_negative());
     if (S.rounding > smallest)
       c.fail("rounding", "expected at most " + std::to_string(smallest) + " m (half the shape's smallest dimension)");
   }
-  C.law = parse_contact_law(c, defaults);
   const Section motion = c.table("motion");
   if (c.has("bone")) {
     if (motion.exists()) c.fail("motion", "a collider follows a bone or a motion, not both");
@@ -583,7 +577,7 @@ void parse_colliders(const Section& root, Scene& sc) {
     }
     sc.colliders.push_back(C);
   }
-  for (const Section& c : root.tables("collider")) sc.colliders.push_back(parse_collider(c, sc, defaults, sc.file));
+  for (const Section& c : root.tables("collider")) sc.colliders.push_back(parse_collider(c, sc, defaults));
   const Section self = contact.table("self");
   if (self.exists()) {
     sc.self_contact.enabled = self.boolean("enabled", true);

@@ -48,6 +48,8 @@ Mesh mesh_closed_surface(const std::string& path, double edge_length);
 // Surface readers (no tetrahedralisation): positions and triangles, duplicate STL vertices merged.
 void read_obj_surface(const std::string& path, Points& x, std::vector<Tri>& tris);
 void read_stl_surface(const std::string& path, Points& x, std::vector<Tri>& tris);
+// Either, by the file's extension (.obj or .stl, any case); another extension is an Error.
+void read_surface(const std::string& path, Points& x, std::vector<Tri>& tris);
 
 // The [mesh] block of a scene: a shape or a file.
 Mesh mesh_from_scene(const Section& mesh, const SceneFile& file);
