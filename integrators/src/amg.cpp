@@ -33,26 +33,30 @@ void ensure_mpi() {
 
 class AmgPcg : public SymmetricSolver {
  public:
-  AmgPcg(const SparsePattern& p, double tol) : tol_(tol), n_(static_cast<HYPRE_BigInt>(p.n)) {
+  // Rows [lo, hi) of S on `comm`: column c of the pattern (both triangles stored) is row c.
+  AmgPcg(const SparsePattern& p, Index lo, Index hi, MPI_Comm comm, double tol)
+      : tol_(tol), comm_(comm), lo_(lo), hi_(hi), offset_(p.col_ptr[static_cast<std::size_t>(lo)]) {
     ensure_mpi();
-    // S is symmetric with both triangles stored: column c of the pattern is row c.
-    rows_.resize(static_cast<std::size_t>(p.n));
-    ncols_.resize(static_cast<std::size_t>(p.n));
-    cols_.assign(p.row_ind.begin(), p.row_ind.end());
-    for (Index c = 0; c < p.n; ++c) {
-      rows_[static_cast<std::size_t>(c)] = static_cast<HYPRE_BigInt>(c);
-      ncols_[static_cast<std::size_t>(c)] = static_cast<HYPRE_Int>(p.col_ptr[c + 1] - p.col_ptr[c]);
+    const std::size_t rows = static_cast<std::size_t>(hi - lo);
+    rows_.resize(rows);
+    ncols_.resize(rows);
+    cols_.assign(p.row_ind.begin() + p.col_ptr[static_cast<std::size_t>(lo)],
+                 p.row_ind.begin() + p.col_ptr[static_cast<std::size_t>(hi)]);
+    for (Index c = lo; c < hi; ++c) {
+      rows_[static_cast<std::size_t>(c - lo)] = static_cast<HYPRE_BigInt>(c);
+      ncols_[static_cast<std::size_t>(c - lo)] = static_cast<HYPRE_Int>(p.col_ptr[c + 1] - p.col_ptr[c]);
     }
-    HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, n_ - 1, 0, n_ - 1, &A_);
+    HYPRE_IJMatrixCreate(comm_, lo, hi - 1, lo, hi - 1, &A_);
     HYPRE_IJMatrixSetObjectType(A_, HYPRE_PARCSR);
     HYPRE_IJMatrixSetRowSizes(A_, ncols_.data());
     HYPRE_IJMatrixInitialize(A_);
     for (HYPRE_IJVector* v : {&b_, &x_}) {
-      HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, n_ - 1, v);
+      HYPRE_IJVectorCreate(comm_, lo, hi - 1, v);
       HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR);
       HYPRE_IJVectorInitialize(*v);
       HYPRE_IJVectorAssemble(*v);
     }
+    nodal_ = p.n % 3 == 0 && lo % 3 == 0 && hi % 3 == 0;
   }
   ~AmgPcg() override {
     destroy_solver();
@@ -62,7 +66,8 @@ class AmgPcg : public SymmetricSolver {
   }
 
   bool factor(const double* values) override {
-    HYPRE_IJMatrixSetValues(A_, static_cast<HYPRE_Int>(n_), ncols_.data(), rows_.data(), cols_.data(), values);
+    HYPRE_IJMatrixSetValues(A_, static_cast<HYPRE_Int>(rows_.size()), ncols_.data(), rows_.data(), cols_.data(),
+                            values + offset_);
     HYPRE_IJMatrixAssemble(A_);
     HYPRE_IJMatrixGetObject(A_, reinterpret_cast<void**>(&parA_));
     // A new hierarchy for the new values (BoomerAMG is set up once per solver object).
@@ -71,7 +76,7 @@ class AmgPcg : public SymmetricSolver {
     HYPRE_BoomerAMGSetPrintLevel(amg_, 0);
     HYPRE_BoomerAMGSetMaxIter(amg_, 1);  // one V-cycle per preconditioning
     HYPRE_BoomerAMGSetTol(amg_, 0.0);
-    if (n_ % 3 == 0) {  // x, y, z of each node (mesh systems): coarsen by node
+    if (nodal_) {  // x, y, z of each node (mesh systems): coarsen by node
       HYPRE_BoomerAMGSetNumFunctions(amg_, 3);
       HYPRE_BoomerAMGSetNodal(amg_, 1);
     }
@@ -82,7 +87,7 @@ class AmgPcg : public SymmetricSolver {
     HYPRE_BoomerAMGSetStrongThreshold(amg_, 0.5);
     HYPRE_BoomerAMGSetRelaxType(amg_, 6);  // symmetric Gauss-Seidel: keeps the preconditioner symmetric
     HYPRE_BoomerAMGSetNumSweeps(amg_, 1);
-    HYPRE_ParCSRPCGCreate(MPI_COMM_SELF, &pcg_);
+    HYPRE_ParCSRPCGCreate(comm_, &pcg_);
     HYPRE_PCGSetTol(pcg_, tol_);
     HYPRE_PCGSetMaxIter(pcg_, 1000);
     HYPRE_PCGSetTwoNorm(pcg_, 1);
@@ -97,13 +102,10 @@ class AmgPcg : public SymmetricSolver {
 
   bool solve(const double* b, double* x) override {
     if (!pcg_) return false;
-    if (index_.empty()) {
-      index_.resize(static_cast<std::size_t>(n_));
-      for (HYPRE_BigInt i = 0; i < n_; ++i) index_[static_cast<std::size_t>(i)] = i;
-      zero_.assign(static_cast<std::size_t>(n_), 0.0);
-    }
-    HYPRE_IJVectorSetValues(b_, static_cast<HYPRE_Int>(n_), index_.data(), b);
-    HYPRE_IJVectorSetValues(x_, static_cast<HYPRE_Int>(n_), index_.data(), zero_.data());
+    const HYPRE_Int local = static_cast<HYPRE_Int>(rows_.size());
+    if (zero_.empty()) zero_.assign(rows_.size(), 0.0);
+    HYPRE_IJVectorSetValues(b_, local, rows_.data(), b + lo_);
+    HYPRE_IJVectorSetValues(x_, local, rows_.data(), zero_.data());
     HYPRE_ParVector pb, px;
     HYPRE_IJVectorGetObject(b_, reinterpret_cast<void**>(&pb));
     HYPRE_IJVectorGetObject(x_, reinterpret_cast<void**>(&px));
@@ -114,7 +116,7 @@ class AmgPcg : public SymmetricSolver {
     iterations_ += its;
     double rel = 0;
     HYPRE_PCGGetFinalRelativeResidualNorm(pcg_, &rel);
-    HYPRE_IJVectorGetValues(x_, static_cast<HYPRE_Int>(n_), index_.data(), x);
+    HYPRE_IJVectorGetValues(x_, local, rows_.data(), x + lo_);
     return HYPRE_GetError() == 0 && rel <= tol_ * 1.0001;
   }
 
@@ -128,8 +130,10 @@ class AmgPcg : public SymmetricSolver {
     pcg_ = amg_ = nullptr;
   }
   double tol_;
-  HYPRE_BigInt n_;
-  std::vector<HYPRE_BigInt> rows_, cols_, index_;
+  MPI_Comm comm_;
+  Index lo_, hi_, offset_;  // the rows held, and where their values start
+  bool nodal_ = false;
+  std::vector<HYPRE_BigInt> rows_, cols_;
   std::vector<HYPRE_Int> ncols_;
   std::vector<double> zero_;
   HYPRE_IJMatrix A_ = nullptr;
@@ -142,7 +146,11 @@ class AmgPcg : public SymmetricSolver {
 }  // namespace
 
 std::unique_ptr<SymmetricSolver> make_amg_solver(const SparsePattern& pattern, double tol) {
-  return std::make_unique<AmgPcg>(pattern, tol);
+  return std::make_unique<AmgPcg>(pattern, 0, pattern.n, MPI_COMM_SELF, tol);
+}
+std::unique_ptr<SymmetricSolver> make_distributed_amg_solver(const SparsePattern& pattern, Index lo, Index hi,
+                                                             double tol) {
+  return std::make_unique<AmgPcg>(pattern, lo, hi, MPI_COMM_WORLD, tol);
 }
 bool amg_available() { return true; }
 
@@ -152,6 +160,9 @@ bool amg_available() { return true; }
 
 namespace isochor {
 std::unique_ptr<SymmetricSolver> make_amg_solver(const SparsePattern&, double) { return nullptr; }
+std::unique_ptr<SymmetricSolver> make_distributed_amg_solver(const SparsePattern&, Index, Index, double) {
+  return nullptr;
+}
 bool amg_available() { return false; }
 }  // namespace isochor
 

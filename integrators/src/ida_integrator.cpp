@@ -19,6 +19,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -42,6 +44,23 @@ struct IdaIntegrator::Impl {
   const char* trace_env = std::getenv("ISOCHOR_TRACE_IDA");
   const bool trace = trace_env != nullptr;
   const double trace_from = trace ? std::atof(trace_env) : std::numeric_limits<double>::infinity();
+  // ISOCHOR_CAPTURE_S=T:PATH (docs/scenes.md): the reduced solvers' S at the first setup at or
+  // after time T, with the right-hand side of its first solve, written to PATH once.
+  std::string capture_path;
+  double capture_from = 0;
+  void read_capture_env() {
+    const char* env = std::getenv("ISOCHOR_CAPTURE_S");
+    if (!env) return;
+    const std::string v(env);
+    const auto colon = v.find(':');
+    char* end = nullptr;
+    capture_from = std::strtod(v.c_str(), &end);
+    if (colon == std::string::npos || colon == 0 || colon + 1 == v.size() || end != v.c_str() + colon)
+      throw std::runtime_error("ISOCHOR_CAPTURE_S: expected TIME:PATH, got \"" + v + "\"");
+    if (opt.linear_solver == LinearSolverKind::klu)
+      throw std::runtime_error("ISOCHOR_CAPTURE_S: captures the effective stiffness S of linear_solver = \"reduced\", \"krylov\" or \"amg\", not \"klu\"");
+    capture_path = v.substr(colon + 1);
+  }
 
   Impl(ConstrainedSystem& s, IdaOptions o) : sys(s), opt(std::move(o)), ggl((check_system(s), s)) {
     n = sys.num_dofs();
@@ -57,6 +76,7 @@ struct IdaIntegrator::Impl {
       order = metis_order(sys.pattern(), sys.dofs_per_group(), n, 2, sys.constraint_rows(), 2);
       stats.symbolic_seconds += seconds_since(t0);
     }
+    read_capture_env();
   }
 
   int residual(double t, N_Vector yy, N_Vector yp, N_Vector rr) {
@@ -166,6 +186,14 @@ int reduced_setup(SUNLinearSolver S, SUNMatrix A) {
   double cj = 0;
   if (IDAGetCurrentCj(s.ida_mem, &cj) < 0) return SUNLS_PACKAGE_FAIL_UNREC;
   const bool ok = s.reduced->setup(cj, SM_DATA_S(A));
+  if (!s.capture_path.empty()) {
+    realtype t = 0;
+    IDAGetCurrentTime(s.ida_mem, &t);
+    if (t >= s.capture_from) {
+      s.reduced->capture_next(s.capture_path, t);
+      s.capture_path.clear();
+    }
+  }
   s.stats.factor_seconds += seconds_since(t0);
   s.stats.fresh_factorisations++;
   s.stats.factor_nnz = s.reduced->factor_nnz();

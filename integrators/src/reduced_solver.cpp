@@ -11,7 +11,10 @@
 // Z3 = S^-1 A G^T, Z2 = (G^T - Z3) / c and the block is ((B G^T - B Z3) / c - G Z3), free of
 // that cancellation.
 #include <Eigen/Dense>
+#include <cstdio>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 
 #include "isochor/ggl.hpp"
 #include "isochor/sparse_factor.hpp"
@@ -32,6 +35,8 @@ struct ReducedSolver::Impl {
   // evaluated on its own and then combined (the order of the arithmetic of the expressions they replace).
   VectorXd b1, y, dq, tmp, rhs, z, tn1, tn2, tm1, tm2;
 
+  std::string capture_path;  // capture_next: written at the next solve
+  double capture_t = 0;
   bool ok = true;  // every solve of S in the current setup/solve succeeded
   // PCG (krylov) falls back to CHOLMOD for the rest of a setup where it fails (S indefinite, e.g.
   // inverted elements, or no convergence): the next setup tries PCG again.
@@ -89,6 +94,10 @@ double ReducedSolver::factor_nnz() const { return impl_->S->factor_nnz(); }
 long ReducedSolver::iterations() const { return impl_->S->iterations(); }
 long ReducedSolver::fallbacks() const { return impl_->fallbacks; }
 double ReducedSolver::analyse_seconds() const { return impl_->S->analyse_seconds(); }
+void ReducedSolver::capture_next(const std::string& path, double t) {
+  impl_->capture_path = path;
+  impl_->capture_t = t;
+}
 
 bool ReducedSolver::setup(double cj, const double* vals) {
   Impl& s = *impl_;
@@ -152,6 +161,16 @@ void ReducedSolver::solve_once(const double* b, double* x) {
   Eigen::Map<const VectorXd> r1(b, n), r2(b + n, n), r3(b + 2 * n, m), r4(b + 2 * n + m, m);
   s.times(s.Vx, r1.data(), s.tmp.data());
   s.b1 = r2 + s.tmp;
+  if (!s.capture_path.empty()) {  // called from SUNDIALS: report, do not throw
+    try {
+      write_system(s.capture_path, s.form.system().pattern(), s.Sx.data(), s.b1.data(), s.cj, s.capture_t);
+      std::fprintf(stderr, "isochor: captured S (n = %lld, c_j = %.6g, t = %.9g s) in %s\n",
+                   static_cast<long long>(s.n), s.cj, s.capture_t, s.capture_path.c_str());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "isochor: ISOCHOR_CAPTURE_S: %s\n", e.what());
+    }
+    s.capture_path.clear();
+  }
   s.solve_S(s.b1.data(), s.y.data());
   // z = (dl, dm).
   const auto dl = s.z.head(m), dm = s.z.tail(m);

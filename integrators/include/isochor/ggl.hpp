@@ -71,6 +71,9 @@ class ReducedSolver {
   // factor or a failed solve switches the rest of that setup to a CHOLMOD factor of S).
   long fallbacks() const;
   double analyse_seconds() const;  // CHOLMOD's ordering and symbolic analysis so far
+  // Writes S of the current setup and the first right-hand side solved with it to `path`
+  // (write_system, sparse_factor.hpp), at the next solve; t is recorded with it.
+  void capture_next(const std::string& path, double t);
 
  private:
   void solve_once(const double* b, double* x);

@@ -9,6 +9,7 @@
 #pragma once
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "isochor/sparse_pattern.hpp"
 
@@ -39,6 +40,25 @@ std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& patt
                                                        double tol = 1e-12);
 bool amg_available();
 std::unique_ptr<SymmetricSolver> make_amg_solver(const SparsePattern& pattern, double tol);
+// BoomerAMG-preconditioned CG on rows [lo, hi) of S, spread over the ranks of MPI_COMM_WORLD
+// (each rank holds its rows; `pattern` and `values` are the whole matrix's, of which a rank reads
+// only its columns lo..hi, which are its rows). solve(b, x) reads b and writes x on those rows
+// only. One rank and [0, n) is make_amg_solver. Null without hypre. (bench/amg_s.cpp)
+std::unique_ptr<SymmetricSolver> make_distributed_amg_solver(const SparsePattern& pattern, Index lo, Index hi,
+                                                             double tol);
+
+// A captured system S x = b (ISOCHOR_CAPTURE_S, docs/scenes.md): the pattern, S's values, one
+// right-hand side the run solved with it, IDA's c_j and the time. Binary, little-endian:
+// "ISOCHORS", int64 n, int64 nnz, double cj, double t, int64 col_ptr[n+1], int64 row_ind[nnz],
+// double values[nnz], double b[n]. read_system throws std::runtime_error naming the file.
+struct CapturedSystem {
+  SparsePattern pattern;
+  std::vector<double> values, b;
+  double cj = 0, t = 0;
+};
+void write_system(const std::string& path, const SparsePattern& pattern, const double* values, const double* b,
+                  double cj, double t);
+CapturedSystem read_system(const std::string& path);
 
 class SymmetricFactor : public SymmetricSolver {
  public:
