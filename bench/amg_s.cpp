@@ -1,7 +1,7 @@
 // Issue 18, part 3: one captured effective stiffness S (ISOCHOR_CAPTURE_S) solved with the
 // right-hand side the run solved it with, by today's block-Jacobi PCG (linear_solver = "krylov",
 // one rank) and by BoomerAMG-preconditioned CG (the "amg" solver's settings) on every rank of
-// MPI_COMM_WORLD, rows split by nodes. Prints per solver and round: setup and solve seconds (wall,
+// MPI_COMM_WORLD, rows split by METIS node parts. Prints per solver and round: setup and solve seconds (wall,
 // the slowest rank), CG iterations, the true relative residual |b - S x| / |b|, and the resident
 // memory of the largest rank before and after the setup; then the medians.
 //   mpirun -n 2 build/isochor_bench_amg S.bin [rounds=3] [tol=1e-12] [solvers=pcg,ic,amg]
@@ -15,11 +15,14 @@
 #include <exception>
 #include <fstream>
 #include <string>
+#include <sys/resource.h>
 #include <unistd.h>
 #include <vector>
 
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCore>
+
+#include <metis.h>
 
 #include "isochor/sparse_factor.hpp"
 
@@ -72,6 +75,60 @@ class IcPcg : public SymmetricSolver {
   long its_ = 0;
 };
 
+// On more than one rank: the nodes split into `parts` by METIS (k-way, on the node graph of S)
+// and renumbered part by part, so each rank's rows are a contiguous range of well-connected nodes
+// (the distributed design of docs/scale.md). Returns the first row of each part (parts + 1).
+std::vector<Index> partition(CapturedSystem& s, int parts) {
+  const Index nodes = s.pattern.n / 3;
+  std::vector<idx_t> xadj{0}, adjncy;
+  for (Index g = 0; g < nodes; ++g) {
+    std::vector<idx_t> nb;
+    for (Index k = s.pattern.col_ptr[3 * g]; k < s.pattern.col_ptr[3 * g + 1]; ++k)
+      if (s.pattern.row_ind[k] / 3 != g && (nb.empty() || nb.back() != s.pattern.row_ind[k] / 3))
+        nb.push_back(static_cast<idx_t>(s.pattern.row_ind[k] / 3));
+    std::sort(nb.begin(), nb.end());
+    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+    adjncy.insert(adjncy.end(), nb.begin(), nb.end());
+    xadj.push_back(static_cast<idx_t>(adjncy.size()));
+  }
+  idx_t nv = static_cast<idx_t>(nodes), ncon = 1, np = parts, cut = 0;
+  std::vector<idx_t> part(static_cast<std::size_t>(nodes), 0);
+  idx_t options[METIS_NOPTIONS];
+  METIS_SetDefaultOptions(options);
+  options[METIS_OPTION_SEED] = 1;
+  if (METIS_PartGraphKway(&nv, &ncon, xadj.data(), adjncy.data(), nullptr, nullptr, nullptr, &np, nullptr, nullptr,
+                          options, &cut, part.data()) != METIS_OK)
+    throw std::runtime_error("METIS_PartGraphKway failed");
+  // New node numbers, part by part (stable within a part).
+  std::vector<Index> first(static_cast<std::size_t>(parts) + 1, 0), perm(static_cast<std::size_t>(nodes));
+  for (Index g = 0; g < nodes; ++g) first[static_cast<std::size_t>(part[g]) + 1] += 3;
+  for (int r = 0; r < parts; ++r) first[r + 1] += first[r];
+  std::vector<Index> next(first.begin(), first.end() - 1);
+  for (Index g = 0; g < nodes; ++g) perm[g] = next[static_cast<std::size_t>(part[g])] / 3, next[part[g]] += 3;
+  auto dof = [&](Index i) { return 3 * perm[i / 3] + i % 3; };
+  // Columns move with their nodes; rows are renamed (hypre's IJ rows need no order).
+  const SparsePattern& p = s.pattern;
+  SparsePattern q;
+  q.n = p.n;
+  q.col_ptr.assign(static_cast<std::size_t>(p.n) + 1, 0);
+  for (Index c = 0; c < p.n; ++c) q.col_ptr[dof(c) + 1] = p.col_ptr[c + 1] - p.col_ptr[c];
+  for (Index c = 0; c < p.n; ++c) q.col_ptr[c + 1] += q.col_ptr[c];
+  q.row_ind.resize(p.row_ind.size());
+  std::vector<double> values(s.values.size()), b(s.b.size());
+  for (Index c = 0; c < p.n; ++c) {
+    Index out = q.col_ptr[dof(c)];
+    for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k, ++out) q.row_ind[out] = dof(p.row_ind[k]), values[out] = s.values[k];
+    b[dof(c)] = s.b[c];
+  }
+  s.pattern = std::move(q), s.values = std::move(values), s.b = std::move(b);
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank == 0)
+    std::printf("METIS: %d parts, %lld edges cut of %lld\n", parts, static_cast<long long>(cut),
+              static_cast<long long>(adjncy.size() / 2));
+  return first;
+}
+
 struct Round {
   double setup, solve, its, residual, mem_before, mem_after;
 };
@@ -89,19 +146,23 @@ int main(int argc, char** argv) {
     const int rounds = argc > 2 ? std::atoi(argv[2]) : 3;
     const double tol = argc > 3 ? std::atof(argv[3]) : 1e-12;
     const std::string solvers = argc > 4 ? argv[4] : "pcg,amg";
-    const CapturedSystem s = read_system(argv[1]);
-    const Index n = s.pattern.n, nodes = n / 3;
-    const Index lo = 3 * (nodes * rank / size), hi = rank + 1 == size ? n : 3 * (nodes * (rank + 1) / size);
+    CapturedSystem s = read_system(argv[1]);
+    const Index n = s.pattern.n;
+    // Every rank reads the file and computes the same partition (METIS is deterministic).
+    std::vector<Index> first = {0, n};
+    if (size > 1) {
+      if (n % 3) throw std::runtime_error("S is not of 3-dof nodes: cannot split it by nodes");
+      first = partition(s, size);
+    }
+    const Index lo = first[static_cast<std::size_t>(rank)], hi = first[static_cast<std::size_t>(rank) + 1];
     const double read_mb = max_over_ranks(resident_mb());
     if (rank == 0)
       std::printf("S: n = %lld, nnz = %lld, c_j = %.6g, t = %.6g s; %d rank(s), tol %.1e; resident after reading %.0f MB (largest rank)\n",
                   static_cast<long long>(n), static_cast<long long>(s.pattern.nnz()), s.cj, s.t, size, tol,
                   read_mb);
     std::vector<int> counts(size), displs(size);
-    for (int r = 0; r < size; ++r) {
-      const Index a = 3 * (nodes * r / size), b = r + 1 == size ? n : 3 * (nodes * (r + 1) / size);
-      counts[r] = static_cast<int>(b - a), displs[r] = static_cast<int>(a);
-    }
+    for (int r = 0; r < size; ++r)
+      counts[r] = static_cast<int>(first[r + 1] - first[r]), displs[r] = static_cast<int>(first[r]);
     for (const std::string kind : {"pcg", "ic", "amg"}) {
       if (solvers.find(kind) == std::string::npos) continue;
       if (kind != "amg" && size > 1) {
@@ -152,6 +213,10 @@ int main(int argc, char** argv) {
                     kind.c_str(), size, med(&Round::setup), med(&Round::solve), med(&Round::setup) + med(&Round::solve),
                     med(&Round::its), all.front().mem_after - all.front().mem_before);
     }
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    const double peak = max_over_ranks(static_cast<double>(ru.ru_maxrss) / 1024.0);
+    if (rank == 0) std::printf("peak resident memory: %.0f MB (largest rank)\n", peak);
   } catch (const std::exception& e) {
     if (rank == 0) std::fprintf(stderr, "isochor_bench_amg: %s\n", e.what());
     code = 1;
