@@ -6,6 +6,7 @@
 
 #include "isochor/backward_euler.hpp"
 #include "isochor/error.hpp"
+#include "isochor/integrator_registry.hpp"
 #include "isochor/mesh_system.hpp"
 #include "isochor/output_reader.hpp"
 #include "isochor/scene.hpp"
@@ -107,6 +108,7 @@ select = { kind = "set", name = "zmax" }
 )";
   const std::vector<std::string> common{"initial.velocity=[0.0, 0.0, 0.0]", "frames.duration=0.2", "material.E=4640.0"};
   std::vector<std::string> klu = common, red = common;
+  klu.push_back("integrator.linear_solver=klu");
   red.push_back("integrator.linear_solver=reduced");
   Scene a = scene(base, klu), b = scene(base, red);
   RunFile fa(run_scene(a, (dir / "klu.h5").string(), false).output);
@@ -122,6 +124,29 @@ select = { kind = "set", name = "zmax" }
   // Both are solutions to rtol 1e-8 / atol 1e-10: they agree far below the motion.
   EXPECT_LT(worst, 1e-6 * sag);
   for (const auto& v : fb.volumes()) EXPECT_NEAR(v[0] / 0.001, 1.0, 1e-10);
+}
+
+// linear_solver = "auto" on IDA: block-Jacobi CG on S (krylov: CG iterations, no factor) for a
+// mesh with one zone; KLU on the whole matrix for more than 256 constraint rows (one patch zone
+// per 1-ring of a 14^3-cell box), which the reduced solvers would carry as dense columns.
+TEST(Run, AutoLinearSolverIsKrylovForAFewZonesAndKluForMany) {
+  const auto dir = test::temp_dir();
+  Scene one = scene(kBox, {"frames.duration=0.02"});
+  RunFile f(run_scene(one, (dir / "zone.h5").string(), false).output);
+  const auto totals = f.stat_totals();
+  std::printf("one zone: CG iterations %.0f, factor entries %.0f\n", totals.at("linear_iterations"), totals.at("factor_nnz"));
+  EXPECT_GT(totals.at("linear_iterations"), 0.0);
+  EXPECT_EQ(totals.at("factor_nnz"), 0.0);
+
+  Scene many = scene(kBox, {"mesh.cells=14", "zones.patches=1", "zones.global=false"});
+  MeshSystem sys(many);
+  std::printf("patches: %d constraint rows\n", sys.num_constraints());
+  EXPECT_GT(sys.num_constraints(), 256);
+  EXPECT_EQ(automatic_ida_solver(sys), LinearSolverKind::klu);
+  Scene few = scene(kBox, {"mesh.cells=6", "zones.patches=1", "zones.global=false"});
+  MeshSystem sys_few(few);
+  EXPECT_LE(sys_few.num_constraints(), 256);
+  EXPECT_EQ(automatic_ida_solver(sys_few), LinearSolverKind::krylov);
 }
 
 TEST(Run, BackwardEulerKeepsTheVolumeAndDissipates) {

@@ -45,6 +45,9 @@ const char* to_string(IntegratorKind k);
 struct IntegratorSpec {
   IntegratorKind kind = IntegratorKind::ida;
   IdaOptions ida;
+  // IDA's linear_solver = "auto": chosen when the system is built (make_ida: krylov for meshes of
+  // 3-dof nodes with at most 256 constraint rows, else klu: automatic_ida_solver).
+  bool ida_linear_solver_auto = false;
   StaticOptions statics;
   BackwardEulerOptions backward_euler;  // also the semi-implicit step
   XpbdOptions xpbd;

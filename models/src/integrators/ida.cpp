@@ -20,12 +20,32 @@ void parse_ida(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
   const std::string ordering = in.string("ordering", "metis", {"metis", "colamd", "amd"});
   o.ordering = ordering == "colamd" ? KluOrdering::colamd : ordering == "amd" ? KluOrdering::amd : KluOrdering::metis;
   o.linear_solver = parse_linear_solver(in, LinearSolverKind::klu);
+  spec.ida_linear_solver_auto = in.string("linear_solver", "auto", {"auto", "klu", "reduced", "krylov", "amg"}) == "auto";
   o.jacobian_age = in.integer("jacobian_age", 0, 0, 1000000000L);
   o.stop_at_frames = in.boolean("stop_at_frames", false);
 }
 
+// linear_solver = "auto" for IDA. Measured (bench/linear_solvers.sh, the ball through its impact,
+// docs/results/linear_solvers.md): krylov is faster than klu at every size tried, 2.5 times at
+// 320 tets, 5 at 966, 13 at 2K and 48 at 4.5K, and faster than reduced from 966 tets up
+// (docs/results/scaling.md). The reduced solvers carry each constraint row as dense columns
+// (7 n x m matrices) and solve with S 2m times per setup, so their cost grows with the rows:
+// with one patch zone per 1-ring (zones.patches = 1, a free box, 20 ms) krylov still took 1.0 s
+// against klu's 2.5 s at 65 zones (1.7K tets) and 6.2 s against 29.4 s at 125 zones (6K tets), a
+// cost of ~0.05 s per zone there. Above 256 rows (1-ring zones: one per node) KLU on the whole
+// matrix, whose cost does not grow with them.
+constexpr int kAutoKrylovMaxConstraints = 256;
+
+LinearSolverKind automatic_ida_solver(const ConstrainedSystem& system) {
+  return system.dofs_per_group() == 3 && system.num_constraints() <= kAutoKrylovMaxConstraints
+             ? LinearSolverKind::krylov
+             : LinearSolverKind::klu;
+}
+
 std::unique_ptr<Integrator> make_ida(const Scene& scene, SceneSystem& system) {
-  return std::make_unique<IdaIntegrator>(system, scene.integrator.ida);
+  IdaOptions o = scene.integrator.ida;
+  if (scene.integrator.ida_linear_solver_auto) o.linear_solver = automatic_ida_solver(system);
+  return std::make_unique<IdaIntegrator>(system, o);
 }
 
 }  // namespace isochor
