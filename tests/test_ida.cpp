@@ -7,6 +7,10 @@
 #include "isochor/backward_euler.hpp"
 #include "isochor/ida_integrator.hpp"
 #include "isochor/initial_state.hpp"
+#include "sundials_util.hpp"
+
+#include <nvector/nvector_serial.h>
+#include <random>
 
 #include "test_util.hpp"
 
@@ -288,4 +292,34 @@ TEST(Ida, ARunThatMakesNoProgressStopsAndSaysSo) {
     EXPECT_LE(e.time, 1000 * 1e-9 * (1 + 1e-9));  // 1,000 steps of at most 1e-9 s
     EXPECT_EQ(frames, 1);
   }
+}
+
+// IDA's error test (masked) and Newton test (plain) norms of new_serial_vector, summed in four
+// parts, against the definition sqrt(sum_i (x_i w_i)^2 [id_i > 0] / N) summed in long double:
+// every length up to 9 (each remainder of the four-way loop) and a long one.
+TEST(SerialVector, WeightedRmsNormsAreTheDefinition) {
+  SUNContext ctx = nullptr;
+  ASSERT_EQ(SUNContext_Create(nullptr, &ctx), 0);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (sunindextype n : {1, 2, 3, 4, 5, 6, 7, 8, 9, 1001}) {
+    N_Vector x = new_serial_vector(n, ctx), w = new_serial_vector(n, ctx), id = new_serial_vector(n, ctx);
+    N_Vector c = N_VClone(x);  // clones carry the same operations
+    long double plain = 0, masked = 0;
+    for (sunindextype i = 0; i < n; ++i) {
+      NV_Ith_S(x, i) = 1e3 * u(rng);
+      NV_Ith_S(w, i) = 1.0 + u(rng);
+      NV_Ith_S(id, i) = (i % 3 == 1) ? 0.0 : 1.0;  // algebraic components out of the error test
+      NV_Ith_S(c, i) = NV_Ith_S(x, i);
+      const long double t = static_cast<long double>(NV_Ith_S(x, i)) * NV_Ith_S(w, i);
+      plain += t * t;
+      if (NV_Ith_S(id, i) > 0) masked += t * t;
+    }
+    const double ref_plain = std::sqrt(static_cast<double>(plain / n)), ref_masked = std::sqrt(static_cast<double>(masked / n));
+    EXPECT_NEAR(N_VWrmsNorm(x, w), ref_plain, 1e-14 * ref_plain) << n;
+    EXPECT_NEAR(N_VWrmsNorm(c, w), ref_plain, 1e-14 * ref_plain) << n;
+    EXPECT_NEAR(N_VWrmsNormMask(c, w, id), ref_masked, 1e-14 * ref_plain) << n;
+    for (N_Vector v : {x, w, id, c}) N_VDestroy(v);
+  }
+  SUNContext_Free(&ctx);
 }

@@ -27,6 +27,12 @@ struct ReducedSolver::Impl {
   std::unique_ptr<SymmetricSolver> S;
   std::vector<double> Sx;  // values of S in the system's pattern
   std::vector<double> Vx, Qx, Ax;  // the v-v (V), q-q (c I + H_mu) and v-q (A) blocks, contiguous in that pattern
+  // V and c I + H_mu without their zero entries, for the two products of every solve: undamped,
+  // V = c M is diagonal, and H_mu lives on the constrained nodes only (a global zone: the surface).
+  struct Compact {
+    std::vector<Index> ptr, idx;
+    std::vector<double> val;
+  } Vc, Qc, Ac;
   Eigen::MatrixXd Gt, W, Z1, Z2, Z3, Bt, BcG;  // n x m: G^T, A G^T, S^-1 G^T, S^-1 V G^T, S^-1 A G^T, B^T, B^T + c G^T
   Eigen::PartialPivLU<Eigen::MatrixXd> small;
   const double* vals = nullptr;
@@ -61,14 +67,28 @@ struct ReducedSolver::Impl {
     BcG.setZero(n, m);
   }
 
-  // out = X x over the K pattern, X a symmetric block of the Jacobian copied contiguously (v-v: V, v-q: A,
-  // q-q: c I + H_mu): row i of X is its column i, so each out[i] is a gather (parallel, and summed
-  // in the same order for any thread count).
-  void times(const std::vector<double>& X, const double* x, double* out, bool add = false) const {
+  // X's nonzero entries, column by column in the pattern's order (zeros left out change no sum).
+  void compact(const std::vector<double>& X, Compact& c) const {
     const SparsePattern& K = form.system().pattern();
-    const Index* cp = K.col_ptr.data();
-    const Index* ri = K.row_ind.data();
-    const double* xv = X.data();
+    c.ptr.assign(static_cast<std::size_t>(n) + 1, 0);
+    c.idx.clear();
+    c.val.clear();
+    for (Index i = 0; i < n; ++i) {
+      for (Index k = K.col_ptr[i]; k < K.col_ptr[i + 1]; ++k)
+        if (X[k] != 0.0) {
+          c.idx.push_back(K.row_ind[k]);
+          c.val.push_back(X[k]);
+        }
+      c.ptr[i + 1] = static_cast<Index>(c.idx.size());
+    }
+  }
+  // out = X x, X a symmetric block of the Jacobian (v-v: V, v-q: A, q-q: c I + H_mu): row i of X
+  // is its column i, so each out[i] is a gather (parallel, and summed in the same order for any
+  // thread count).
+  void times(const Compact& X, const double* x, double* out, bool add = false) const {
+    const Index* cp = X.ptr.data();
+    const Index* ri = X.idx.data();
+    const double* xv = X.val.data();
 #pragma omp parallel for schedule(static)
     for (Index i = 0; i < n; ++i) {
       double sum = 0;
@@ -111,6 +131,9 @@ bool ReducedSolver::setup(double cj, const double* vals) {
     s.Ax[k] = vals[f.vq[k]];
     s.Sx[k] = s.Ax[k] + cj * s.Vx[k];
   }
+  s.compact(s.Vx, s.Vc);
+  s.compact(s.Qx, s.Qc);
+  if (m) s.compact(s.Ax, s.Ac);
   s.use_direct = false;
   s.ok = true;
   if (!s.S->factor(s.Sx.data()) && !s.switch_to_direct()) return false;
@@ -124,7 +147,7 @@ bool ReducedSolver::setup(double cj, const double* vals) {
       s.Bt(rows[j][k], j) = vals[f.gvq[j][k]];
     }
   for (Index j = 0; j < m; ++j) {
-    s.times(s.Ax, s.Gt.col(j).data(), s.W.col(j).data());
+    s.times(s.Ac, s.Gt.col(j).data(), s.W.col(j).data());
     s.solve_S(s.Gt.col(j).data(), s.Z1.col(j).data());
     s.solve_S(s.W.col(j).data(), s.Z3.col(j).data());
   }
@@ -159,7 +182,7 @@ void ReducedSolver::solve_once(const double* b, double* x) {
   Impl& s = *impl_;
   const Index n = s.n, m = s.m;
   Eigen::Map<const VectorXd> r1(b, n), r2(b + n, n), r3(b + 2 * n, m), r4(b + 2 * n + m, m);
-  s.times(s.Vx, r1.data(), s.tmp.data());
+  s.times(s.Vc, r1.data(), s.tmp.data());
   s.b1 = r2 + s.tmp;
   if (!s.capture_path.empty()) {  // called from SUNDIALS: report, do not throw
     try {
@@ -194,7 +217,7 @@ void ReducedSolver::solve_once(const double* b, double* x) {
     s.tn1.noalias() = s.Gt * dm;
     dv += s.tn1;
   }
-  s.times(s.Qx, s.dq.data(), dv.data(), true);
+  s.times(s.Qc, s.dq.data(), dv.data(), true);
   Eigen::Map<VectorXd>(x, n) = s.dq;
   if (m) {
     Eigen::Map<VectorXd>(x + 2 * n, m) = dl;

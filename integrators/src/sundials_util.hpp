@@ -27,6 +27,8 @@ T* check_ptr(T* p, const char* function) {
 // N_VNew_Serial and the rest of its API, and a reference to those alone may bind to that copy
 // (the sanitizer build did, and crashed in N_VGetArrayPointer); this reference pulls SUNDIALS'
 // own object out of the static library, and its definitions then win (NOTES-dependencies §0).
+// Its weighted RMS norms (plain and masked, IDA's error and Newton tests) are isochor's own, with
+// four partial sums: the same norms up to the order of the additions, faster (sundials_util.cpp).
 N_Vector new_serial_vector(sunindextype n, SUNContext ctx);
 
 // Runs f when it goes out of scope: SUNDIALS' objects released on success and on a throw alike.
