@@ -163,6 +163,79 @@ TEST(Ida, InterpolatedFramesCostNoStepsAndKeepTheConstraints) {
   EXPECT_LT(diff, 100 * tol);
 }
 
+// The same pendulum with its length constraint written twice: two linearly dependent
+// constraints, as zones.global over patches that partition the mesh. Their Gram matrix
+// G M^-1 G^T and the reduced solver's 2m x 2m system are singular; the projections and the
+// multipliers take the least-squares solution with the smallest norm. The motion is the
+// pendulum's: the same bound against the exact solution as a single constraint.
+class TwicePendulum : public Pendulum {
+ public:
+  int num_constraints() const override { return 2; }
+  const std::vector<std::vector<Index>>& constraint_rows() const override { return rows2_; }
+  void constraint(double t, const VectorXd& q, VectorXd& g) override {
+    Pendulum::constraint(t, q, g);
+    g.conservativeResize(2);
+    g[1] = g[0];
+  }
+  void constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* gt) override {
+    Pendulum::constraint_jacobian(t, q, G, gt);
+    G[1] = G[0];
+    if (gt) gt->setZero(2);
+  }
+  void add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) override {
+    Pendulum::add_constraint_hessian(t, q, VectorXd::Constant(1, w[0] + w[1]), scale, values);
+  }
+  void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v, std::vector<std::vector<double>>& rows) override {
+    Pendulum::constraint_velocity_jacobian(t, q, v, rows);
+    rows[1] = rows[0];
+  }
+
+ private:
+  std::vector<std::vector<Index>> rows2_{{0, 1}, {0, 1}};
+};
+
+TEST(Ida, DependentConstraintsMoveLikeOne) {
+  const double tol = 1e-6;
+  const auto times = test::frame_times(2.0, 0.02);
+  const auto ref = reference_angles(times);
+  TwicePendulum p;
+  IdaOptions o;
+  o.rtol = o.atol_q = o.atol_v = tol;
+  o.linear_solver = LinearSolverKind::reduced;
+  IdaIntegrator ida(p, o);
+  double err = 0, worst_g = 0, worst_gv = 0, worst_split = 0;
+  ida.run(times, [&](int k, double, const VectorXd& q, const VectorXd& v, const VectorXd& lambda, const RunStats::FrameSample&) {
+    const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
+    err = std::max(err, (q - exact).norm());
+    worst_g = std::max(worst_g, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
+    worst_gv = std::max(worst_gv, std::abs(q.dot(v)));
+    worst_split = std::max(worst_split, std::abs(lambda[0] - lambda[1]) / (std::abs(lambda[0]) + std::abs(lambda[1]) + 1e-300));
+  });
+  std::printf("twice-constrained pendulum: error %.2e, max |g| %.2e, |G v| %.2e, multipliers split %.2e\n", err, worst_g,
+              worst_gv, worst_split);
+  EXPECT_LT(err, 100 * tol);
+  EXPECT_LT(worst_g, 1e-12);
+  EXPECT_LT(worst_gv, 1e-12);
+  // The smallest-norm split of one force between two identical rows is half each.
+  EXPECT_LT(worst_split, 1e-6);
+}
+
+// KLU factors the whole GGL matrix, singular with dependent constraints: the run stops before
+// its first step and says why, instead of IDA's corrector failing at t = 0.
+TEST(Ida, DependentConstraintsOnKluStopWithTheReason) {
+  TwicePendulum p;
+  IdaOptions o;
+  o.linear_solver = LinearSolverKind::klu;
+  IdaIntegrator ida(p, o);
+  try {
+    ida.run({0.0, 0.1}, [](int, double, const VectorXd&, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {});
+    FAIL() << "expected the run to stop";
+  } catch (const IntegrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("linearly dependent"), std::string::npos) << e.what();
+    EXPECT_EQ(e.time, 0.0);
+  }
+}
+
 // A declared breakpoint ends a step exactly there: no force is evaluated beyond it before one is
 // evaluated at it. Undeclared, IDA steps across (and the first call beyond comes from inside a step).
 TEST(Ida, StepsEndAtTheSystemsBreakpoints) {

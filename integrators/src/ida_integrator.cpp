@@ -224,6 +224,10 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   const double t0 = times.front();
   VectorXd q0, v0, a0, l0;
   consistent_initial_state(s.sys, t0, q0, v0, a0, l0);
+  if (!s.reduced && constraints_dependent(s.sys, t0, q0))
+    throw IntegrationError(t0, "the constraints are linearly dependent (e.g. zones.global together with zones that partition the "
+                               "mesh), which makes the matrix that KLU factors singular: remove the redundant zones, or set "
+                               "integrator.linear_solver = \"reduced\" or \"krylov\", which take the multipliers of smallest norm");
 
   // Everything SUNDIALS allocates is released by this guard, on success or on a throw.
   N_Vector yy = nullptr, yp = nullptr, id = nullptr, atol = nullptr, yout = nullptr, ele = nullptr, ewt = nullptr;

@@ -1,5 +1,6 @@
 #include "isochor/initial_state.hpp"
 
+#include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
@@ -35,7 +36,51 @@ Eigen::SparseMatrix<double> sparse_rows(const ConstrainedSystem& sys, const std:
   S.setFromTriplets(tr.begin(), tr.end());
   return S;
 }
+
+// The Gram matrix A = G M^-1 G^T of the constraint rows, for the projections and the initial
+// multipliers. Linearly dependent constraints (zones.global over patches that partition the mesh)
+// make A singular: LDL^T's pivot there is rounding, and its solve would put a huge multiplier
+// along the dependency. A pivot below 1e-12 of the largest one switches to the least-squares
+// solution with the smallest norm (a complete orthogonal decomposition of the dense A): the
+// dependent constraints are consistent, so the state is the same; only the split of their
+// multipliers is chosen. Above kDenseLimit constraints that would be too slow, and the run stops
+// and says why.
+class GramSolver {
+ public:
+  static constexpr Index kDenseLimit = 2000;
+  explicit GramSolver(const Eigen::SparseMatrix<double>& S, const VectorXd& Minv) {
+    const Eigen::SparseMatrix<double> A(S * Minv.asDiagonal() * S.transpose());
+    ldlt_.compute(A);
+    const VectorXd d = ldlt_.vectorD().cwiseAbs();
+    if (ldlt_.info() == Eigen::Success && d.size() && d.minCoeff() > 1e-12 * d.maxCoeff()) return;
+    if (A.rows() > kDenseLimit)
+      throw std::runtime_error(std::to_string(A.rows()) + " constraints that are linearly dependent (e.g. zones.global together with zones that partition the mesh): remove the redundant zones");
+    dense_ = true;
+    cod_.setThreshold(1e-12);
+    cod_.compute(Eigen::MatrixXd(A));
+  }
+  VectorXd solve(const VectorXd& b) const { return dense_ ? VectorXd(cod_.solve(b)) : VectorXd(ldlt_.solve(b)); }
+  bool dependent() const { return dense_; }
+
+ private:
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod_;
+  bool dense_ = false;
+};
 }  // namespace
+
+bool constraints_dependent(ConstrainedSystem& sys, double t, const VectorXd& q) {
+  const Index m = sys.num_constraints();
+  if (m == 0) return false;
+  std::vector<std::vector<double>> G(m);
+  for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
+  sys.constraint_jacobian(t, q, G, nullptr);
+  try {
+    return GramSolver(sparse_rows(sys, G), sys.mass().cwiseInverse()).dependent();
+  } catch (const std::runtime_error&) {  // too many to decompose densely: dependent all the same
+    return true;
+  }
+}
 
 double constraint_error(const ConstrainedSystem& sys, const VectorXd& g) {
   double worst = 0;
@@ -61,14 +106,12 @@ void project_state(ConstrainedSystem& sys, double t, VectorXd& q, VectorXd& v) {
     last = err;
     sys.constraint_jacobian(t, q, G, nullptr);
     const Eigen::SparseMatrix<double> S = sparse_rows(sys, G);
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Eigen::SparseMatrix<double>(S * Minv.asDiagonal() * S.transpose()));
-    q -= Minv.asDiagonal() * (S.transpose() * ldlt.solve(g));
+    q -= Minv.asDiagonal() * (S.transpose() * GramSolver(S, Minv).solve(g));
   }
   // 2. Velocities: the nearest v (mass norm) with G v + dg/dt = 0, one linear solve.
   sys.constraint_jacobian(t, q, G, &gt);
   const Eigen::SparseMatrix<double> S = sparse_rows(sys, G);
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Eigen::SparseMatrix<double>(S * Minv.asDiagonal() * S.transpose()));
-  v -= Minv.asDiagonal() * (S.transpose() * ldlt.solve(VectorXd(S * v + gt)));
+  v -= Minv.asDiagonal() * (S.transpose() * GramSolver(S, Minv).solve(VectorXd(S * v + gt)));
 }
 
 void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, VectorXd& v, VectorXd& a, VectorXd& lambda) {
@@ -82,7 +125,7 @@ void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, Ve
     for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
     sys.constraint_jacobian(t0, q, G, nullptr);
     const Eigen::SparseMatrix<double> S = sparse_rows(sys, G);
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Eigen::SparseMatrix<double>(S * Minv.asDiagonal() * S.transpose()));
+    const GramSolver gram(S, Minv);
     // 3. Accelerations: M a + G^T lambda = f, G a = -w, where w = d/dt (G v + g_t) at a = 0,
     //    taken by a central difference along x(t +- h) = x +- h v (drivers exact).
     sys.force(t0, q, v, f);
@@ -97,7 +140,7 @@ void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, Ve
       return out;
     };
     const VectorXd w = (velocity_constraint(t0 + h, q + h * v) - velocity_constraint(t0 - h, q - h * v)) / (2 * h);
-    lambda = ldlt.solve(VectorXd(S * Minv.cwiseProduct(f) + w));
+    lambda = gram.solve(VectorXd(S * Minv.cwiseProduct(f) + w));
     a = Minv.cwiseProduct(f - S.transpose() * lambda);
     sys.stored_multipliers(lambda);  // a resumed run: the multipliers it had there
   } else {

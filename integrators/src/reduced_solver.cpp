@@ -35,6 +35,14 @@ struct ReducedSolver::Impl {
   } Vc, Qc, Ac;
   Eigen::MatrixXd Gt, W, Z1, Z2, Z3, Bt, BcG;  // n x m: G^T, A G^T, S^-1 G^T, S^-1 V G^T, S^-1 A G^T, B^T, B^T + c G^T
   Eigen::PartialPivLU<Eigen::MatrixXd> small;
+  // Zones whose constraints are linearly dependent (zones.global over patches that partition the
+  // mesh: the global volume is the patches' sum) make the 2m x 2m system singular; it is then
+  // solved in the least-squares sense with the smallest multipliers (the constraints themselves
+  // are consistent, so Newton's update is the same; only the split of the pressure among the
+  // dependent zones is chosen).
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> rank_deficient;
+  Eigen::VectorXd row_scale, col_scale;
+  bool singular = false;
   const double* vals = nullptr;
   double cj = 0;
   // Work vectors, sized once: a solve allocates nothing. tn1, tn2, tm1, tm2 hold products, each
@@ -160,6 +168,18 @@ bool ReducedSolver::setup(double cj, const double* vals) {
   C.bottomLeftCorner(m, m) = s.BcG.transpose() * s.Z1;
   C.bottomRightCorner(m, m) = (s.Bt.transpose() * s.Gt - s.Bt.transpose() * s.Z3) / cj - s.Gt.transpose() * s.Z3;
   s.small.compute(C);
+  // rcond below 1e-17: LU's solution would be rounding. Then C is equilibrated (rows, then
+  // columns, to unit largest entries: its blocks differ by powers of c_j) and decomposed with
+  // rank revealed at 1e-12.
+  s.singular = !(s.small.rcond() > 1e-17);
+  if (s.singular) {
+    s.row_scale = C.cwiseAbs().rowwise().maxCoeff().cwiseMax(1e-300).cwiseInverse();
+    C = s.row_scale.asDiagonal() * C;
+    s.col_scale = C.cwiseAbs().colwise().maxCoeff().transpose().cwiseMax(1e-300).cwiseInverse();
+    C = C * s.col_scale.asDiagonal();
+    s.rank_deficient.setThreshold(1e-12);
+    s.rank_deficient.compute(C);
+  }
   return s.ok;
 }
 
@@ -203,7 +223,10 @@ void ReducedSolver::solve_once(const double* b, double* x) {
     s.tm1.noalias() = s.BcG.transpose() * s.y;
     s.tm2.noalias() = s.Gt.transpose() * r1;
     s.rhs.tail(m) = s.tm1 - r4 - s.tm2;
-    s.z = s.small.solve(s.rhs);
+    if (s.singular)
+      s.z = s.col_scale.cwiseProduct(s.rank_deficient.solve(s.row_scale.cwiseProduct(s.rhs)));
+    else
+      s.z = s.small.solve(s.rhs);
     s.tn1.noalias() = s.Z1 * dl;
     s.tn2.noalias() = s.Z2 * dm;
     s.dq = s.y - s.tn1 - s.tn2;

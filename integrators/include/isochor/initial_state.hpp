@@ -16,6 +16,12 @@ void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, Ve
 // G v + dg/dt = 0, both the nearest points in the mass norm. Used on IDA's interpolated frames.
 void project_state(ConstrainedSystem& sys, double t, VectorXd& q, VectorXd& v);
 
+// Linearly dependent constraints (e.g. zones.global over zones that partition the mesh) make
+// G M^-1 G^T singular; the projections and the initial multipliers then take its least-squares
+// solution of smallest norm. True when the rows of G at (t, q) are dependent (a pivot of
+// G M^-1 G^T below 1e-12 of the largest).
+bool constraints_dependent(ConstrainedSystem& sys, double t, const VectorXd& q);
+
 // max_j |g_j| / constraint_scale(j).
 double constraint_error(const ConstrainedSystem& sys, const VectorXd& g);
 
