@@ -32,7 +32,7 @@ struct ReducedSolver::Impl {
   struct Compact {
     std::vector<Index> ptr, idx;
     std::vector<double> val;
-  } Vc, Qc, Ac;
+  } Vc, Qc;
   Eigen::MatrixXd Gt, W, Z1, Z2, Z3, Bt, BcG;  // n x m: G^T, A G^T, S^-1 G^T, S^-1 V G^T, S^-1 A G^T, B^T, B^T + c G^T
   Eigen::PartialPivLU<Eigen::MatrixXd> small;
   // Zones whose constraints are linearly dependent (zones.global over patches that partition the
@@ -90,19 +90,19 @@ struct ReducedSolver::Impl {
       c.ptr[i + 1] = static_cast<Index>(c.idx.size());
     }
   }
-  // out = X x, X a symmetric block of the Jacobian (v-v: V, v-q: A, q-q: c I + H_mu): row i of X
-  // is its column i, so each out[i] is a gather (parallel, and summed in the same order for any
-  // thread count).
-  void times(const Compact& X, const double* x, double* out, bool add = false) const {
-    const Index* cp = X.ptr.data();
-    const Index* ri = X.idx.data();
-    const double* xv = X.val.data();
+  // out = X x, X a symmetric block of the Jacobian (v-v: V, v-q: A, q-q: c I + H_mu) by columns
+  // (cp, ri, xv): row i of X is its column i, so each out[i] is a gather (parallel, and summed in
+  // the same order for any thread count).
+  void times(const Index* cp, const Index* ri, const double* xv, const double* x, double* out, bool add = false) const {
 #pragma omp parallel for schedule(static)
     for (Index i = 0; i < n; ++i) {
       double sum = 0;
       for (Index k = cp[i]; k < cp[i + 1]; ++k) sum += xv[k] * x[ri[k]];
       out[i] = add ? out[i] + sum : sum;
     }
+  }
+  void times(const Compact& X, const double* x, double* out, bool add = false) const {
+    times(X.ptr.data(), X.idx.data(), X.val.data(), x, out, add);
   }
   void solve_S(const double* b, double* x) {
     if (!use_direct && S->solve(b, x)) return;
@@ -141,7 +141,6 @@ bool ReducedSolver::setup(double cj, const double* vals) {
   }
   s.compact(s.Vx, s.Vc);
   s.compact(s.Qx, s.Qc);
-  if (m) s.compact(s.Ax, s.Ac);
   s.use_direct = false;
   s.ok = true;
   if (!s.S->factor(s.Sx.data()) && !s.switch_to_direct()) return false;
@@ -155,7 +154,8 @@ bool ReducedSolver::setup(double cj, const double* vals) {
       s.Bt(rows[j][k], j) = vals[f.gvq[j][k]];
     }
   for (Index j = 0; j < m; ++j) {
-    s.times(s.Ac, s.Gt.col(j).data(), s.W.col(j).data());
+    s.times(f.system().pattern().col_ptr.data(), f.system().pattern().row_ind.data(), s.Ax.data(), s.Gt.col(j).data(),
+            s.W.col(j).data());  // A is full: no compact copy for m products
     s.solve_S(s.Gt.col(j).data(), s.Z1.col(j).data());
     s.solve_S(s.W.col(j).data(), s.Z3.col(j).data());
   }
