@@ -148,19 +148,6 @@ TEST(Penalty, ClosedFormsOfTheCnhPaper) {
     }
 }
 
-// alpha~ = J^(-1/3) above epsilon, computed without libm's cbrt (material.cpp): against
-// std::cbrt(1 / J) over twenty decades, to a few ulp, and exactly 1 at rest.
-TEST(Penalty, AlphaTildeIsTheInverseCubeRoot) {
-  EXPECT_EQ(alpha_tilde(1.0, 1e-3).a, 1.0);
-  double worst = 0;
-  for (int k = 0; k <= 4000; ++k) {
-    const double J = std::pow(10.0, -10.0 + 20.0 * k / 4000.0) * (1.0 + 1e-3 * (k % 7));
-    const double ref = std::cbrt(1.0 / J);
-    worst = std::max(worst, std::abs(alpha_tilde(J, 1e-12).a - ref) / ref);
-  }
-  EXPECT_LT(worst, 1e-15);
-}
-
 TEST(Penalty, AlphaTildeIsC2AtEpsilon) {
   const double eps = 0.1, h = 1e-9;
   const AlphaTilde above = alpha_tilde(eps + h, eps), below = alpha_tilde(eps - h, eps);
