@@ -26,7 +26,7 @@ struct ReducedSolver::Impl {
   Index n, m;
   std::unique_ptr<SymmetricSolver> S;
   std::vector<double> Sx;  // values of S in the system's pattern
-  std::vector<double> Vx, Qx, Ax;  // the v-v (V), q-q (c I + H_mu) and v-q (A) blocks, contiguous in that pattern
+  std::vector<double> Ax;  // the v-q block (A), contiguous in that pattern
   // V and c I + H_mu without their zero entries, for the two products of every solve: undamped,
   // V = c M is diagonal, and H_mu lives on the constrained nodes only (a global zone: the surface).
   struct Compact {
@@ -68,24 +68,25 @@ struct ReducedSolver::Impl {
   Impl(const GglForm& f, SymmetricSolverKind kind, double pcg_tol)
       : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind, pcg_tol)), fallback(kind != SymmetricSolverKind::cholmod) {
     Sx.resize(f.system().pattern().nnz());
-    Vx.resize(Sx.size()), Qx.resize(Sx.size()), Ax.resize(Sx.size());
+    Ax.resize(Sx.size());
     Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);
     b1.resize(n), y.resize(n), dq.resize(n), tmp.resize(n), rhs.resize(2 * m), z.resize(2 * m);
     tn1.resize(n), tn2.resize(n), tm1.resize(m), tm2.resize(m);
     BcG.setZero(n, m);
   }
 
-  // X's nonzero entries, column by column in the pattern's order (zeros left out change no sum).
-  void compact(const std::vector<double>& X, Compact& c) const {
+  // The nonzero entries of the Jacobian block whose entry k of the pattern sits at vals[slot[k]],
+  // column by column in the pattern's order (zeros left out change no sum).
+  void compact(const double* vals, const std::vector<Index>& slot, Compact& c) const {
     const SparsePattern& K = form.system().pattern();
     c.ptr.assign(static_cast<std::size_t>(n) + 1, 0);
     c.idx.clear();
     c.val.clear();
     for (Index i = 0; i < n; ++i) {
       for (Index k = K.col_ptr[i]; k < K.col_ptr[i + 1]; ++k)
-        if (X[k] != 0.0) {
+        if (const double x = vals[slot[k]]; x != 0.0) {
           c.idx.push_back(K.row_ind[k]);
-          c.val.push_back(X[k]);
+          c.val.push_back(x);
         }
       c.ptr[i + 1] = static_cast<Index>(c.idx.size());
     }
@@ -134,13 +135,11 @@ bool ReducedSolver::setup(double cj, const double* vals) {
   const GglForm& f = s.form;
   const Index m = s.m;
   for (std::size_t k = 0; k < f.vq.size(); ++k) {
-    s.Vx[k] = vals[f.vv[k]];
-    s.Qx[k] = vals[f.qq[k]];
     s.Ax[k] = vals[f.vq[k]];
-    s.Sx[k] = s.Ax[k] + cj * s.Vx[k];
+    s.Sx[k] = s.Ax[k] + cj * vals[f.vv[k]];
   }
-  s.compact(s.Vx, s.Vc);
-  s.compact(s.Qx, s.Qc);
+  s.compact(vals, f.vv, s.Vc);
+  s.compact(vals, f.qq, s.Qc);
   s.use_direct = false;
   s.ok = true;
   if (!s.S->factor(s.Sx.data()) && !s.switch_to_direct()) return false;
