@@ -170,28 +170,28 @@ TEST(Ida, InterpolatedFramesCostNoStepsAndKeepTheConstraints) {
 // pendulum's: the same bound against the exact solution as a single constraint.
 class TwicePendulum : public Pendulum {
  public:
-  int num_constraints() const override { return 2; }
-  const std::vector<std::vector<Index>>& constraint_rows() const override { return rows2_; }
+  explicit TwicePendulum(int copies = 2) : rows_k_(static_cast<std::size_t>(copies), std::vector<Index>{0, 1}) {}
+  int num_constraints() const override { return static_cast<int>(rows_k_.size()); }
+  const std::vector<std::vector<Index>>& constraint_rows() const override { return rows_k_; }
   void constraint(double t, const VectorXd& q, VectorXd& g) override {
     Pendulum::constraint(t, q, g);
-    g.conservativeResize(2);
-    g[1] = g[0];
+    g = VectorXd::Constant(num_constraints(), g[0]);
   }
   void constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* gt) override {
     Pendulum::constraint_jacobian(t, q, G, gt);
-    G[1] = G[0];
-    if (gt) gt->setZero(2);
+    for (auto& row : G) row = G[0];
+    if (gt) gt->setZero(num_constraints());
   }
   void add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) override {
-    Pendulum::add_constraint_hessian(t, q, VectorXd::Constant(1, w[0] + w[1]), scale, values);
+    Pendulum::add_constraint_hessian(t, q, VectorXd::Constant(1, w.sum()), scale, values);
   }
   void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v, std::vector<std::vector<double>>& rows) override {
     Pendulum::constraint_velocity_jacobian(t, q, v, rows);
-    rows[1] = rows[0];
+    for (auto& row : rows) row = rows[0];
   }
 
  private:
-  std::vector<std::vector<Index>> rows2_{{0, 1}, {0, 1}};
+  std::vector<std::vector<Index>> rows_k_;
 };
 
 TEST(Ida, DependentConstraintsMoveLikeOne) {
@@ -218,6 +218,23 @@ TEST(Ida, DependentConstraintsMoveLikeOne) {
   EXPECT_LT(worst_gv, 1e-12);
   // The smallest-norm split of one force between two identical rows is half each.
   EXPECT_LT(worst_split, 1e-6);
+}
+
+// More dependent constraints than a dense decomposition takes (1,000): the run stops at its start
+// and names the cause, with no frame written.
+TEST(Ida, TooManyDependentConstraintsStopWithTheReason) {
+  TwicePendulum p(1001);
+  IdaOptions o;
+  o.linear_solver = LinearSolverKind::reduced;
+  IdaIntegrator ida(p, o);
+  int frames = 0;
+  try {
+    ida.run({0.0, 0.1}, [&](int, double, const VectorXd&, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) { ++frames; });
+    FAIL() << "expected the run to stop";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("1001 constraints that are linearly dependent"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(frames, 0);
 }
 
 // KLU factors the whole GGL matrix, singular with dependent constraints: the run stops before
