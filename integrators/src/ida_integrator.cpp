@@ -67,10 +67,10 @@ struct IdaIntegrator::Impl {
     m = sys.num_constraints();
     if (opt.linear_solver != LinearSolverKind::klu)
       // CG's residual below what IDA's Newton test can see: 1e-6 rtol, at most 1e-12
-      // (docs/decisions.md).
+      // (docs/decisions.md), unless the scene sets integrator.linear_tol.
       reduced = std::make_unique<ReducedSolver>(
           ggl, symmetric_solver_of(opt.linear_solver),
-          std::min(1e-12, 1e-6 * opt.rtol));
+          opt.linear_tol > 0 ? opt.linear_tol : std::min(1e-12, 1e-6 * opt.rtol));
     else if (opt.ordering == KluOrdering::metis) {
       const auto t0 = Clock::now();
       order = metis_order(sys.pattern(), sys.dofs_per_group(), n, 2, sys.constraint_rows(), 2);

@@ -44,6 +44,8 @@ struct IdaOptions {
   // Reuse the last assembled Jacobian (with the current c_j) for setups within this many steps of
   // it, unless Newton failed since; 0: assemble at every setup.
   long jacobian_age = 0;
+  // Relative residual at which CG stops (linear solvers krylov and amg); 0: min(1e-12, 1e-6 rtol).
+  double linear_tol = 0.0;
   // Called with every Jacobian IDA asks for (its values in the GGL form's pattern, ggl.hpp), e.g.
   // to test linear solvers on the matrices of a real integration.
   std::function<void(double t, double cj, const double* y, const double* yp, const double* values)> on_jacobian;
