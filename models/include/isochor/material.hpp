@@ -45,6 +45,9 @@ class Material {
  public:
   virtual ~Material() = default;
   virtual InvariantDerivatives invariants(double I_C, double J) const = 0;
+  // W, W_I and W_J alone (the second derivatives may be left zero): what a gradient needs. A model
+  // may skip the work of its second derivatives here; the default is invariants().
+  virtual InvariantDerivatives first_invariants(double I_C, double J) const { return invariants(I_C, J); }
   virtual std::string name() const = 0;
   // Whether the energy is defined for J <= 0 (UNH is not: log J).
   virtual bool invertible() const { return true; }

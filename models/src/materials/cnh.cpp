@@ -2,6 +2,8 @@
 //   W = mu/2 (alpha~(J)^2 I_C - 3) + lambda U(J; beta)
 // F-bar deviatoric term, eq. (12), with alpha~ of eq. (11); penalty U of eq. (13). The zone volume
 // constraints are separate (constraints/zone_volume).
+#include <cmath>
+
 #include "isochor/material.hpp"
 
 namespace isochor {
@@ -21,6 +23,15 @@ class Cnh : public Material {
             0.0,
             0.5 * mu_ * da2,
             0.5 * mu_ * d2a2 * I + lambda_ * u.d2U};
+  }
+  InvariantDerivatives first_invariants(double I, double J) const override {
+    if (!(J > eps_)) return invariants(I, J);
+    // alpha = J^(-1/3): d(alpha^2)/dJ = -2 alpha^2 / (3 J); penalty U' = d (beta d^2 + 3) / 3.
+    const double r = 1.0 / J, a = std::cbrt(r), a2 = a * a;
+    const double d = J - 1.0, d2 = d * d;
+    return {0.5 * mu_ * (a2 * I - 3.0) + lambda_ * d2 * (beta_ * d2 + 6.0) / 12.0,
+            0.5 * mu_ * a2,
+            -mu_ / 3.0 * a2 * r * I + lambda_ * d * (beta_ * d2 + 3.0) / 3.0};
   }
 
  private:
