@@ -13,9 +13,14 @@ cd "$(dirname "$0")/.."
 mkdir -p out/bench
 builds=("$build")
 [ -n "$other" ] && builds+=("$other")
+# Side by side, each run is pinned to its own core and the two swap cores every round: on this
+# machine one core was at times 35-40% slower than the other (session 16, docs/decisions.md), which
+# an unpinned pair turns into a difference between builds.
+pin=()
 for r in $(seq 1 "$rounds"); do
   for i in "${!builds[@]}"; do
-    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "${builds[$i]}/isochor" run demos/ball_drop.toml -q --overwrite \
+    [ ${#builds[@]} -gt 1 ] && command -v taskset > /dev/null && pin=(taskset -c $(((i + r) % 2)))
+    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "${pin[@]}" "${builds[$i]}/isochor" run demos/ball_drop.toml -q --overwrite \
       --set mesh.target_tets=64000 --set integrator.rtol=1e-4 --set integrator.atol=1e-6 \
       -o "out/bench/fine_ball_b${i}_r$r.h5" > /dev/null &
   done

@@ -3,17 +3,21 @@
 # 24.6K tets, rtol 1e-4, atol 1e-8, max_step 33 ms, one thread), runs interleaved in rounds so that
 # machine noise spreads over both. Prints per solver the median wall seconds, IDA's steps and the
 # wall seconds per step; the steps must agree (the linear solver does not change them).
+# COLLAPSE_SET (environment) adds --set overrides to every run, e.g. the settings of session 16's
+# figure: COLLAPSE_SET="integrator.jacobian_age=10 integrator.linear_tol=1e-6".
 #   bench/ida_collapse.sh [rounds] [duration s]
 set -euo pipefail
 rounds=${1:-3}
 duration=${2:-0.12}
+extra=()
+for o in ${COLLAPSE_SET:-}; do extra+=(--set "$o"); done
 cd "$(dirname "$0")/.."
 mkdir -p out/bench
 for r in $(seq 1 "$rounds"); do
   for s in reduced krylov; do
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 build/isochor run demos/cube_collapse.toml -q --overwrite \
       --set frames.duration="$duration" --set integrator.rtol=1e-4 --set integrator.atol=1e-8 \
-      --set integrator.max_step=0.033 --set integrator.linear_solver=$s -o "out/bench/collapse_${s}_r$r.h5" > /dev/null
+      --set integrator.max_step=0.033 --set integrator.linear_solver=$s "${extra[@]}" -o "out/bench/collapse_${s}_r$r.h5" > /dev/null
   done
 done
 /usr/bin/python3 - "$rounds" <<'PY'
