@@ -260,10 +260,7 @@ double ElasticAssembly::evaluate(const Points& x, const ElementPass& p) const {
     Mat3 Ds;
     Ds << x.col(t[1]) - x0, x.col(t[2]) - x0, x.col(t[3]) - x0;
     const Mat3 F = Ds * s.Dm_inv;
-    Mat3 C;  // cof F
-    C.col(0) = F.col(1).cross(F.col(2));
-    C.col(1) = F.col(2).cross(F.col(0));
-    C.col(2) = F.col(0).cross(F.col(1));
+    const Mat3 C = cofactor(F);
     const InvariantDerivatives w = material_->first_invariants(F.squaredNorm(), F.col(0).dot(C.col(0)));
     const Mat3 G = s.rest_volume * (((2.0 * w.W_I) * F + w.W_J * C) * s.Dm_inv.transpose());
     Eigen::VectorXd& g = *p.grad;

@@ -8,6 +8,7 @@
 // with f = vec(F), c = vec(cof F), vec column-major (entry (i, j) at 3 j + i).
 #pragma once
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <memory>
 #include <string>
 
@@ -32,7 +33,10 @@ struct InvariantDerivatives {
 struct Penalty {
   double U, dU, d2U;
 };
-Penalty penalty_U(double J, double beta);
+inline Penalty penalty_U(double J, double beta) {
+  const double d = J - 1.0, d2 = d * d;
+  return {d2 * (beta * d2 + 6.0) / 12.0, d * (beta * d2 + 3.0) / 3.0, beta * d2 + 1.0};
+}
 
 // alpha~(J) of the CNH paper, eq. (11): J^(-1/3) above epsilon, its quadratic Taylor continuation
 // at epsilon below. Returns the value and the first two derivatives.
@@ -77,6 +81,14 @@ std::unique_ptr<Material> make_cnh(double mu, double lambda, double beta, double
 // lambda' = lambda + mu (their rest-stability shift): mu/2 (I_C - 3) + lambda'/2 (J - gamma)^2.
 std::unique_ptr<Material> make_xpbd_pair(double mu, double lambda);
 
+// cof F = dJ/dF, column by column: (f1 x f2, f2 x f0, f0 x f1); J = f0 . (f1 x f2).
+inline Mat3 cofactor(const Mat3& F) {
+  Mat3 C;
+  C.col(0) = F.col(1).cross(F.col(2));
+  C.col(1) = F.col(2).cross(F.col(0));
+  C.col(2) = F.col(0).cross(F.col(1));
+  return C;
+}
 // vec(cof F) and the Hessian of det F (the derivative of vec(cof F)).
 Vec9 cofactor_vec(const Mat3& F);
 Mat9 det_hessian(const Mat3& F);

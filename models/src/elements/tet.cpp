@@ -78,10 +78,7 @@ double tet_energy(const Material& m, const TetShape& s, const Vec12& x, Vec12* g
   //                      zero for a = c.
   const Mat3 F = s.F(x);
   const InvariantDerivatives w = m.invariants(F.squaredNorm(), F.determinant());
-  Mat3 C;  // cof F = dJ/dF
-  C.col(0) = F.col(1).cross(F.col(2));
-  C.col(1) = F.col(2).cross(F.col(0));
-  C.col(2) = F.col(0).cross(F.col(1));
+  const Mat3 C = cofactor(F);  // dJ/dF
   const double V = s.rest_volume;
   const Vec12 gf = s.scatter(F), gc = s.scatter(C);
   if (grad) *grad = V * (2.0 * w.W_I * gf + w.W_J * gc);

@@ -26,12 +26,10 @@ class Cnh : public Material {
   }
   InvariantDerivatives first_invariants(double I, double J) const override {
     if (!(J > eps_)) return invariants(I, J);
-    // alpha = J^(-1/3): d(alpha^2)/dJ = -2 alpha^2 / (3 J); penalty U' = d (beta d^2 + 3) / 3.
+    // alpha = J^(-1/3) without alpha_tilde's second derivative: d(alpha^2)/dJ = -2 alpha^2 / (3 J).
     const double r = 1.0 / J, a = std::cbrt(r), a2 = a * a;
-    const double d = J - 1.0, d2 = d * d;
-    return {0.5 * mu_ * (a2 * I - 3.0) + lambda_ * d2 * (beta_ * d2 + 6.0) / 12.0,
-            0.5 * mu_ * a2,
-            -mu_ / 3.0 * a2 * r * I + lambda_ * d * (beta_ * d2 + 3.0) / 3.0};
+    const Penalty u = penalty_U(J, beta_);
+    return {0.5 * mu_ * (a2 * I - 3.0) + lambda_ * u.U, 0.5 * mu_ * a2, -mu_ / 3.0 * a2 * r * I + lambda_ * u.dU};
   }
 
  private:

@@ -9,11 +9,6 @@ namespace {
 Vec9 vec(const Mat3& A) { return Eigen::Map<const Vec9>(A.data()); }
 }  // namespace
 
-Penalty penalty_U(double J, double beta) {
-  const double d = J - 1.0, d2 = d * d;
-  return {d2 * (beta * d2 + 6.0) / 12.0, d * (beta * d2 + 3.0) / 3.0, beta * d2 + 1.0};
-}
-
 AlphaTilde alpha_tilde(double J, double eps) {
   if (J > eps) {
     const double a = std::cbrt(1.0 / J);
@@ -25,13 +20,7 @@ AlphaTilde alpha_tilde(double J, double eps) {
   return {e13 - e43 * d / 3.0 + 2.0 / 9.0 * e73 * d * d, -e43 / 3.0 + 4.0 / 9.0 * e73 * d, 4.0 / 9.0 * e73};
 }
 
-Vec9 cofactor_vec(const Mat3& F) {
-  Mat3 C;
-  C.col(0) = F.col(1).cross(F.col(2));
-  C.col(1) = F.col(2).cross(F.col(0));
-  C.col(2) = F.col(0).cross(F.col(1));
-  return vec(C);
-}
+Vec9 cofactor_vec(const Mat3& F) { return vec(cofactor(F)); }
 
 Mat9 det_hessian(const Mat3& F) {
   // cof columns: c0 = f1 x f2, c1 = f2 x f0, c2 = f0 x f1; d(a x b) = -[b]x da + [a]x db.
