@@ -30,6 +30,7 @@ void write_totals(OutputWriter& w, const RunStats& s) {
   w.set_stat("fresh_factorisations", static_cast<double>(s.fresh_factorisations));
   w.set_stat("reused_jacobians", static_cast<double>(s.reused_jacobians));
   w.set_stat("linear_fallbacks", static_cast<double>(s.linear_fallbacks));
+  w.set_stat("retargets", static_cast<double>(s.retargets));
   w.set_stat("wall_seconds", s.wall_seconds);
   w.set_stat("assembly_seconds", s.assembly_seconds);
   w.set_stat("factorisation_seconds", s.factor_seconds);

@@ -152,14 +152,32 @@ namespace {
 // sides: unrefined (what IDA uses) within `unrefined` relative residual; with one step of
 // refinement as accurate as a backward-stable dense LU of the same matrix (the GGL matrix is badly
 // conditioned at large c_j: even the dense LU leaves ~1e-9).
-void check_reduced_solve(const std::string& kind, double unrefined) {
+// retarget: the setup is made at 0.6 c_j (and at 1.5 c_j before that, warm borders) and moved to
+// c_j by ReducedSolver::retarget: its values must then equal the Jacobian's at c_j, and its solves
+// the same accuracy as a setup at c_j.
+void check_reduced_solve(const std::string& kind, double unrefined, bool retarget = false) {
   Fixture f;
   for (double cj : {50.0, 1000.0, 20000.0}) {
     const Eigen::MatrixXd J = f.dense_jacobian(0.1, cj);
     std::vector<double> vals(f.form.pattern().nnz());
-    f.form.jacobian(0.1, cj, f.y.data(), f.yp.data(), vals.data());
     ReducedSolver rs(f.form, solver_kind(kind));
-    ASSERT_TRUE(rs.setup(cj, vals.data()));
+    if (retarget) {
+      std::vector<double> exact(vals.size());
+      f.form.jacobian(0.1, cj, f.y.data(), f.yp.data(), exact.data());
+      f.form.jacobian(0.1, 1.5 * cj, f.y.data(), f.yp.data(), vals.data());
+      ASSERT_TRUE(rs.setup(1.5 * cj, vals.data()));
+      ASSERT_TRUE(rs.can_retarget());
+      ASSERT_TRUE(rs.retarget(0.6 * cj, vals.data()));
+      ASSERT_TRUE(rs.retarget(cj, vals.data()));
+      EXPECT_EQ(rs.cj(), cj);
+      double worst = 0;
+      for (std::size_t k = 0; k < vals.size(); ++k)
+        worst = std::max(worst, std::abs(vals[k] - exact[k]) / std::max(1.0, std::abs(exact[k])));
+      EXPECT_LT(worst, 1e-12) << "cj " << cj;
+    } else {
+      f.form.jacobian(0.1, cj, f.y.data(), f.yp.data(), vals.data());
+      ASSERT_TRUE(rs.setup(cj, vals.data()));
+    }
     std::mt19937 rng(5);
     std::normal_distribution<double> nd;
     for (int trial = 0; trial < 3; ++trial) {
@@ -189,6 +207,19 @@ TEST(Ggl, ReducedSolveEqualsADenseSolveWhenMuIsZero) { check_reduced_solve("chol
 // the GGL system; a relative error of 1e-4 in a Newton correction slows Newton by 1e-4 per
 // iteration, nothing against its own contraction (0.1-0.3 per iteration in IDA).
 TEST(Ggl, KrylovReducedSolveEqualsADenseSolveWhenMuIsZero) { check_reduced_solve("pcg", 1e-4); }
+
+// A krylov setup moved to another c_j (IDA's step changed between Jacobians) solves as a setup
+// made there; a direct factor cannot move.
+TEST(Ggl, KrylovRetargetedSolveEqualsADenseSolve) { check_reduced_solve("pcg", 1e-4, true); }
+TEST(Ggl, CholmodSetupCannotRetarget) {
+  Fixture f;
+  std::vector<double> vals(f.form.pattern().nnz());
+  f.form.jacobian(0.1, 100.0, f.y.data(), f.yp.data(), vals.data());
+  ReducedSolver rs(f.form, solver_kind("cholmod"));
+  ASSERT_TRUE(rs.setup(100.0, vals.data()));
+  EXPECT_FALSE(rs.can_retarget());
+  EXPECT_EQ(rs.cj(), 100.0);
+}
 
 // The one-pass force_and_jacobians (elements visited once for the gradient, K, beta K and the
 // damping force beta K v) against independent references: the force at v = 0 is minus the

@@ -104,6 +104,14 @@ bool GglForm::residual(double t, const double* y, const double* yp, double* r) {
   return true;
 }
 
+void GglForm::shift_cj(double d, double* val) const {
+  const VectorXd& M = sys_.mass();
+  for (Index i = 0; i < n_; ++i) {
+    val[q_diag[i]] += d;
+    val[v_diag[i]] += d * M[i];
+  }
+}
+
 void GglForm::jacobian(double t, double cj, const double* y, const double* yp, double* val) {
   unpack(y, yp);
   const Index n = n_, m = m_;
@@ -121,12 +129,8 @@ void GglForm::jacobian(double t, double cj, const double* y, const double* yp, d
     val[vq[k]] += sB_[k];
     val[vv[k]] += sC_[k];
   }
-  const VectorXd& M = sys_.mass();
-  for (Index i = 0; i < n; ++i) {
-    val[q_diag[i]] += cj;
-    val[v_diag[i]] += cj * M[i];
-    val[qv[i]] = -1.0;
-  }
+  shift_cj(cj, val);
+  for (Index i = 0; i < n; ++i) val[qv[i]] = -1.0;
   if (m) {
     sys_.constraint_jacobian(t, q_, G_, nullptr);
     sys_.constraint_velocity_jacobian(t, q_, v_, Gv_);

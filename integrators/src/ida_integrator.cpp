@@ -1,4 +1,5 @@
 #include "isochor/ida_integrator.hpp"
+#include "ida_newton.hpp"
 #include "klu_order.hpp"
 #include "sundials_util.hpp"
 #include "timing.hpp"
@@ -96,6 +97,11 @@ struct IdaIntegrator::Impl {
     return ok ? 0 : 1;  // not finite: recoverable, IDA retries with a smaller step
   }
 
+  // Our Newton iteration's setup after a failed attempt with the old matrix: assemble afresh.
+  bool setup_after_failure = false;
+  // krylov with jacobian_age: the reduced solver's setup was made from the last assembled
+  // Jacobian (reduced_holds_fresh), and this setup only moves it to the new c_j (setup_in_place).
+  bool reduced_holds_fresh = false, setup_in_place = false;
   // The last assembled Jacobian (jacobian_age > 0): values, c_j, step count.
   std::vector<double> fresh_vals;
   double fresh_cj = 0;
@@ -106,8 +112,10 @@ struct IdaIntegrator::Impl {
     long nfail = 0, nst = 0;
     check(IDAGetNumNonlinSolvConvFails(ida_mem, &nfail), "IDAGetNumNonlinSolvConvFails", t);
     check(IDAGetNumSteps(ida_mem, &nst), "IDAGetNumSteps", t);
-    const bool failed = nfail > last_newton_failures;
+    const bool failed = nfail > last_newton_failures || setup_after_failure;
     last_newton_failures = nfail;
+    setup_after_failure = false;
+    setup_in_place = false;
     // A Newton failure since the last Jacobian: the pivot order of KLU's first factorisation may
     // have gone stale (c_j changed, contact): ask KLU for a fresh factorisation.
     if (klu && failed && stats.jacobian_evals > 0) SUNLinSol_KLUReInit(klu, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
@@ -115,16 +123,20 @@ struct IdaIntegrator::Impl {
     std::memcpy(SM_INDEXPTRS_S(J), ggl.pattern().col_ptr.data(), sizeof(sunindextype) * (ggl.size() + 1));
     std::memcpy(SM_INDEXVALS_S(J), ggl.pattern().row_ind.data(), sizeof(sunindextype) * ggl.pattern().nnz());
     double* vals = SM_DATA_S(J);
+    if (opt.jacobian_age > 0 && !failed && fresh_step >= 0 && nst - fresh_step < opt.jacobian_age && reduced_holds_fresh &&
+        reduced->can_retarget()) {
+      // The reduced solver holds the last assembled Jacobian, moved to its c_j in J's own values:
+      // its setup moves it to the new c_j (reduced_setup), without a copy or a new factor.
+      setup_in_place = true;
+      stats.reused_jacobians++;
+      stats.assembly_seconds += seconds_since(t0);
+      return 0;
+    }
     if (opt.jacobian_age > 0 && !failed && fresh_step >= 0 && nst - fresh_step < opt.jacobian_age) {
       // IDA asks for a setup because c_j changed: the last assembled Jacobian with the new c_j
       // (it enters only the diagonals c_j I and c_j M), as CVODE does with its saved Jacobian.
       std::memcpy(vals, fresh_vals.data(), sizeof(double) * fresh_vals.size());
-      const double d = cj - fresh_cj;
-      const VectorXd& M = sys.mass();
-      for (Index i = 0; i < n; ++i) {
-        vals[ggl.q_diag[i]] += d;
-        vals[ggl.v_diag[i]] += d * M[i];
-      }
+      ggl.shift_cj(cj - fresh_cj, vals);
       stats.reused_jacobians++;
       stats.assembly_seconds += seconds_since(t0);
       return 0;
@@ -185,7 +197,15 @@ int reduced_setup(SUNLinearSolver S, SUNMatrix A) {
   const auto t0 = Clock::now();
   double cj = 0;
   if (IDAGetCurrentCj(s.ida_mem, &cj) < 0) return SUNLS_PACKAGE_FAIL_UNREC;
+  if (s.setup_in_place) {
+    const bool moved = s.reduced->retarget(cj, nullptr);  // A was zeroed by IDA: not read
+    s.stats.retargets++;
+    s.stats.factor_seconds += seconds_since(t0);
+    s.reduced_holds_fresh = moved;
+    return moved ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
+  }
   const bool ok = s.reduced->setup(cj, SM_DATA_S(A));
+  s.reduced_holds_fresh = ok && s.opt.jacobian_age > 0;
   if (!s.capture_path.empty()) {
     realtype t = 0;
     IDAGetCurrentTime(s.ida_mem, &t);
@@ -204,7 +224,24 @@ int reduced_setup(SUNLinearSolver S, SUNMatrix A) {
 int reduced_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype) {
   auto& s = *static_cast<IdaIntegrator::Impl*>(S->content);
   const auto t0 = Clock::now();
+  // IDA's solution scaling is off for this solver (IDASetLinearSolutionScaling): a c_j that moved
+  // since the setup is followed exactly where S is cheap to refactor (PCG), and otherwise the
+  // correction is scaled as IDA would, by 2 / (1 + c_j / c_j,setup).
+  double cj = 0, scale = 1;
+  if (IDAGetCurrentCj(s.ida_mem, &cj) < 0) return SUNLS_PACKAGE_FAIL_UNREC;
+  if (cj != s.reduced->cj()) {
+    if (!s.reduced->can_retarget()) {
+      scale = 2.0 / (1.0 + cj / s.reduced->cj());
+    } else if (!s.reduced->retarget(cj, nullptr)) {  // A is not read again before the next setup
+      s.stats.solve_seconds += seconds_since(t0);
+      if (s.trace) std::fprintf(stderr, "ida: the reduced solver's shift to c_j = %.3g failed\n", cj);
+      return SUNLS_PACKAGE_FAIL_REC;
+    } else {
+      s.stats.retargets++;
+    }
+  }
   const bool ok = s.reduced->solve(N_VGetArrayPointer(b), N_VGetArrayPointer(x));
+  if (scale != 1) N_VScale(scale, x, x);
   s.stats.solve_seconds += seconds_since(t0);
   s.stats.linear_iterations = s.reduced->iterations();
   s.stats.linear_fallbacks = s.reduced->fallbacks();
@@ -232,9 +269,11 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   // Everything SUNDIALS allocates is released by this guard, on success or on a throw.
   N_Vector yy = nullptr, yp = nullptr, id = nullptr, atol = nullptr, yout = nullptr, ele = nullptr, ewt = nullptr;
   SUNMatrix J = nullptr;
+  SUNNonlinearSolver nls = nullptr;
   void* mem = nullptr;
   const OnExit release{[&]() {
     if (mem) IDAFree(&mem);
+    if (nls) SUNNonlinSolFree(nls);
     if (s.LS) SUNLinSolFree(s.LS);
     if (s.klu) SUNLinSolFree(s.klu);
     s.LS = s.klu = nullptr;
@@ -287,6 +326,16 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   check(IDASetUserData(mem, &s), "IDASetUserData", t0);
   check(IDASetId(mem, id), "IDASetId", t0);
   check(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg", t0);
+  if (s.reduced && s.reduced->can_retarget()) {
+    // The solves follow c_j (reduced_solve): a Newton iteration whose rate estimate survives a
+    // change of c_j (ida_newton.hpp). Set before the iteration limit, which it resets.
+    IdaNewtonHooks hooks;
+    hooks.follows_cj = [&s]() { return s.reduced->can_retarget(); };
+    hooks.before_setup = [&s](bool after_failure) { s.setup_after_failure = after_failure; };
+    hooks.kept_matrix = [&s]() { return s.setup_in_place; };
+    nls = check_ptr(make_ida_newton(yy, s.ctx, std::move(hooks)), "make_ida_newton");
+    check(IDASetNonlinearSolver(mem, nls), "IDASetNonlinearSolver", t0);
+  }
   check(IDASetNonlinConvCoef(mem, s.opt.newton_coef), "IDASetNonlinConvCoef", t0);
   check(IDASetMaxOrd(mem, s.opt.max_order), "IDASetMaxOrd", t0);
   check(IDASetMaxNonlinIters(mem, s.opt.max_newton), "IDASetMaxNonlinIters", t0);
@@ -324,6 +373,7 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
     s.LS = make_custom_linear_solver(s.ctx, &s, timed_klu_setup, timed_klu_solve);
   }
   check(IDASetLinearSolver(mem, s.LS, J), "IDASetLinearSolver", t0);
+  if (s.reduced) check(IDASetLinearSolutionScaling(mem, SUNFALSE), "IDASetLinearSolutionScaling", t0);
   check(IDASetJacFn(mem, jac_fn), "IDASetJacFn", t0);
 
   auto collect = [&](double t) {

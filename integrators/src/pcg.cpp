@@ -30,32 +30,46 @@ class BlockJacobiPcg : public SymmetricSolver {
     vals_ = values;
     if (!block_col_.empty())  // the values as contiguous 3x3 blocks
       for (std::size_t k = 0; k < block_slot_.size(); ++k) block_vals_[k] = values[block_slot_[k]];
-    for (Index k = 0; 3 * k < n_; ++k) {
-      Eigen::Matrix3d B = Eigen::Matrix3d::Identity();
-      for (int a = 0; a < 3 && 3 * k + a < n_; ++a)
-        for (int b = 0; b < 3 && 3 * k + b < n_; ++b) {
-          const Index s = slot_[3 * (3 * k + b) + a];
-          B(a, b) = s >= 0 ? values[s] : (a == b ? 1.0 : 0.0);
-        }
-      Eigen::LLT<Eigen::Matrix3d> llt(B);
-      if (llt.info() != Eigen::Success) return false;  // a non-positive diagonal block: S is indefinite
-      inv_[k] = llt.solve(Eigen::Matrix3d::Identity());
-    }
-    return true;
+    return invert_diagonal_blocks();
+  }
+  bool refactor(const double* values, const std::vector<Index>& changed) override {
+    vals_ = values;
+    if (!block_col_.empty())
+      for (Index k : changed) block_vals_[block_of_slot_[k]] = values[k];
+    return invert_diagonal_blocks();
   }
 
   bool solve(const double* b, double* x) override {
+    Eigen::Map<VectorXd>(x, n_).setZero();
+    r_ = Eigen::Map<const VectorXd>(b, n_);
+    return iterate(b, x);
+  }
+  bool solve_from(const double* b, double* x) override {
+    multiply(x, r_);
+    r_ = Eigen::Map<const VectorXd>(b, n_) - r_;
+    return iterate(b, x);
+  }
+  double factor_nnz() const override { return 0; }
+  long iterations() const override { return iterations_; }
+  bool cheap_factor() const override { return true; }
+
+ private:
+  int max_iterations() const { return static_cast<int>(std::max<Index>(1000, n_ / 10)); }
+  // CG from x with its residual r_ = b - S x.
+  bool iterate(const double* b, double* x) {
     Eigen::Map<const VectorXd> bb(b, n_);
     Eigen::Map<VectorXd> xx(x, n_);
-    xx.setZero();
-    r_ = bb;
     const double bnorm = bb.norm();
-    if (bnorm == 0) return true;
+    if (bnorm == 0) {
+      xx.setZero();
+      return true;
+    }
+    if (r_.norm() <= tol_ * bnorm) return true;
     precondition(r_, z_);
     d_ = z_;
     double rz = r_.dot(z_);
     for (int it = 0; it < max_iterations(); ++it) {
-      multiply(d_, q_);
+      multiply(d_.data(), q_);
       const double dq = d_.dot(q_);
       if (!(dq > 0)) return false;  // S is not positive definite along d
       const double alpha = rz / dq;
@@ -70,15 +84,23 @@ class BlockJacobiPcg : public SymmetricSolver {
     }
     return false;
   }
-
-  double factor_nnz() const override { return 0; }
-  long iterations() const override { return iterations_; }
-
- private:
-  int max_iterations() const { return static_cast<int>(std::max<Index>(1000, n_ / 10)); }
+  bool invert_diagonal_blocks() {
+    for (Index k = 0; 3 * k < n_; ++k) {
+      Eigen::Matrix3d B = Eigen::Matrix3d::Identity();
+      for (int a = 0; a < 3 && 3 * k + a < n_; ++a)
+        for (int b = 0; b < 3 && 3 * k + b < n_; ++b) {
+          const Index s = slot_[3 * (3 * k + b) + a];
+          B(a, b) = s >= 0 ? vals_[s] : (a == b ? 1.0 : 0.0);
+        }
+      Eigen::LLT<Eigen::Matrix3d> llt(B);
+      if (llt.info() != Eigen::Success) return false;  // a non-positive diagonal block: S is indefinite
+      inv_[k] = llt.solve(Eigen::Matrix3d::Identity());
+    }
+    return true;
+  }
   // out = S v. S is symmetric (both triangles stored): row c of S is its column c, so each entry
   // of out is a gather over one column, in parallel and in the same order for any thread count.
-  void multiply(const VectorXd& v, VectorXd& out) const {
+  void multiply(const double* v, VectorXd& out) const {
     if (!block_col_.empty()) {
       // Block form: out_c = sum over the blocks B of block column c of B^T v_r (S symmetric).
       const int nb = static_cast<int>(block_col_.size()) - 1;
@@ -87,7 +109,7 @@ class BlockJacobiPcg : public SymmetricSolver {
         Eigen::Vector3d sum = Eigen::Vector3d::Zero();
         for (Index b = block_col_[c]; b < block_col_[c + 1]; ++b)
           sum.noalias() += Eigen::Map<const Eigen::Matrix3d>(block_vals_.data() + 9 * b).transpose() *
-                           v.segment<3>(3 * static_cast<Index>(block_row_[b]));
+                           Eigen::Map<const Eigen::Vector3d>(v + 3 * static_cast<Index>(block_row_[b]));
         out.segment<3>(3 * static_cast<Index>(c)) = sum;
       }
       return;
@@ -138,12 +160,14 @@ class BlockJacobiPcg : public SymmetricSolver {
       }
       cols.push_back(static_cast<Index>(rows.size()));
     }
+    block_of_slot_.assign(static_cast<std::size_t>(p_.nnz()), -1);
+    for (std::size_t b = 0; b < slots.size(); ++b) block_of_slot_[slots[b]] = static_cast<Index>(b);
     block_col_ = std::move(cols);
     block_row_ = std::move(rows);
     block_slot_ = std::move(slots);
     block_vals_.resize(block_slot_.size());
   }
-  std::vector<Index> block_col_, block_slot_;
+  std::vector<Index> block_col_, block_slot_, block_of_slot_;
   std::vector<int> block_row_;
   std::vector<double> block_vals_;
   const SparsePattern& p_;

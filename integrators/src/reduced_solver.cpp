@@ -30,7 +30,8 @@ struct ReducedSolver::Impl {
   // V and c I + H_mu without their zero entries, for the two products of every solve: undamped,
   // V = c M is diagonal, and H_mu lives on the constrained nodes only (a global zone: the surface).
   struct Compact {
-    std::vector<Index> ptr, idx;
+    std::vector<Index> ptr, idx, pos;  // pos: the entry's index in the system's pattern
+    std::vector<Index> diag;           // per row, its diagonal entry
     std::vector<double> val;
   } Vc, Qc;
   Eigen::MatrixXd Gt, W, Z1, Z2, Z3, Bt, BcG;  // n x m: G^T, A G^T, S^-1 G^T, S^-1 V G^T, S^-1 A G^T, B^T, B^T + c G^T
@@ -76,16 +77,21 @@ struct ReducedSolver::Impl {
   }
 
   // The nonzero entries of the Jacobian block whose entry k of the pattern sits at vals[slot[k]],
-  // column by column in the pattern's order (zeros left out change no sum).
+  // column by column in the pattern's order (zeros left out change no sum), and every diagonal
+  // entry (retarget moves them).
   void compact(const double* vals, const std::vector<Index>& slot, Compact& c) const {
     const SparsePattern& K = form.system().pattern();
     c.ptr.assign(static_cast<std::size_t>(n) + 1, 0);
     c.idx.clear();
+    c.pos.clear();
     c.val.clear();
+    c.diag.assign(static_cast<std::size_t>(n), -1);
     for (Index i = 0; i < n; ++i) {
       for (Index k = K.col_ptr[i]; k < K.col_ptr[i + 1]; ++k)
-        if (const double x = vals[slot[k]]; x != 0.0) {
+        if (const double x = vals[slot[k]]; x != 0.0 || K.row_ind[k] == i) {
+          if (K.row_ind[k] == i) c.diag[i] = static_cast<Index>(c.idx.size());
           c.idx.push_back(K.row_ind[k]);
+          c.pos.push_back(k);
           c.val.push_back(x);
         }
       c.ptr[i + 1] = static_cast<Index>(c.idx.size());
@@ -105,8 +111,46 @@ struct ReducedSolver::Impl {
   void times(const Compact& X, const double* x, double* out, bool add = false) const {
     times(X.ptr.data(), X.idx.data(), X.val.data(), x, out, add);
   }
-  void solve_S(const double* b, double* x) {
-    if (!use_direct && S->solve(b, x)) return;
+  // The m borders for the current S and c_j (W = A G^T, G^T and B^T set): Z1, Z3, Z2 and the
+  // 2m x 2m system C. warm: Z1 and Z3 hold S^-1 G^T and S^-1 A G^T of the same setup at c_j /
+  // ratio; scaled by 1 / ratio^2 (S ~ c_j^2 M at the small steps where c_j moves most), they
+  // start CG.
+  void borders(double ratio = 0) {
+    for (Index j = 0; j < m; ++j) {
+      if (ratio > 0) {
+        Z1.col(j) /= ratio * ratio;
+        Z3.col(j) /= ratio * ratio;
+        solve_S(Gt.col(j).data(), Z1.col(j).data(), true);
+        solve_S(W.col(j).data(), Z3.col(j).data(), true);
+      } else {
+        solve_S(Gt.col(j).data(), Z1.col(j).data());
+        solve_S(W.col(j).data(), Z3.col(j).data());
+      }
+    }
+    Z2 = (Gt - Z3) / cj;
+    const Eigen::MatrixXd GtG = Gt.transpose() * Gt;
+    Eigen::MatrixXd C(2 * m, 2 * m);
+    C.topLeftCorner(m, m) = Gt.transpose() * Z1;
+    C.topRightCorner(m, m) = (GtG - Gt.transpose() * Z3) / cj;
+    BcG = Bt + cj * Gt;
+    C.bottomLeftCorner(m, m) = BcG.transpose() * Z1;
+    C.bottomRightCorner(m, m) = (Bt.transpose() * Gt - Bt.transpose() * Z3) / cj - Gt.transpose() * Z3;
+    small.compute(C);
+    // rcond below 1e-17: LU's solution would be rounding. Then C is equilibrated (rows, then
+    // columns, to unit largest entries: its blocks differ by powers of c_j) and decomposed with
+    // rank revealed at 1e-12.
+    singular = !(small.rcond() > 1e-17);
+    if (singular) {
+      row_scale = C.cwiseAbs().rowwise().maxCoeff().cwiseMax(1e-300).cwiseInverse();
+      C = row_scale.asDiagonal() * C;
+      col_scale = C.cwiseAbs().colwise().maxCoeff().transpose().cwiseMax(1e-300).cwiseInverse();
+      C = C * col_scale.asDiagonal();
+      rank_deficient.setThreshold(1e-12);
+      rank_deficient.compute(C);
+    }
+  }
+  void solve_S(const double* b, double* x, bool from_guess = false) {
+    if (!use_direct && (from_guess ? S->solve_from(b, x) : S->solve(b, x))) return;
     if (use_direct || switch_to_direct()) {
       ok = direct->solve(b, x) && ok;
       return;
@@ -152,33 +196,38 @@ bool ReducedSolver::setup(double cj, const double* vals) {
       s.Gt(rows[j][k], j) = vals[f.gq[j][k]];
       s.Bt(rows[j][k], j) = vals[f.gvq[j][k]];
     }
-  for (Index j = 0; j < m; ++j) {
+  for (Index j = 0; j < m; ++j)
     s.times(f.system().pattern().col_ptr.data(), f.system().pattern().row_ind.data(), s.Ax.data(), s.Gt.col(j).data(),
             s.W.col(j).data());  // A is full: no compact copy for m products
-    s.solve_S(s.Gt.col(j).data(), s.Z1.col(j).data());
-    s.solve_S(s.W.col(j).data(), s.Z3.col(j).data());
+  s.borders();
+  return s.ok;
+}
+
+double ReducedSolver::cj() const { return impl_->cj; }
+bool ReducedSolver::can_retarget() const { return !impl_->use_direct && impl_->S->cheap_factor(); }
+
+bool ReducedSolver::retarget(double cj, double* vals) {
+  Impl& s = *impl_;
+  if (cj == s.cj) return true;
+  if (!can_retarget() || (vals && vals != s.vals)) throw std::logic_error("ReducedSolver::retarget: not after this setup's factor");
+  const GglForm& f = s.form;
+  const VectorXd& M = f.system().mass();
+  const double d = cj - s.cj, ratio = cj / s.cj;
+  if (vals) f.shift_cj(d, vals);
+  s.cj = cj;
+  // The copies move as the Jacobian would: V's diagonal by d M, that of c_j I + H_mu by d (every
+  // diagonal entry is in the compact copies). S = A + c_j V changes where V is not zero.
+  for (Index i = 0; i < s.n; ++i) {
+    s.Vc.val[s.Vc.diag[i]] += d * M[i];
+    s.Qc.val[s.Qc.diag[i]] += d;
   }
-  s.Z2 = (s.Gt - s.Z3) / cj;
-  const Eigen::MatrixXd GtG = s.Gt.transpose() * s.Gt;
-  Eigen::MatrixXd C(2 * m, 2 * m);
-  C.topLeftCorner(m, m) = s.Gt.transpose() * s.Z1;
-  C.topRightCorner(m, m) = (GtG - s.Gt.transpose() * s.Z3) / cj;
-  s.BcG = s.Bt + cj * s.Gt;
-  C.bottomLeftCorner(m, m) = s.BcG.transpose() * s.Z1;
-  C.bottomRightCorner(m, m) = (s.Bt.transpose() * s.Gt - s.Bt.transpose() * s.Z3) / cj - s.Gt.transpose() * s.Z3;
-  s.small.compute(C);
-  // rcond below 1e-17: LU's solution would be rounding. Then C is equilibrated (rows, then
-  // columns, to unit largest entries: its blocks differ by powers of c_j) and decomposed with
-  // rank revealed at 1e-12.
-  s.singular = !(s.small.rcond() > 1e-17);
-  if (s.singular) {
-    s.row_scale = C.cwiseAbs().rowwise().maxCoeff().cwiseMax(1e-300).cwiseInverse();
-    C = s.row_scale.asDiagonal() * C;
-    s.col_scale = C.cwiseAbs().colwise().maxCoeff().transpose().cwiseMax(1e-300).cwiseInverse();
-    C = C * s.col_scale.asDiagonal();
-    s.rank_deficient.setThreshold(1e-12);
-    s.rank_deficient.compute(C);
+  for (std::size_t e = 0; e < s.Vc.val.size(); ++e) {
+    const Index k = s.Vc.pos[e];
+    s.Sx[k] = s.Ax[k] + cj * s.Vc.val[e];
   }
+  s.ok = true;
+  if (!s.S->refactor(s.Sx.data(), s.Vc.pos) && !s.switch_to_direct()) return false;
+  if (s.m) s.borders(s.use_direct ? 0.0 : ratio);
   return s.ok;
 }
 

@@ -32,6 +32,9 @@ class GglForm {
   bool residual(double t, const double* y, const double* yp, double* r);
   // values (in pattern()) = dF/dy + cj dF/dy'.
   void jacobian(double t, double cj, const double* y, const double* yp, double* values);
+  // values += d dF/dy': a Jacobian filled at c_j becomes the one at c_j + d (dF/dy' is constant:
+  // the diagonals I of F_q and M of F_v).
+  void shift_cj(double d, double* values) const;
 
   // Slots of the blocks in the value array: per entry k of the system's pattern (q-q, v-q, v-v),
   // per dof (diagonals), per entry of each constraint row.
@@ -61,6 +64,17 @@ class ReducedSolver {
   // Factors S for this Jacobian (LDL^T while S is indefinite; "pcg": CHOLMOD where PCG fails);
   // false when it is singular.
   bool setup(double cj, const double* values);
+  // IDA's c_j moves between setups (the step or the order changed). A solve with the setup's c_j
+  // then converges linearly (IDA scales the correction by 2 / (1 + c_j / c_j,setup), exact for a
+  // first-order system, not for this one, whose S ~ c_j^2 M: ~0.2 per Newton iteration on the
+  // collapse). retarget moves the setup to the new c_j: S and the borders follow
+  // without new assembly, and `values` (the array given to setup, or null: IDA zeroes its matrix
+  // before each setup) get their c_j I and c_j M diagonals moved. Only where the factor of S is
+  // cheap (can_retarget: PCG, not in its CHOLMOD fallback). False when S at the new c_j cannot be
+  // solved. solve(refine > 0) reads the values: after retarget(cj, nullptr) only refine = 0.
+  bool can_retarget() const;
+  bool retarget(double cj, double* values);
+  double cj() const;  // the c_j of the current setup (or retarget)
   // x = J^-1 b, then `refine` steps of iterative refinement with the exact J (each one more
   // sparse product and reduced solve).
   // False if a solve with S failed (PCG: no convergence or S found indefinite).

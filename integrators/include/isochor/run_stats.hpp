@@ -18,6 +18,7 @@ struct RunStats {
   double factor_nnz = 0;        // nnz(L) + nnz(U) of the last factorisation
   long linear_iterations = 0;   // krylov: PCG iterations over the run
   long linear_fallbacks = 0;    // krylov: setups solved by CHOLMOD after PCG failed
+  long retargets = 0;           // IDA krylov: setups moved to a new c_j (ReducedSolver::retarget)
   double symbolic_seconds = 0;  // of factor_seconds: ordering and symbolic analysis
   double projection_seconds = 0;  // IDA: projecting interpolated frames onto the constraints
   // Backward Euler as an optimisation: Newton iterations whose step the line search cut,

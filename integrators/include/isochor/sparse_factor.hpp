@@ -27,6 +27,13 @@ class SymmetricSolver {
   virtual double factor_nnz() const = 0;   // entries of the factor (0 for an iterative solver)
   virtual long iterations() const { return 0; }  // iterative: iterations over all solves so far
   virtual double analyse_seconds() const { return 0; }  // direct: ordering and symbolic analysis so far
+  // factor() costs no more than a few products (block-Jacobi PCG): worth repeating for a shift.
+  virtual bool cheap_factor() const { return false; }
+  // factor() again after the entries at pattern positions `changed` (and only those) took new
+  // values; an iterative solver updates its copy and preconditioner there only.
+  virtual bool refactor(const double* values, const std::vector<Index>& changed) { return factor(values); }
+  // solve() from the guess in x (iterative solvers; a direct solver ignores it).
+  virtual bool solve_from(const double* b, double* x) { return solve(b, x); }
 };
 
 // cholmod: SymmetricFactor; pcg: BlockJacobiPcg with relative residual tolerance `tol` (the GGL
