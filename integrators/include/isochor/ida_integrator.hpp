@@ -32,7 +32,9 @@ struct IdaOptions {
   double atol_lambda = 0.0;
   int max_order = 5;
   double max_step = 0.0;      // 0: no limit
-  double newton_coef = 0.33;  // IDA's nonlinear convergence coefficient (smaller: algebraic rows kept tighter)
+  // IDA's nonlinear convergence coefficient (smaller: algebraic rows kept tighter); 0: 0.1 where
+  // krylov's Newton iteration keeps its rate across c_j changes (ida_newton.hpp), else IDA's 0.33.
+  double newton_coef = 0;
   int max_newton = 4;         // Newton iterations per step attempt before IDA calls it a failure (IDASetMaxNonlinIters)
   double initial_step = 0.0;  // 0: a position-based first step (see the .cpp)
   long max_steps = 10000000;  // over the whole run
