@@ -119,20 +119,20 @@ struct IdaIntegrator::Impl {
     // A Newton failure since the last Jacobian: the pivot order of KLU's first factorisation may
     // have gone stale (c_j changed, contact): ask KLU for a fresh factorisation.
     if (klu && failed && stats.jacobian_evals > 0) SUNLinSol_KLUReInit(klu, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
-    // SUNMatZero cleared the index arrays too: copy the pattern back, then the values.
-    std::memcpy(SM_INDEXPTRS_S(J), ggl.pattern().col_ptr.data(), sizeof(sunindextype) * (ggl.size() + 1));
-    std::memcpy(SM_INDEXVALS_S(J), ggl.pattern().row_ind.data(), sizeof(sunindextype) * ggl.pattern().nnz());
-    double* vals = SM_DATA_S(J);
-    if (opt.jacobian_age > 0 && !failed && fresh_step >= 0 && nst - fresh_step < opt.jacobian_age && reduced_holds_fresh &&
-        reduced->can_retarget()) {
-      // The reduced solver holds the last assembled Jacobian, moved to its c_j in J's own values:
-      // its setup moves it to the new c_j (reduced_setup), without a copy or a new factor.
+    const bool reuse = opt.jacobian_age > 0 && !failed && fresh_step >= 0 && nst - fresh_step < opt.jacobian_age;
+    if (reuse && reduced_holds_fresh && reduced->can_retarget()) {
+      // The reduced solver holds the last assembled Jacobian in its own copies: its setup moves
+      // them to the new c_j (reduced_setup), without a copy or a new factor; J is not read.
       setup_in_place = true;
       stats.reused_jacobians++;
       stats.assembly_seconds += seconds_since(t0);
       return 0;
     }
-    if (opt.jacobian_age > 0 && !failed && fresh_step >= 0 && nst - fresh_step < opt.jacobian_age) {
+    // SUNMatZero cleared the index arrays too: copy the pattern back, then the values.
+    std::memcpy(SM_INDEXPTRS_S(J), ggl.pattern().col_ptr.data(), sizeof(sunindextype) * (ggl.size() + 1));
+    std::memcpy(SM_INDEXVALS_S(J), ggl.pattern().row_ind.data(), sizeof(sunindextype) * ggl.pattern().nnz());
+    double* vals = SM_DATA_S(J);
+    if (reuse) {
       // IDA asks for a setup because c_j changed: the last assembled Jacobian with the new c_j
       // (it enters only the diagonals c_j I and c_j M), as CVODE does with its saved Jacobian.
       std::memcpy(vals, fresh_vals.data(), sizeof(double) * fresh_vals.size());
