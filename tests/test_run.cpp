@@ -375,6 +375,58 @@ TEST(BackwardEulerRun, KrylovAndCholmodStepsAgree) {
   for (int k = 0; k < 11; ++k) EXPECT_LT((frames[1][k] - frames[0][k]).cwiseAbs().maxCoeff(), 1e-5) << "frame " << k;
 }
 
+TEST(BackwardEulerRun, PcgStoppedEarlyKeepsTheSteps) {
+  // The pinned cube at 8^3 cells (1,944 free dofs) over 1 s. Newton's test measures its own
+  // contraction and stops on its estimated error, so a CG stopped at a relative residual of 1e-4
+  // (the default) moves work from CG to Newton without moving the steps by more than Newton's
+  // tolerance (1e-5 of each step's displacement, ~1e-7 m here; 1e-6 m over 60 steps). PCG to
+  // 1e-12 takes the same Newton path as CHOLMOD, to rounding.
+  const auto dir = test::temp_dir();
+  const char* sets[3] = {"integrator.linear_solver=reduced", "integrator.linear_tol=1e-12", "integrator.linear_tol=0"};
+  std::vector<Points> frames[3];
+  std::map<std::string, double> totals[3];
+  for (int s = 0; s < 3; ++s) {
+    Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/pinned_cube.toml",
+                          {"mesh.cells=8", "frames.duration=1.0", sets[s]});
+    const RunFile f(run_scene(sc, (dir / (std::to_string(s) + ".h5")).string(), false).output);
+    ASSERT_EQ(f.num_frames(), 61);
+    for (int k = 0; k < f.num_frames(); ++k) frames[s].push_back(f.positions(k));
+    totals[s] = f.stat_totals();
+  }
+  // "auto" (the demo's) chose PCG for runs 1 and 2 at this size, CHOLMOD only when named.
+  EXPECT_EQ(totals[0].at("linear_iterations"), 0.0);
+  ASSERT_GT(totals[1].at("linear_iterations"), 0.0);
+  ASSERT_GT(totals[2].at("linear_iterations"), 0.0);
+  const auto per_newton = [&](int s) { return totals[s].at("linear_iterations") / totals[s].at("newton_iterations"); };
+  std::printf("CG iterations per Newton iteration: %.1f at 1e-12, %.1f at the default\n", per_newton(1), per_newton(2));
+  EXPECT_LT(per_newton(2), 0.7 * per_newton(1));
+  double exact = 0, loose = 0;
+  for (int k = 0; k < 61; ++k) {
+    exact = std::max(exact, (frames[1][k] - frames[0][k]).cwiseAbs().maxCoeff());
+    loose = std::max(loose, (frames[2][k] - frames[0][k]).cwiseAbs().maxCoeff());
+  }
+  std::printf("largest distance to CHOLMOD's frames: %.2e m (PCG to 1e-12), %.2e m (default)\n", exact, loose);
+  EXPECT_LT(exact, 1e-10);
+  EXPECT_LT(loose, 1e-6);
+  // The cube moves by decimetres, so the bounds above are not met by standing still.
+  EXPECT_GT((frames[0][60] - frames[0][0]).cwiseAbs().maxCoeff(), 0.05);
+}
+
+TEST(BackwardEulerRun, AutomaticSolverFollowsTheMeshSize) {
+  // linear_solver = "auto": CHOLMOD below 1,300 free dofs (6^3 cells: 882), PCG above (8^3:
+  // 1,944), CHOLMOD again without the line search (PCG could then fail on an indefinite matrix).
+  const auto dir = test::temp_dir();
+  int runs = 0;
+  const auto cg_iterations = [&](std::vector<std::string> sets) {
+    sets.push_back("frames.duration=0.1");
+    Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/pinned_cube.toml", sets);
+    return RunFile(run_scene(sc, (dir / (std::to_string(++runs) + ".h5")).string(), false).output).stat_totals().at("linear_iterations");
+  };
+  EXPECT_EQ(cg_iterations({"mesh.cells=6"}), 0.0);
+  EXPECT_GT(cg_iterations({"mesh.cells=8"}), 0.0);
+  EXPECT_EQ(cg_iterations({"mesh.cells=8", "integrator.line_search=false"}), 0.0);
+}
+
 TEST(Statics, TheSameEquilibriaWithEveryLinearSolver) {
   // KINSOL's Newton steps through KLU on the KKT matrix, through CHOLMOD on its n x n block with
   // the borders by a Schur complement, and through PCG on that block: each solve is exact to

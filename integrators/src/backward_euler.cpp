@@ -37,8 +37,7 @@ struct BackwardEuler::Impl {
         use_kkt(o.linear_solver == LinearSolverKind::klu || m > o.schur_max_constraints) {
     if (o.project_hessian && !s.set_hessian_projection(true))
       throw std::invalid_argument("integrator.hessian = \"projected\": this model has no element Hessians to project");
-    if (!use_kkt)
-      S = std::make_unique<BorderedSolver>(s.pattern(), s.constraint_rows(), symmetric_solver_of(o.linear_solver));
+    if (!use_kkt && !o.automatic_linear_solver) make_step_solver(o.linear_solver);
     if (use_kkt) {
       layout = std::make_unique<KktLayout>(s.pattern(), s.constraint_rows());
       kkt = std::make_unique<KktFactor>(*layout, s.pattern(), s.dofs_per_group(), s.constraint_rows());
@@ -52,6 +51,11 @@ struct BackwardEuler::Impl {
     for (Index i = 0; i < n; ++i) diag[i] = p.find(i, i);
     G.resize(m);
     for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
+  }
+
+  void make_step_solver(LinearSolverKind kind) {
+    S = std::make_unique<BorderedSolver>(sys.pattern(), sys.constraint_rows(), symmetric_solver_of(kind),
+                                         opt.linear_tol > 0 ? opt.linear_tol : BackwardEulerOptions::kDefaultLinearTol);
   }
 
   bool factored = false;  // S holds a factorisation of some earlier step matrix
@@ -420,6 +424,9 @@ RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
   s.line_search = s.opt.line_search && !s.opt.semi_implicit && s.sys.potential(times.front(), q, V0) &&
                   (!s.sys.has_damping() || s.sys.set_damping_forces(true));
   s.variational = s.line_search && s.sys.has_damping();
+  if (!s.use_kkt && s.opt.automatic_linear_solver)
+    s.make_step_solver(s.line_search && s.n >= BackwardEulerOptions::kAutoKrylovMinDofs ? LinearSolverKind::krylov
+                                                                                        : LinearSolverKind::reduced);
   if (s.variational) s.Dn.assign(s.sys.pattern().nnz(), 0.0);
   auto step = [&](double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q1, VectorXd& v1, VectorXd& l1,
                   std::string& reason) {

@@ -18,7 +18,9 @@ namespace isochor {
 class BorderedSolver {
  public:
   // A's pattern (both triangles), the dofs of each constraint row, and the solver of A.
-  BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows, SymmetricSolverKind kind);
+  // tol: the relative residual of an iterative solver of A (make_symmetric_solver).
+  BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows, SymmetricSolverKind kind,
+                 double tol = 1e-12);
   bool factor(const double* A_values);  // false: singular, or indefinite for PCG
   // The borders' values (G[j][k] at rows[j][k]): Z and C for the current factor. False if a
   // solve failed.

@@ -47,6 +47,19 @@ struct BackwardEulerOptions {
   // "reduced" (the above), "klu" (KLU on the KKT matrix always), "krylov" (block-Jacobi PCG
   // instead of CHOLMOD on the step matrix; the KKT path above schur_max_constraints stays KLU).
   LinearSolverKind linear_solver = LinearSolverKind::reduced;
+  // krylov and amg: the relative residual at which CG stops (0: kDefaultLinearTol). Newton's
+  // test measures its own contraction and stops on its estimated error, so an inexact solve
+  // (relative residual eta < 1: a descent direction, linear convergence at a rate ~eta) moves the
+  // work between CG and Newton, not the accuracy of a step.
+  double linear_tol = 0.0;
+  static constexpr double kDefaultLinearTol = 1e-4;
+  // linear_solver = "auto" (backward Euler): block-Jacobi PCG ("krylov") where the step is
+  // solved with the line search (a matrix PCG finds indefinite is shifted, never a failure) and
+  // the step matrix has at least kAutoKrylovMinDofs rows; else CHOLMOD ("reduced"). Measured on
+  // the pinned cube (docs/decisions.md, session 18): the two tie at 1,344 dofs (7^3 cells),
+  // PCG is 1.4 times faster at 7,644 (13^3) and 4.9 times at 58K (26^3).
+  bool automatic_linear_solver = false;
+  static constexpr long kAutoKrylovMinDofs = 1300;
   // The step as a minimisation (above); off: plain Newton on the KKT system.
   bool line_search = true;
   bool project_hessian = false;
