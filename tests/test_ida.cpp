@@ -8,7 +8,11 @@
 #include "isochor/ida_integrator.hpp"
 #include "isochor/initial_state.hpp"
 #include "sundials_util.hpp"
+#include "ida_newton.hpp"
 
+#include <ida/ida.h>
+#include <algorithm>
+#include <vector>
 #include <nvector/nvector_serial.h>
 #include <random>
 
@@ -412,4 +416,106 @@ TEST(SerialVector, WeightedRmsNormsAreTheDefinition) {
     for (N_Vector v : {x, w, id, c}) N_VDestroy(v);
   }
   SUNContext_Free(&ctx);
+}
+
+// The Newton iteration that replaces IDA's with `krylov` (ida_newton.hpp), on its own: a linear
+// residual F(y) = A y - b, A = diag(2, 3, 4), solved with a matrix s A that the fake linear
+// solver holds. With s = 0.3 the corrections grow by |1 - 1/s| = 2.33 per iteration (a diverging,
+// recoverable failure); with s = 1 the first correction is exact.
+namespace {
+struct FakeNewtonSystem {
+  double s = 1.0;              // the matrix the solver holds is s A
+  double next_setup_s = 1.0;   // what the next setup installs
+  int setups = 0, fresh_asked = 0;
+  bool kept = false;           // what kept_matrix() answers after a setup
+} fake;
+const double kA[3] = {2, 3, 4}, kB[3] = {1, -2, 3};
+int fake_sys(N_Vector y, N_Vector F, void*) {
+  for (int i = 0; i < 3; ++i) NV_Ith_S(F, i) = kA[i] * NV_Ith_S(y, i) - kB[i];
+  return 0;
+}
+int fake_setup(booleantype, booleantype* jcur, void*) {
+  fake.s = fake.next_setup_s;
+  fake.setups++;
+  *jcur = SUNTRUE;
+  return 0;
+}
+int fake_solve(N_Vector b, void*) {
+  for (int i = 0; i < 3; ++i) NV_Ith_S(b, i) /= fake.s * kA[i];
+  return 0;
+}
+struct NewtonRun {
+  int result;
+  long iterations, conv_fails;
+  double error;  // largest distance of the correction from A^-1 b
+};
+// One SUNNonlinSolSolve from a zero correction, with the held matrix s0 A, a setup asked or not,
+// and each setup installing the matrices listed in turn.
+NewtonRun newton_run(double s0, bool call_setup, std::vector<double> setup_s, bool kept) {
+  SUNContext ctx = nullptr;
+  EXPECT_EQ(SUNContext_Create(nullptr, &ctx), 0);
+  void* mem = IDACreate(ctx);  // only for IDAGetCurrentCj
+  N_Vector y = new_serial_vector(3, ctx), ycor = N_VClone(y), w = N_VClone(y);
+  N_VConst(0.0, y);
+  N_VConst(0.0, ycor);
+  N_VConst(1.0, w);
+  fake = FakeNewtonSystem{};
+  fake.s = s0;
+  std::size_t next = 0;
+  IdaNewtonHooks hooks;
+  hooks.follows_cj = [] { return true; };
+  hooks.before_setup = [&](bool fresh) {
+    fake.fresh_asked += fresh;
+    fake.next_setup_s = setup_s.at(std::min(next++, setup_s.size() - 1));
+  };
+  hooks.kept_matrix = [&] { return kept && fake.fresh_asked == 0; };
+  SUNNonlinearSolver nls = make_ida_newton(y, ctx, hooks);
+  SUNNonlinSolSetSysFn(nls, fake_sys);
+  SUNNonlinSolSetLSetupFn(nls, fake_setup);
+  SUNNonlinSolSetLSolveFn(nls, fake_solve);
+  SUNNonlinSolSetMaxIters(nls, 4);
+  NewtonRun r{};
+  r.result = SUNNonlinSolSolve(nls, y, ycor, w, 1e-8, call_setup ? SUNTRUE : SUNFALSE, mem);
+  SUNNonlinSolGetNumIters(nls, &r.iterations);
+  SUNNonlinSolGetNumConvFails(nls, &r.conv_fails);
+  for (int i = 0; i < 3; ++i) r.error = std::max(r.error, std::abs(NV_Ith_S(ycor, i) - kB[i] / kA[i]));
+  SUNNonlinSolFree(nls);
+  for (N_Vector v : {y, ycor, w}) N_VDestroy(v);
+  IDAFree(&mem);
+  SUNContext_Free(&ctx);
+  return r;
+}
+}  // namespace
+
+TEST(IdaNewton, AStaleMatrixThatDivergesEarnsOneFreshSetup) {
+  // No setup asked: the held matrix 0.3 A diverges (rate 2.33 > 0.9 at the second correction),
+  // the attempt is redone from a zero correction with a setup flagged fresh, which installs A:
+  // one correction lands on A^-1 b, a second (zero) confirms it.
+  const NewtonRun r = newton_run(0.3, false, {1.0}, false);
+  EXPECT_EQ(r.result, SUN_NLS_SUCCESS);
+  EXPECT_EQ(fake.setups, 1);
+  EXPECT_EQ(fake.fresh_asked, 1);
+  EXPECT_EQ(r.iterations, 4);
+  EXPECT_EQ(r.conv_fails, 1);
+  EXPECT_LT(r.error, 1e-14);
+}
+
+TEST(IdaNewton, AFreshMatrixThatDivergesIsAFailure) {
+  // A setup asked and done in this attempt (current), yet the matrix it installs diverges: no
+  // retry; IDA gets the recoverable failure (and will cut its step).
+  const NewtonRun r = newton_run(1.0, true, {0.3}, false);
+  EXPECT_EQ(r.result, SUN_NLS_CONV_RECVR);
+  EXPECT_EQ(fake.setups, 1);
+  EXPECT_EQ(fake.fresh_asked, 0);
+  EXPECT_EQ(r.conv_fails, 1);
+}
+
+TEST(IdaNewton, AKeptMatrixIsNotCurrent) {
+  // A setup that only moved the old matrix to the new c_j (kept) counts as stale: when it
+  // diverges, the attempt is redone with a fresh setup, which converges.
+  const NewtonRun r = newton_run(1.0, true, {0.3, 1.0}, true);
+  EXPECT_EQ(r.result, SUN_NLS_SUCCESS);
+  EXPECT_EQ(fake.setups, 2);
+  EXPECT_EQ(fake.fresh_asked, 1);
+  EXPECT_LT(r.error, 1e-14);
 }
