@@ -16,7 +16,7 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
   if (o.rescale_volume && kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
     in.fail("rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
   o.linear_solver = parse_linear_solver(in, LinearSolverKind::reduced);
-  o.automatic_linear_solver = kind == IntegratorKind::backward_euler && in.string("linear_solver", "auto", {"auto", "klu", "reduced", "krylov", "amg"}) == "auto";
+  o.automatic_linear_solver = kind == IntegratorKind::backward_euler && linear_solver_is_auto(in);
   o.linear_tol = in.number("linear_tol", 0.0, {0.0, 1e-2, false, true});
   const std::string hessian = in.string("hessian", "exact", {"exact", "projected", "hybrid"});
   o.project_hessian = hessian != "exact";

@@ -20,5 +20,7 @@ std::unique_ptr<Integrator> make_hong(const Scene& scene, SceneSystem& system);
 long parse_max_steps(const Section& in);
 double parse_dt(const Section& in);
 LinearSolverKind parse_linear_solver(const Section& in, LinearSolverKind automatic);
+// Whether integrator.linear_solver is "auto" (or unset).
+bool linear_solver_is_auto(const Section& in);
 
 }  // namespace isochor

@@ -21,7 +21,7 @@ void parse_ida(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
   const std::string ordering = in.string("ordering", "metis", {"metis", "colamd", "amd"});
   o.ordering = ordering == "colamd" ? KluOrdering::colamd : ordering == "amd" ? KluOrdering::amd : KluOrdering::metis;
   o.linear_solver = parse_linear_solver(in, LinearSolverKind::klu);
-  spec.ida_linear_solver_auto = in.string("linear_solver", "auto", {"auto", "klu", "reduced", "krylov", "amg"}) == "auto";
+  spec.ida_linear_solver_auto = linear_solver_is_auto(in);
   o.jacobian_age = in.integer("jacobian_age", 0, 0, 1000000000L);
   o.linear_tol = in.number("linear_tol", 0.0, {0.0, 1e-2, false, true});
   o.stop_at_frames = in.boolean("stop_at_frames", false);

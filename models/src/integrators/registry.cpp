@@ -37,8 +37,14 @@ long parse_max_steps(const Section& in) { return in.integer("max_steps", 1000000
 
 double parse_dt(const Section& in) { return in.number("dt", 1e-3, Range::positive()); }
 
+static std::string linear_solver_name(const Section& in) {
+  return in.string("linear_solver", "auto", {"auto", "klu", "reduced", "krylov", "amg"});
+}
+
+bool linear_solver_is_auto(const Section& in) { return linear_solver_name(in) == "auto"; }
+
 LinearSolverKind parse_linear_solver(const Section& in, LinearSolverKind automatic) {
-  const std::string s = in.string("linear_solver", "auto", {"auto", "klu", "reduced", "krylov", "amg"});
+  const std::string s = linear_solver_name(in);
   if (s == "amg" && !amg_available())
     in.fail("linear_solver", "\"amg\" needs isochor built with hypre and MPI (Debian: apt-get install libhypre-dev "
                              "libopenmpi-dev, then rebuild)");
