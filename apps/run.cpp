@@ -42,6 +42,7 @@ void write_totals(OutputWriter& w, const RunStats& s) {
   w.set_stat("line_search_cuts", static_cast<double>(s.line_search_cuts));
   w.set_stat("regularisations", static_cast<double>(s.regularisations));
   w.set_stat("step_halvings", static_cast<double>(s.step_halvings));
+  w.set_stat("solver_switches", static_cast<double>(s.solver_switches));
   // Peak resident memory of the whole process (getrusage), for the linear-solver benchmarks.
   w.set_stat("peak_memory_mb", peak_memory_mb());
 }

@@ -392,6 +392,26 @@ TEST(Ggl, SolversOnJacobiansCapturedFromABallDrop) {
   EXPECT_EQ(with_inverted >= 2, true) << "no Jacobian with inverted elements was captured";
 }
 
+// The cost of a factorisation from CHOLMOD's analysis, on a dense n x n matrix: column j of L has
+// n - j entries, so n(n+1)/2 entries and sum_j (n - j)^2 = n(n+1)(2n+1)/6 flops (CHOLMOD's count).
+TEST(SymmetricFactor, FactorCostOfADenseMatrix) {
+  const Index n = 40;
+  SparsePattern p;
+  p.n = n;
+  p.col_ptr.push_back(0);
+  for (Index c = 0; c < n; ++c) {
+    for (Index r = 0; r < n; ++r) p.row_ind.push_back(r);
+    p.col_ptr.push_back(static_cast<Index>(p.row_ind.size()));
+  }
+  SymmetricFactor f(p);
+  double flops = 0, entries = 0;
+  ASSERT_TRUE(f.factor_cost(flops, entries));
+  EXPECT_EQ(entries, n * (n + 1) / 2.0);
+  EXPECT_EQ(flops, n * (n + 1) * (2 * n + 1) / 6.0);
+  double none = 0;
+  EXPECT_FALSE(make_symmetric_solver(p, SymmetricSolverKind::pcg)->factor_cost(none, none));
+}
+
 // CHOLMOD's factor: supernodal LL^T while the matrix is positive definite, simplicial LDL^T when
 // it is not, and LL^T again within 8 factorisations once the matrix is definite again (the slow
 // LDL^T must not stay for the rest of a run after one indefinite matrix). Every solve exact.
@@ -453,4 +473,14 @@ TEST(SymmetricFactor, BackToLLtOnceTheMatrixIsDefiniteAgain) {
   }
   EXPECT_EQ(back, 8);  // LL^T retried at the 8th factorisation after the switch, and kept
   EXPECT_FALSE(f.used_ldlt());
+  // Refusing indefinite matrices (backward Euler's line search shifts them instead): the
+  // indefinite matrix is no longer factored and leaves no usable factor; a definite one still is.
+  f.refuse_indefinite();
+  EXPECT_FALSE(f.factor(indefinite.data()));
+  EXPECT_FALSE(f.used_ldlt());
+  EXPECT_FALSE(f.solve(b.data(), x.data()));
+  const std::vector<double> barely = values(-0.05);  // L's smallest eigenvalue: 6 - 6 cos(pi/(k+1)) = 0.102
+  ASSERT_TRUE(f.factor(barely.data()));
+  ASSERT_TRUE(f.solve(b.data(), x.data()));
+  EXPECT_LT(residual(barely, x, b), 1e-9);
 }

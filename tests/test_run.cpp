@@ -1,6 +1,7 @@
 // Whole runs of mesh scenes on IDA: exact solutions and conservation laws.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <map>
 
@@ -18,6 +19,40 @@ using namespace isochor;
 namespace {
 Scene scene(const std::string& text, const std::vector<std::string>& overrides = {}) {
   return parse_scene(SceneFile::parse(text, "test.toml", overrides));
+}
+// A demo run with overrides into dir/name.h5: every frame's positions and the /stats totals.
+struct DemoRun {
+  std::vector<Points> frames;
+  std::map<std::string, double> totals;
+};
+DemoRun run_demo(const std::filesystem::path& dir, const std::string& name, const std::string& demo,
+                 const std::vector<std::string>& overrides) {
+  const Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/" + demo, overrides);
+  const RunFile f(run_scene(sc, (dir / (name + ".h5")).string(), false).output);
+  DemoRun r;
+  for (int k = 0; k < f.num_frames(); ++k) r.frames.push_back(f.positions(k));
+  r.totals = f.stat_totals();
+  return r;
+}
+// The ball drop on backward Euler with these overrides, its step matrix solved by CHOLMOD
+// ("reduced", [0]) and by PCG ("krylov", [1]).
+std::array<DemoRun, 2> ball_on_cholmod_and_pcg(std::vector<std::string> overrides) {
+  const auto dir = test::temp_dir();
+  overrides.push_back("integrator.kind=backward_euler");
+  std::array<DemoRun, 2> r;
+  for (int s = 0; s < 2; ++s) {
+    const char* solver = s == 0 ? "reduced" : "krylov";
+    overrides.push_back(std::string("integrator.linear_solver=") + solver);
+    r[s] = run_demo(dir, solver, "ball_drop.toml", overrides);
+    overrides.pop_back();
+  }
+  return r;
+}
+// The largest distance of a node between two runs' frames (as many frames in both).
+double frames_apart(const DemoRun& a, const DemoRun& b) {
+  double d = 0;
+  for (std::size_t k = 0; k < a.frames.size(); ++k) d = std::max(d, (a.frames[k] - b.frames[k]).cwiseAbs().maxCoeff());
+  return d;
 }
 const char* kBox = R"(
 [mesh]
@@ -357,22 +392,12 @@ TEST(IdaRun, BallDropFramesAgreeAcrossLinearSolvers) {
 TEST(BackwardEulerRun, KrylovAndCholmodStepsAgree) {
   // Backward Euler's step matrix solved by CHOLMOD or by block-Jacobi PCG: the same steps to the
   // Newton tolerance (1e-8 |q|, accumulated over 160 steps: 1e-5 m).
-  const auto dir = test::temp_dir();
-  std::vector<Points> frames[2];
-  const char* solvers[2] = {"reduced", "krylov"};
-  for (int s = 0; s < 2; ++s) {
-    Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/ball_drop.toml",
-                          {"mesh.target_tets=1000", "frames.duration=0.04", "frames.rate=250.0", "integrator.kind=backward_euler",
-                           "integrator.dt=0.00025", std::string("integrator.linear_solver=") + solvers[s]});
-    const RunSummary r = run_scene(sc, (dir / (std::string(solvers[s]) + ".h5")).string(), false);
-    const RunFile f(r.output);
-    ASSERT_EQ(f.num_frames(), 11);
-    for (int k = 0; k < f.num_frames(); ++k) frames[s].push_back(f.positions(k));
-    if (s == 1) {
-      EXPECT_GT(f.stat_totals().at("linear_iterations"), 0.0);
-    }
-  }
-  for (int k = 0; k < 11; ++k) EXPECT_LT((frames[1][k] - frames[0][k]).cwiseAbs().maxCoeff(), 1e-5) << "frame " << k;
+  const auto r = ball_on_cholmod_and_pcg(
+      {"mesh.target_tets=1000", "frames.duration=0.04", "frames.rate=250.0", "integrator.dt=0.00025"});
+  ASSERT_EQ(r[0].frames.size(), 11u);
+  ASSERT_EQ(r[1].frames.size(), 11u);
+  EXPECT_GT(r[1].totals.at("linear_iterations"), 0.0);
+  EXPECT_LT(frames_apart(r[1], r[0]), 1e-5);
 }
 
 TEST(BackwardEulerRun, PcgStoppedEarlyKeepsTheSteps) {
@@ -383,15 +408,12 @@ TEST(BackwardEulerRun, PcgStoppedEarlyKeepsTheSteps) {
   // 1e-12 takes the same Newton path as CHOLMOD, to rounding.
   const auto dir = test::temp_dir();
   const char* sets[3] = {"integrator.linear_solver=reduced", "integrator.linear_tol=1e-12", "integrator.linear_tol=0"};
-  std::vector<Points> frames[3];
+  DemoRun r[3];
   std::map<std::string, double> totals[3];
   for (int s = 0; s < 3; ++s) {
-    Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/pinned_cube.toml",
-                          {"mesh.cells=8", "frames.duration=1.0", sets[s]});
-    const RunFile f(run_scene(sc, (dir / (std::to_string(s) + ".h5")).string(), false).output);
-    ASSERT_EQ(f.num_frames(), 61);
-    for (int k = 0; k < f.num_frames(); ++k) frames[s].push_back(f.positions(k));
-    totals[s] = f.stat_totals();
+    r[s] = run_demo(dir, std::to_string(s), "pinned_cube.toml", {"mesh.cells=8", "frames.duration=1.0", sets[s]});
+    ASSERT_EQ(r[s].frames.size(), 61u);
+    totals[s] = r[s].totals;
   }
   // "auto" (the demo's) chose PCG for runs 1 and 2 at this size, CHOLMOD only when named.
   EXPECT_EQ(totals[0].at("linear_iterations"), 0.0);
@@ -400,16 +422,12 @@ TEST(BackwardEulerRun, PcgStoppedEarlyKeepsTheSteps) {
   const auto per_newton = [&](int s) { return totals[s].at("linear_iterations") / totals[s].at("newton_iterations"); };
   std::printf("CG iterations per Newton iteration: %.1f at 1e-12, %.1f at the default\n", per_newton(1), per_newton(2));
   EXPECT_LT(per_newton(2), 0.7 * per_newton(1));
-  double exact = 0, loose = 0;
-  for (int k = 0; k < 61; ++k) {
-    exact = std::max(exact, (frames[1][k] - frames[0][k]).cwiseAbs().maxCoeff());
-    loose = std::max(loose, (frames[2][k] - frames[0][k]).cwiseAbs().maxCoeff());
-  }
+  const double exact = frames_apart(r[1], r[0]), loose = frames_apart(r[2], r[0]);
   std::printf("largest distance to CHOLMOD's frames: %.2e m (PCG to 1e-12), %.2e m (default)\n", exact, loose);
   EXPECT_LT(exact, 1e-10);
   EXPECT_LT(loose, 1e-6);
   // The cube moves by decimetres, so the bounds above are not met by standing still.
-  EXPECT_GT((frames[0][60] - frames[0][0]).cwiseAbs().maxCoeff(), 0.05);
+  EXPECT_GT((r[0].frames[60] - r[0].frames[0]).cwiseAbs().maxCoeff(), 0.05);
 }
 
 TEST(BackwardEulerRun, AutomaticSolverFollowsTheMeshSize) {
@@ -425,6 +443,58 @@ TEST(BackwardEulerRun, AutomaticSolverFollowsTheMeshSize) {
   EXPECT_EQ(cg_iterations({"mesh.cells=6"}), 0.0);
   EXPECT_GT(cg_iterations({"mesh.cells=8"}), 0.0);
   EXPECT_EQ(cg_iterations({"mesh.cells=8", "integrator.line_search=false"}), 0.0);
+}
+
+TEST(BackwardEulerRun, AutomaticSolverSwitchesToCholmodWhereCgIsSlow) {
+  // linear_solver = "auto" starts on PCG above 1,300 free dofs, then estimates both solvers' cost
+  // per Newton iteration from what the steps counted. The Figure 8 cube at 8^3 cells (2,187 dofs)
+  // in UNH at lambda = 9,900 Pa = 99 mu and 8 ms steps: CG takes ~180 iterations per solve, while
+  // one CHOLMOD factor serves ~10 Newton iterations, so auto moves to CHOLMOD once (measured: 0.14
+  // s against PCG's 0.28 s) and its CG iterations stop there. The frames stay those of CHOLMOD
+  // alone, to the Newton tolerance (1e-6 of each step's few-mm displacement, over 13 steps).
+  const auto dir = test::temp_dir();
+  const char* solvers[3] = {"reduced", "krylov", "auto"};
+  DemoRun r[3];
+  for (int s = 0; s < 3; ++s) {
+    r[s] = run_demo(dir, solvers[s], "cube_gravity.toml",
+                    {"mesh.cells=8", "frames.duration=0.1", "integrator.kind=backward_euler", "integrator.dt=0.008",
+                     "material.model=unh", "material.lambda=9900", "zones.global=false",
+                     std::string("integrator.linear_solver=") + solvers[s]});
+    ASSERT_EQ(r[s].frames.size(), 13u);
+  }
+  EXPECT_EQ(r[0].totals.at("solver_switches"), 0.0);
+  EXPECT_EQ(r[1].totals.at("solver_switches"), 0.0);
+  EXPECT_EQ(r[2].totals.at("solver_switches"), 1.0);
+  // PCG ran only for the first steps: CG iterations over 100 per Newton iteration alone, fewer
+  // than half of PCG's over the whole run.
+  const double cg_alone = r[1].totals.at("linear_iterations") / r[1].totals.at("newton_iterations");
+  std::printf("CG iterations per Newton iteration, PCG alone: %.1f; auto: %.0f of PCG's %.0f\n", cg_alone,
+              r[2].totals.at("linear_iterations"), r[1].totals.at("linear_iterations"));
+  EXPECT_GT(cg_alone, 100.0);
+  EXPECT_GT(r[2].totals.at("linear_iterations"), 0.0);
+  EXPECT_LT(r[2].totals.at("linear_iterations"), 0.5 * r[1].totals.at("linear_iterations"));
+  const double apart = frames_apart(r[2], r[0]);
+  std::printf("auto's frames from CHOLMOD's: %.2e m\n", apart);
+  EXPECT_LT(apart, 1e-7);
+  EXPECT_GT((r[0].frames[12] - r[0].frames[0]).cwiseAbs().maxCoeff(), 1e-3);  // the cube sagged
+}
+
+TEST(BackwardEulerRun, CholmodShiftsAnIndefiniteStepMatrixAsPcgDoes) {
+  // The 2K-tet ball at 1 ms through its impact: with the line search an indefinite step matrix
+  // is shifted by more inertia (PCG stops on it). CHOLMOD used to factor it by LDL^T instead; the
+  // line search then cut its directions to 1/8-1/128 and the run failed at 37 ms ("Newton did not
+  // converge in 30 iterations"). Now CHOLMOD refuses it too: both solvers run through 50 ms, shift
+  // matrices, and give the same frames to the Newton tolerance (1e-6 of each step's ~1 cm,
+  // over 50 steps).
+  const auto r = ball_on_cholmod_and_pcg({"mesh.target_tets=2000", "frames.duration=0.05", "integrator.dt=0.001"});
+  for (int s = 0; s < 2; ++s) {
+    ASSERT_EQ(r[s].frames.size(), 51u) << (s == 0 ? "CHOLMOD" : "PCG");
+    EXPECT_GT(r[s].totals.at("regularisations"), 0.0) << (s == 0 ? "CHOLMOD" : "PCG");
+  }
+  const double apart = frames_apart(r[1], r[0]);
+  std::printf("CHOLMOD's frames from PCG's: %.2e m\n", apart);
+  EXPECT_LT(apart, 1e-6);
+  EXPECT_GT((r[0].frames[50] - r[0].frames[0]).cwiseAbs().maxCoeff(), 0.3);  // the ball fell and hit the ground
 }
 
 TEST(Statics, TheSameEquilibriaWithEveryLinearSolver) {

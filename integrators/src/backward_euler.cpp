@@ -21,7 +21,11 @@ struct BackwardEuler::Impl {
   ConstrainedSystem& sys;
   BackwardEulerOptions opt;
   Index n, m;
-  std::unique_ptr<BorderedSolver> S;  // the step matrix and the borders by a Schur complement
+  // The step matrix and the borders by a Schur complement: S is solvers[0] (CHOLMOD) or
+  // solvers[1] (PCG, or AMG when named); "auto" with the line search may switch between them.
+  std::unique_ptr<BorderedSolver> solvers[2];
+  BorderedSolver* S = nullptr;
+  bool refuse_indefinite = false;  // the line search shifts indefinite matrices (run())
   std::vector<double> K, D, Sv;
   std::vector<Index> diag;
   std::vector<std::vector<double>> G;
@@ -53,9 +57,75 @@ struct BackwardEuler::Impl {
     for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
   }
 
-  void make_step_solver(LinearSolverKind kind) {
-    S = std::make_unique<BorderedSolver>(sys.pattern(), sys.constraint_rows(), symmetric_solver_of(kind),
-                                         opt.linear_tol > 0 ? opt.linear_tol : BackwardEulerOptions::kDefaultLinearTol);
+  BorderedSolver& step_solver(LinearSolverKind kind) {  // made on first use
+    std::unique_ptr<BorderedSolver>& b = solvers[kind == LinearSolverKind::reduced ? 0 : 1];
+    if (!b) {
+      b = std::make_unique<BorderedSolver>(sys.pattern(), sys.constraint_rows(), symmetric_solver_of(kind),
+                                           opt.linear_tol > 0 ? opt.linear_tol : BackwardEulerOptions::kDefaultLinearTol);
+      if (refuse_indefinite) b->refuse_indefinite();
+    }
+    return *b;
+  }
+  void make_step_solver(LinearSolverKind kind) {  // S from here on; the next iteration factors afresh
+    S = &step_solver(kind);
+    factored = false;
+    refresh = true;
+  }
+  // Over both solvers: CG iterations, and seconds of CHOLMOD's ordering and symbolic analysis.
+  long linear_iterations() const {
+    long k = 0;
+    for (const auto& b : solvers)
+      if (b) k += b->symmetric().iterations();
+    return k;
+  }
+  double analyse_seconds() const {
+    double t = 0;
+    for (const auto& b : solvers)
+      if (b) t += b->symmetric().analyse_seconds();
+    return t;
+  }
+
+  // linear_solver = "auto" with the line search: after every step, once the current solver has
+  // taken kChooseWindow steps, the cost per Newton iteration of each solver is estimated from
+  // what those steps counted (no clock, so a run is repeatable): PCG's from its CG iterations,
+  // CHOLMOD's from the fresh matrices per Newton iteration and its factor's flops and entries
+  // (the symbolic analysis, asked for only once CG takes kAnalyseMinCg iterations per Newton
+  // iteration). The solver switches when the other is estimated kSwitchGain times cheaper.
+  // Seconds per unit, measured on one core of the development machine (session 19): a CG
+  // iteration per entry of the step matrix; a factorisation per flop and per entry of the factor;
+  // a solve per entry of the factor.
+  static constexpr double kCgSecondsPerEntry = 0.3e-9, kFactorSecondsPerFlop = 0.05e-9,
+                          kFactorSecondsPerEntry = 2e-9, kSolveSecondsPerEntry = 1e-9;
+  static constexpr int kChooseWindow = 4;
+  static constexpr double kAnalyseMinCg = 100, kSwitchGain = 1.5;
+  bool choosing = false;
+  struct StepCounts {
+    long newton, fresh, cg;
+  };
+  std::vector<StepCounts> recent;  // per step since the solver last changed (the last kChooseWindow)
+  double cg_per_newton = -1;       // PCG's CG iterations per Newton iteration over its last window
+  StepCounts counts() const { return {stats.newton_iterations, stats.fresh_factorisations, stats.linear_iterations}; }
+  void after_step(const StepCounts& before) {
+    const StepCounts now = counts();
+    recent.push_back({now.newton - before.newton, now.fresh - before.fresh, now.cg - before.cg});
+    if (static_cast<int>(recent.size()) > kChooseWindow) recent.erase(recent.begin());
+    if (static_cast<int>(recent.size()) < kChooseWindow) return;
+    StepCounts w{0, 0, 0};
+    for (const StepCounts& c : recent) w = {w.newton + c.newton, w.fresh + c.fresh, w.cg + c.cg};
+    if (w.newton == 0) return;
+    const double fresh = static_cast<double>(w.fresh) / static_cast<double>(w.newton);
+    const bool on_pcg = S == solvers[1].get();
+    if (on_pcg) cg_per_newton = static_cast<double>(w.cg) / static_cast<double>(w.newton);
+    if (cg_per_newton < (on_pcg ? kAnalyseMinCg : 0.0)) return;  // CG cheap, or never measured
+    double flops = 0, entries = 0;
+    step_solver(LinearSolverKind::reduced).symmetric().factor_cost(flops, entries);
+    const double pcg = cg_per_newton * static_cast<double>(sys.pattern().nnz()) * kCgSecondsPerEntry;
+    const double direct = fresh * (flops * kFactorSecondsPerFlop + entries * kFactorSecondsPerEntry) + entries * kSolveSecondsPerEntry;
+    if (on_pcg ? kSwitchGain * direct < pcg : kSwitchGain * pcg < direct) {
+      make_step_solver(on_pcg ? LinearSolverKind::reduced : LinearSolverKind::krylov);
+      recent.clear();
+      stats.solver_switches++;
+    }
   }
 
   bool factored = false;  // S holds a factorisation of some earlier step matrix
@@ -255,7 +325,7 @@ struct BackwardEuler::Impl {
             ok = kkt->factor(kv.data());
           } else {
             ok = S->factor(Sv.data());
-            stats.symbolic_seconds = S->symmetric().analyse_seconds();
+            stats.symbolic_seconds = analyse_seconds();
           }
           stats.factor_seconds += seconds_since(tf);
           stats.jacobian_evals++;
@@ -284,7 +354,7 @@ struct BackwardEuler::Impl {
           const VectorXd r2 = -R2;
           solved = S->set_borders(G);
           solved = S->solve(rhs.data(), r2.data(), dq.data(), dl.data()) && solved;
-          stats.linear_iterations = S->symmetric().iterations();
+          stats.linear_iterations = linear_iterations();
         }
         stats.solve_seconds += seconds_since(ts);
         if (!solved && !line_search) {
@@ -424,13 +494,22 @@ RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
   s.line_search = s.opt.line_search && !s.opt.semi_implicit && s.sys.potential(times.front(), q, V0) &&
                   (!s.sys.has_damping() || s.sys.set_damping_forces(true));
   s.variational = s.line_search && s.sys.has_damping();
-  if (!s.use_kkt && s.opt.automatic_linear_solver)
+  // With the line search an indefinite step matrix is shifted (step_once), never factored as it
+  // is: CHOLMOD's LDL^T of it gave directions the search cut to 1/8-1/128, and the 4.5K-tet ball
+  // at 1 ms failed at 37 ms where PCG, which stops on such a matrix, ran through.
+  s.refuse_indefinite = s.line_search;
+  if (s.S && s.line_search) s.S->refuse_indefinite();
+  if (!s.use_kkt && s.opt.automatic_linear_solver) {
     s.make_step_solver(s.line_search && s.n >= BackwardEulerOptions::kAutoKrylovMinDofs ? LinearSolverKind::krylov
                                                                                         : LinearSolverKind::reduced);
+    s.choosing = s.line_search;
+  }
   if (s.variational) s.Dn.assign(s.sys.pattern().nnz(), 0.0);
   auto step = [&](double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q1, VectorXd& v1, VectorXd& l1,
                   std::string& reason) {
+    const Impl::StepCounts before = s.counts();
     if (!s.advance(t, t1, qn, vn, q1, v1, l1, reason)) return false;
+    if (s.choosing) s.after_step(before);
     if (s.opt.rescale_volume && !s.sys.rescale_volume(t1, q1)) {
       reason = "this model has no volume rescaling";
       return false;

@@ -28,6 +28,8 @@ class BorderedSolver {
   // Solves the bordered system; l has m entries. False if a solve with A failed.
   bool solve(const double* r1, const double* r2, double* x, double* l);
   const SymmetricSolver& symmetric() const { return *A_; }
+  SymmetricSolver& symmetric() { return *A_; }
+  void refuse_indefinite() { A_->refuse_indefinite(); }  // SymmetricSolver::refuse_indefinite
 
  private:
   const std::vector<std::vector<Index>>& rows_;

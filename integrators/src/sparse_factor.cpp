@@ -18,9 +18,17 @@ struct SymmetricFactor::Impl {
   cholmod_factor* Lldl = nullptr;  // simplicial LDL^T, for an indefinite matrix
   cholmod_dense *B = nullptr, *X = nullptr, *Y = nullptr, *E = nullptr;
   bool ldlt = false;     // the last factorisation was LDL^T
+  bool refuse = false;   // refuse_indefinite(): no LDL^T
   int since_ldlt = 0;    // factorisations in LDL^T mode since LL^T was last tried
   static constexpr int kRetry = 8;
   double analyse = 0;  // seconds in cholmod_l_analyze (METIS ordering and symbolic factorisation)
+  double flops = 0, entries = 0;  // of the supernodal LL^T, from its analysis
+  cholmod_factor* analyze_ll() {
+    cholmod_factor* f = analyze();
+    flops = c.fl;
+    entries = c.lnz;
+    return f;
+  }
   cholmod_factor* analyze() {
     const auto t0 = std::chrono::steady_clock::now();
     cholmod_factor* f = cholmod_l_analyze(A, &c);
@@ -63,11 +71,12 @@ bool SymmetricFactor::factor(const double* values) {
   std::memcpy(s.A->x, values, sizeof(double) * s.A->nzmax);
   const bool try_ll = !s.ldlt || ++s.since_ldlt >= Impl::kRetry;
   if (try_ll) {
-    if (!s.Lsup) s.Lsup = s.analyze();
+    if (!s.Lsup) s.Lsup = s.analyze_ll();
     cholmod_l_factorize(s.A, s.Lsup, &s.c);
     s.L = s.Lsup;
     s.ldlt = false;
   }
+  if (s.refuse) return s.c.status == CHOLMOD_OK;
   if (!try_ll || s.c.status == CHOLMOD_NOT_POSDEF) {
     if (!s.Lldl) {
       s.c.supernodal = CHOLMOD_SIMPLICIAL;
@@ -96,6 +105,17 @@ bool SymmetricFactor::solve(const double* b, double* x) {
 }
 
 bool SymmetricFactor::used_ldlt() const { return impl_->ldlt; }
+bool SymmetricFactor::factor_cost(double& flops, double& entries) {
+  Impl& s = *impl_;
+  if (!s.Lsup) s.Lsup = s.analyze_ll();
+  flops = s.flops;
+  entries = s.entries;
+  return true;
+}
+void SymmetricFactor::refuse_indefinite() {
+  impl_->refuse = true;
+  impl_->ldlt = false;
+}
 double SymmetricFactor::analyse_seconds() const { return impl_->analyse; }
 
 double SymmetricFactor::factor_nnz() const {

@@ -25,6 +25,7 @@ struct RunStats {
   // matrices shifted because they could not be factored or gave no descent, and steps
   // retried as half steps after a failure.
   long line_search_cuts = 0, regularisations = 0, step_halvings = 0;
+  long solver_switches = 0;  // backward Euler, linear_solver = "auto": changes between PCG and CHOLMOD
   struct FrameSample {
     long steps, newton_iterations, error_test_failures, newton_failures, jacobian_evals;
     int order;

@@ -34,6 +34,15 @@ class SymmetricSolver {
   virtual bool refactor(const double* values, const std::vector<Index>& changed) { return factor(values); }
   // solve() from the guess in x (iterative solvers; a direct solver ignores it).
   virtual bool solve_from(const double* b, double* x) { return solve(b, x); }
+  // From now on factor() fails on a matrix it finds indefinite instead of factoring it as one: for
+  // a minimisation that shifts such a matrix towards definiteness (backward Euler's line search),
+  // where an indefinite matrix's Newton direction descends poorly or not at all. Iterative
+  // solvers fail there already.
+  virtual void refuse_indefinite() {}
+  // A direct solver: the floating-point operations of one factorisation and the entries of its
+  // factor, from the symbolic analysis (done here if not yet: an ordering, no numbers). False for
+  // an iterative solver.
+  virtual bool factor_cost(double& flops, double& entries) { return false; }
 };
 
 // cholmod: SymmetricFactor; pcg: BlockJacobiPcg with relative residual tolerance `tol` (the GGL
@@ -74,6 +83,8 @@ class SymmetricFactor : public SymmetricSolver {
   bool factor(const double* values) override;
   bool solve(const double* b, double* x) override;
   bool used_ldlt() const;
+  void refuse_indefinite() override;
+  bool factor_cost(double& flops, double& entries) override;
   double factor_nnz() const override;
   double analyse_seconds() const override;
 
