@@ -55,6 +55,8 @@ for c in sizes:
                 per_frame.append(w[-1] / (len(w) - 1))
                 newton.append(a["newton_iterations"] / a["steps"])
                 solver = "krylov" if a["linear_iterations"] > 0 else "direct"
+                if a.get("solver_switches", 0) > 0:  # auto moved between PCG and CHOLMOD
+                    solver += f" ({int(a['solver_switches'])} switch)"
                 tets = f["/mesh/tets"].shape[0] if "/mesh/tets" in f else 6 * c**3
         m = float(np.median(per_frame))
         if c in hobak:

@@ -89,8 +89,9 @@ struct BackwardEuler::Impl {
   // taken kChooseWindow steps, the cost per Newton iteration of each solver is estimated from
   // what those steps counted (no clock, so a run is repeatable): PCG's from its CG iterations,
   // CHOLMOD's from the fresh matrices per Newton iteration and its factor's flops and entries
-  // (the symbolic analysis, asked for only once CG takes kAnalyseMinCg iterations per Newton
-  // iteration). The solver switches when the other is estimated kSwitchGain times cheaper.
+  // (the symbolic analysis; above kAnalyseAnyMaxDofs, where it costs more than ~0.1 s, asked for
+  // only once CG takes kAnalyseMinCg iterations per Newton iteration). The solver switches when
+  // the other is estimated kSwitchGain times cheaper.
   // Seconds per unit, measured on one core of the development machine (session 19): a CG
   // iteration per entry of the step matrix; a factorisation per flop and per entry of the factor;
   // a solve per entry of the factor.
@@ -98,6 +99,7 @@ struct BackwardEuler::Impl {
                           kFactorSecondsPerEntry = 2e-9, kSolveSecondsPerEntry = 1e-9;
   static constexpr int kChooseWindow = 4;
   static constexpr double kAnalyseMinCg = 100, kSwitchGain = 1.5;
+  static constexpr Index kAnalyseAnyMaxDofs = 20000;
   bool choosing = false;
   struct StepCounts {
     long newton, fresh, cg;
@@ -116,9 +118,13 @@ struct BackwardEuler::Impl {
     const double fresh = static_cast<double>(w.fresh) / static_cast<double>(w.newton);
     const bool on_pcg = S == solvers[1].get();
     if (on_pcg) cg_per_newton = static_cast<double>(w.cg) / static_cast<double>(w.newton);
-    if (cg_per_newton < (on_pcg ? kAnalyseMinCg : 0.0)) return;  // CG cheap, or never measured
+    if (cg_per_newton < 0) return;  // PCG never ran
+    if (on_pcg && cg_per_newton < kAnalyseMinCg && n > kAnalyseAnyMaxDofs) return;  // CG cheap, the analysis not
     double flops = 0, entries = 0;
+    const auto ta = Clock::now();  // the first call orders and analyses: part of the factorisations' time
     step_solver(LinearSolverKind::reduced).symmetric().factor_cost(flops, entries);
+    stats.factor_seconds += seconds_since(ta);
+    stats.symbolic_seconds = analyse_seconds();
     const double pcg = cg_per_newton * static_cast<double>(sys.pattern().nnz()) * kCgSecondsPerEntry;
     const double direct = fresh * (flops * kFactorSecondsPerFlop + entries * kFactorSecondsPerEntry) + entries * kSolveSecondsPerEntry;
     if (on_pcg ? kSwitchGain * direct < pcg : kSwitchGain * pcg < direct) {
