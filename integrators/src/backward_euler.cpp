@@ -501,8 +501,8 @@ RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
                   (!s.sys.has_damping() || s.sys.set_damping_forces(true));
   s.variational = s.line_search && s.sys.has_damping();
   // With the line search an indefinite step matrix is shifted (step_once), never factored as it
-  // is: CHOLMOD's LDL^T of it gave directions the search cut to 1/8-1/128, and the 4.5K-tet ball
-  // at 1 ms failed at 37 ms where PCG, which stops on such a matrix, ran through.
+  // is: CHOLMOD's LDL^T of it gave directions the search cut to 1/8-1/128, and the 4.7K-tet ball
+  // at 1 ms failed at 36 ms where PCG, which stops on such a matrix, ran through.
   s.refuse_indefinite = s.line_search;
   if (s.S && s.line_search) s.S->refuse_indefinite();
   if (!s.use_kkt && s.opt.automatic_linear_solver) {
