@@ -134,6 +134,23 @@ TEST(Resume, AnInterruptedBackwardEulerRunRepeatsTheSameSteps) {
   EXPECT_LT(dv, 1e-6);
 }
 
+// linear_solver = "auto" moving from PCG to CHOLMOD (the stiff cube of
+// BackwardEulerRun.AutomaticSolverSwitchesToCholmodWhereCgIsSlow, which switches after 4-8
+// steps): a run resumed after its 6th frame starts on PCG again and switches again, and its frames
+// are the uninterrupted run's to the Newton tolerance (1e-6 of each step's few-mm displacement).
+TEST(Resume, AnAutomaticSolverChoosesAgainAfterAResume) {
+  const Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/cube_gravity.toml",
+                              {"mesh.cells=8", "frames.duration=0.1", "integrator.kind=backward_euler",
+                               "integrator.dt=0.008", "material.model=unh", "material.lambda=9900", "zones.global=false"});
+  const auto [ref, res] = straight_and_resumed(sc, 6);
+  ASSERT_EQ(res.x.size(), 13u);
+  ASSERT_EQ(ref.x.size(), 13u);
+  const double dx = max_difference(res.x, ref.x);
+  std::printf("auto's backward Euler resumed at frame 6: positions %.3e m apart\n", dx);
+  EXPECT_LT(dx, 1e-7);
+  EXPECT_GT(max_difference(ref.x, std::vector<Points>(ref.x.size(), ref.x[0])), 1e-3);  // the cube sagged
+}
+
 // A killed writer can leave a frame half written: some series a row longer than others. The
 // resume drops it, continues from the last complete frame, and the file ends as the
 // uninterrupted run's.

@@ -25,7 +25,7 @@ struct BackwardEuler::Impl {
   // solvers[1] (PCG, or AMG when named); "auto" with the line search may switch between them.
   std::unique_ptr<BorderedSolver> solvers[2];
   BorderedSolver* S = nullptr;
-  bool refuse_indefinite = false;  // the line search shifts indefinite matrices (run())
+  bool refuse_indefinite = false;  // the line search shifts indefinite matrices (run() sets both)
   std::vector<double> K, D, Sv;
   std::vector<Index> diag;
   std::vector<std::vector<double>> G;
@@ -41,7 +41,6 @@ struct BackwardEuler::Impl {
         use_kkt(o.linear_solver == LinearSolverKind::klu || m > o.schur_max_constraints) {
     if (o.project_hessian && !s.set_hessian_projection(true))
       throw std::invalid_argument("integrator.hessian = \"projected\": this model has no element Hessians to project");
-    if (!use_kkt && !o.automatic_linear_solver) make_step_solver(o.linear_solver);
     if (use_kkt) {
       layout = std::make_unique<KktLayout>(s.pattern(), s.constraint_rows());
       kkt = std::make_unique<KktFactor>(*layout, s.pattern(), s.dofs_per_group(), s.constraint_rows());
@@ -504,11 +503,13 @@ RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
   // is: CHOLMOD's LDL^T of it gave directions the search cut to 1/8-1/128, and the 4.7K-tet ball
   // at 1 ms failed at 36 ms where PCG, which stops on such a matrix, ran through.
   s.refuse_indefinite = s.line_search;
-  if (s.S && s.line_search) s.S->refuse_indefinite();
-  if (!s.use_kkt && s.opt.automatic_linear_solver) {
-    s.make_step_solver(s.line_search && s.n >= BackwardEulerOptions::kAutoKrylovMinDofs ? LinearSolverKind::krylov
-                                                                                        : LinearSolverKind::reduced);
-    s.choosing = s.line_search;
+  if (!s.use_kkt) {
+    LinearSolverKind kind = s.opt.linear_solver;
+    if (s.opt.automatic_linear_solver)
+      kind = s.line_search && s.n >= BackwardEulerOptions::kAutoKrylovMinDofs ? LinearSolverKind::krylov
+                                                                              : LinearSolverKind::reduced;
+    s.make_step_solver(kind);
+    s.choosing = s.opt.automatic_linear_solver && s.line_search;
   }
   if (s.variational) s.Dn.assign(s.sys.pattern().nnz(), 0.0);
   auto step = [&](double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q1, VectorXd& v1, VectorXd& l1,
