@@ -15,19 +15,7 @@ rounds=${2:-4}
 cd "$(dirname "$0")/.."
 out=out/bench/auto_solver
 mkdir -p "$out"
-cube=(demos/cube_gravity.toml --set frames.duration=0.5 --set integrator.kind=backward_euler)
-stiff=("${cube[@]}" --set zones.global=false)
-cases=(
-  "unh900_8ms|${stiff[*]} --set material.model=unh --set material.lambda=900 --set integrator.dt=0.008"
-  "unh9900_8ms|${stiff[*]} --set material.model=unh --set material.lambda=9900 --set integrator.dt=0.008"
-  "unh9900_33ms|${stiff[*]} --set material.model=unh --set material.lambda=9900 --set integrator.dt=0.033"
-  "snh9900_8ms|${stiff[*]} --set material.model=snh --set material.lambda=9900 --set integrator.dt=0.008"
-  "cnh_8ms|${cube[*]} --set integrator.dt=0.008"
-  "cnh_33ms|${cube[*]} --set integrator.dt=0.033"
-  "twist|demos/twist.toml"
-  "pinned7|demos/pinned_cube.toml --set mesh.cells=7"
-  "pinned13|demos/pinned_cube.toml --set mesh.cells=13"
-)
+source bench/auto_solver_cases.sh
 solvers=(reduced krylov auto)
 round() {  # round R CORE ORDER(0: as listed, 1: reversed)
   local r=$1 core=$2 order=$3 list=("${cases[@]}")

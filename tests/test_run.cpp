@@ -403,18 +403,21 @@ TEST(BackwardEulerRun, KrylovAndCholmodStepsAgree) {
 TEST(BackwardEulerRun, PcgStoppedEarlyKeepsTheSteps) {
   // The pinned cube at 8^3 cells (1,944 free dofs) over 1 s. Newton's test measures its own
   // contraction and stops on its estimated error, so a CG stopped at a relative residual of 1e-4
-  // (the default) moves work from CG to Newton without moving the steps by more than Newton's
-  // tolerance (1e-5 of each step's displacement, ~1e-7 m here; 1e-6 m over 60 steps). PCG to
-  // 1e-12 takes the same Newton path as CHOLMOD, to rounding.
+  // (the default) moves work from CG to Newton, not error into the frames: at the demo's Newton
+  // tolerance (1e-5 of each step's displacement) its frames are as close to those of a tight run
+  // (CHOLMOD, Newton to 1e-10) as CHOLMOD's own are, and so are those of PCG to 1e-12. (Which
+  // matrices are kept depends on each solver's estimated costs, so the three take different
+  // Newton paths within that tolerance.)
   const auto dir = test::temp_dir();
-  const char* solvers[3] = {"reduced", "krylov", "krylov"};
-  const char* tols[3] = {"0", "1e-12", "0"};
-  DemoRun r[3];
-  std::map<std::string, double> totals[3];
-  for (int s = 0; s < 3; ++s) {
+  const char* solvers[4] = {"reduced", "krylov", "krylov", "reduced"};
+  const char* tols[4] = {"0", "1e-12", "0", "0"};
+  const char* newton[4] = {"1e-5", "1e-5", "1e-5", "1e-10"};
+  DemoRun r[4];
+  std::map<std::string, double> totals[4];
+  for (int s = 0; s < 4; ++s) {
     r[s] = run_demo(dir, std::to_string(s), "pinned_cube.toml",
                     {"mesh.cells=8", "frames.duration=1.0", std::string("integrator.linear_solver=") + solvers[s],
-                     std::string("integrator.linear_tol=") + tols[s]});
+                     std::string("integrator.linear_tol=") + tols[s], std::string("integrator.newton_tol=") + newton[s]});
     ASSERT_EQ(r[s].frames.size(), 61u);
     totals[s] = r[s].totals;
   }
@@ -424,10 +427,13 @@ TEST(BackwardEulerRun, PcgStoppedEarlyKeepsTheSteps) {
   const auto per_newton = [&](int s) { return totals[s].at("linear_iterations") / totals[s].at("newton_iterations"); };
   std::printf("CG iterations per Newton iteration: %.1f at 1e-12, %.1f at the default\n", per_newton(1), per_newton(2));
   EXPECT_LT(per_newton(2), 0.7 * per_newton(1));
-  const double exact = frames_apart(r[1], r[0]), loose = frames_apart(r[2], r[0]);
-  std::printf("largest distance to CHOLMOD's frames: %.2e m (PCG to 1e-12), %.2e m (default)\n", exact, loose);
-  EXPECT_LT(exact, 1e-10);
-  EXPECT_LT(loose, 1e-6);
+  const double direct = frames_apart(r[0], r[3]), exact = frames_apart(r[1], r[3]), loose = frames_apart(r[2], r[3]);
+  std::printf("largest distance to the tight run's frames: %.2e m (CHOLMOD), %.2e m (PCG to 1e-12), %.2e m (default)\n",
+              direct, exact, loose);
+  // "As close": within half as much again as the direct solver's distance, which Newton's
+  // tolerance alone sets.
+  EXPECT_LT(exact, 1.5 * direct);
+  EXPECT_LT(loose, 1.5 * direct);
   // The cube moves by decimetres, so the bounds above are not met by standing still.
   EXPECT_GT((r[0].frames[60] - r[0].frames[0]).cwiseAbs().maxCoeff(), 0.05);
 }

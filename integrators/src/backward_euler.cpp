@@ -69,6 +69,7 @@ struct BackwardEuler::Impl {
     S = &step_solver(kind);
     factored = false;
     refresh = true;
+    buying = false;
   }
   // Over both solvers: CG iterations, and seconds of CHOLMOD's ordering and symbolic analysis.
   long linear_iterations() const {
@@ -96,26 +97,35 @@ struct BackwardEuler::Impl {
   // a solve per entry of the factor.
   static constexpr double kCgSecondsPerEntry = 0.3e-9, kFactorSecondsPerFlop = 0.05e-9,
                           kFactorSecondsPerEntry = 2e-9, kSolveSecondsPerEntry = 1e-9;
+  // Per Newton iteration: CG's iterations (the borders' solves included) or CHOLMOD's 1 + m solves;
+  // per factorisation.
+  double pcg_solve_cost(double cg) const { return cg * static_cast<double>(sys.pattern().nnz()) * kCgSecondsPerEntry; }
+  double cholmod_solve_cost(double entries) const { return static_cast<double>(1 + m) * entries * kSolveSecondsPerEntry; }
+  static double cholmod_factor_cost(double flops, double entries) {
+    return flops * kFactorSecondsPerFlop + entries * kFactorSecondsPerEntry;
+  }
   static constexpr int kChooseWindow = 4;
   static constexpr double kAnalyseMinCg = 100, kSwitchGain = 1.5;
   static constexpr Index kAnalyseAnyMaxDofs = 20000;
   bool choosing = false;
   struct StepCounts {
-    long newton, fresh, cg;
+    long newton, fresh, cg, bought;  // bought: fresh matrices the reuse rule bought (charge_reuse)
   };
   std::vector<StepCounts> recent;  // per step since the solver last changed (the last kChooseWindow)
   double cg_per_newton = -1;       // PCG's CG iterations per Newton iteration over its last window
-  StepCounts counts() const { return {stats.newton_iterations, stats.fresh_factorisations, stats.linear_iterations}; }
+  StepCounts counts() const { return {stats.newton_iterations, stats.fresh_factorisations, stats.linear_iterations, bought}; }
   void after_step(const StepCounts& before) {
     const StepCounts now = counts();
-    recent.push_back({now.newton - before.newton, now.fresh - before.fresh, now.cg - before.cg});
+    recent.push_back({now.newton - before.newton, now.fresh - before.fresh, now.cg - before.cg, now.bought - before.bought});
     if (static_cast<int>(recent.size()) > kChooseWindow) recent.erase(recent.begin());
     if (static_cast<int>(recent.size()) < kChooseWindow) return;
-    StepCounts w{0, 0, 0};
-    for (const StepCounts& c : recent) w = {w.newton + c.newton, w.fresh + c.fresh, w.cg + c.cg};
+    StepCounts w{0, 0, 0, 0};
+    for (const StepCounts& c : recent) w = {w.newton + c.newton, w.fresh + c.fresh, w.cg + c.cg, w.bought + c.bought};
     if (w.newton == 0) return;
-    const double fresh = static_cast<double>(w.fresh) / static_cast<double>(w.newton);
     const bool on_pcg = S == solvers[1].get();
+    // CHOLMOD's fresh matrices per Newton iteration: on PCG, those the contraction asked for (the
+    // reuse rule buys more there, where a matrix costs only its assembly, than it would on CHOLMOD).
+    const double fresh = static_cast<double>(on_pcg ? w.fresh - w.bought : w.fresh) / static_cast<double>(w.newton);
     if (on_pcg) cg_per_newton = static_cast<double>(w.cg) / static_cast<double>(w.newton);
     if (cg_per_newton < 0) return;  // PCG never ran
     if (on_pcg && cg_per_newton < kAnalyseMinCg && n > kAnalyseAnyMaxDofs) return;  // CG cheap, the analysis not
@@ -124,14 +134,51 @@ struct BackwardEuler::Impl {
     step_solver(LinearSolverKind::reduced).symmetric().factor_cost(flops, entries);
     stats.factor_seconds += seconds_since(ta);
     stats.symbolic_seconds = analyse_seconds();
-    const double pcg = cg_per_newton * static_cast<double>(sys.pattern().nnz()) * kCgSecondsPerEntry;
-    const double direct = fresh * (flops * kFactorSecondsPerFlop + entries * kFactorSecondsPerEntry) + entries * kSolveSecondsPerEntry;
+    const double pcg = pcg_solve_cost(cg_per_newton);
+    const double direct = fresh * cholmod_factor_cost(flops, entries) + cholmod_solve_cost(entries);
     if (on_pcg ? kSwitchGain * direct < pcg : kSwitchGain * pcg < direct) {
       make_step_solver(on_pcg ? LinearSolverKind::reduced : LinearSolverKind::krylov);
       recent.clear();
       stats.solver_switches++;
     }
   }
+
+  // Factor reuse by cost. A matrix kept because it contracts at 1/4 or better may still take more
+  // iterations per step than a fresh one would: in the CNH cube at 8 ms on "auto", the matrix
+  // CHOLMOD factored at 0.072 s was kept to the end at 4-8 iterations per step, where the
+  // CHOLMOD-only run kept one from 0.056 s at 2-3. The step that factored the matrix sets the
+  // reference (its iterations from the factorisation on, at least 2); every later step's
+  // iterations beyond it are charged at the estimated cost of one (the forces, and the solves of
+  // pcg_solve_cost or cholmod_solve_cost), and once the charges exceed the estimated price of a
+  // fresh matrix (the Hessian's assembly and, on CHOLMOD, the factorisation) the next step factors
+  // afresh. Renting until the rent paid equals the price costs at most twice the better choice
+  // in hindsight (the ski-rental rule). Counts only, no clock: a run repeats exactly. Not for
+  // KLU's KKT matrix or AMG, which have no estimate.
+  // Seconds per entry of the step matrix, one core of the development machine (session 20,
+  // bench_assembly: the CNH ball's gradient pass 73 ns per tet, gradient and Hessian 586 ns, ~25
+  // entries per tet; the line search's energy adds to the former).
+  static constexpr double kForcesSecondsPerEntry = 4e-9, kHessianSecondsPerEntry = 20e-9;
+  int reference_iterations = 2;
+  double rent = 0;
+  void charge_reuse(int iterations, int since_fresh, bool fresh_step, long cg) {
+    if (fresh_step) {
+      reference_iterations = std::max(2, since_fresh);
+      rent = 0;
+      return;
+    }
+    const int extra = iterations - reference_iterations;
+    if (extra <= 0 || use_kkt || S == nullptr || opt.linear_solver == LinearSolverKind::amg) return;
+    const double entries_S = static_cast<double>(sys.pattern().nnz());
+    double flops = 0, entries = 0;
+    const bool direct = S->symmetric().factor_cost(flops, entries);
+    const double iteration = entries_S * kForcesSecondsPerEntry +
+                             (direct ? cholmod_solve_cost(entries) : pcg_solve_cost(static_cast<double>(cg) / iterations));
+    const double price = entries_S * kHessianSecondsPerEntry + (direct ? cholmod_factor_cost(flops, entries) : 0.0);
+    rent += extra * iteration;
+    if (rent > price && !refresh) refresh = buying = true;
+  }
+  bool buying = false;  // the next fresh matrix is one charge_reuse bought
+  long bought = 0;
 
   bool factored = false;  // S holds a factorisation of some earlier step matrix
   bool refresh = true;    // factor the next step matrix afresh
@@ -283,12 +330,14 @@ struct BackwardEuler::Impl {
     double first = 0;              // |dq| of the first iteration since the last factorisation
     int since = 0;                 // iterations since then
     bool fresh_this_step = false;  // a factorisation of this step's matrix
+    int newton_this_step = 0, newton_since_fresh = 0;
+    const long cg_before = linear_iterations();
     if (line_search) nu.setZero(m);
     double Vq = std::numeric_limits<double>::quiet_NaN();  // V(q), when known
     for (int it = 0; it < iterations; ++it) {
       const auto ta = Clock::now();
       v = (q - qn) / h;
-      bool fresh = always_fresh || refresh || !factored || opt.semi_implicit;
+      bool fresh = always_fresh || refresh || !factored || opt.semi_implicit || !opt.reuse_matrices;
       if (fresh) {
         std::fill(K.begin(), K.end(), 0.0);
         std::fill(D.begin(), D.end(), 0.0);
@@ -338,6 +387,9 @@ struct BackwardEuler::Impl {
           factored = ok;
           refresh = false;
           fresh_this_step = true;
+          newton_since_fresh = 0;
+          if (buying) bought++;
+          buying = false;
           ss = 20.0;
           if (!ok) {
             if (line_search && add_shift(shift, h)) continue;
@@ -430,6 +482,8 @@ struct BackwardEuler::Impl {
       q += alpha * dq;
       if (m) lambda += alpha * dl;
       stats.newton_iterations++;
+      newton_this_step++;
+      newton_since_fresh++;
       if (!q.allFinite()) {
         reason = "Newton produced a non-finite state";
         return false;
@@ -461,6 +515,7 @@ struct BackwardEuler::Impl {
       const bool done = since == 0 ? size <= 1e-4 * tol || (size <= tol && ss <= 1.0 && !fresh) : ss * size <= tol;
       if (done) {
         v = (q - qn) / h;
+        charge_reuse(newton_this_step, newton_since_fresh, fresh_this_step, linear_iterations() - cg_before);
         return true;
       }
     }

@@ -70,6 +70,10 @@ struct BackwardEulerOptions {
   // taken whole, the rest of the step uses the exact Hessian (quadratic convergence near the
   // solution, where the projected one contracts linearly, slowly where elements are indefinite).
   bool exact_near_solution = false;
+  // Keep a factored step matrix across iterations and steps while it serves (backward_euler.cpp:
+  // the contraction rate, and the reuse's cost against a fresh matrix's); off: a fresh matrix at
+  // every Newton iteration (exact Newton), the reference the reuse is tested against.
+  bool reuse_matrices = true;
   // A failed step is retried as two half steps, each of which may be halved again, up to this
   // many levels (0: a failed step stops the run).
   int substeps_on_failure = 0;
