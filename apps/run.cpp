@@ -1,9 +1,12 @@
 #include "run.hpp"
 
+#include <dlfcn.h>
+#include <omp.h>
 
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 
@@ -43,6 +46,10 @@ void write_totals(OutputWriter& w, const RunStats& s) {
   w.set_stat("regularisations", static_cast<double>(s.regularisations));
   w.set_stat("step_halvings", static_cast<double>(s.step_halvings));
   w.set_stat("solver_switches", static_cast<double>(s.solver_switches));
+  // The threads the run had: OpenMP's (assembly, CG) and OpenBLAS's (inside CHOLMOD; 0 where
+  // the BLAS is not OpenBLAS), for comparing timings.
+  w.set_stat("threads", static_cast<double>(omp_get_max_threads()));
+  w.set_stat("blas_threads", static_cast<double>(blas_threads()));
   // Peak resident memory of the whole process (getrusage), for the linear-solver benchmarks.
   w.set_stat("peak_memory_mb", peak_memory_mb());
 }
@@ -234,6 +241,17 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   w.close();
   bar.finish();
   return summary;
+}
+
+void blas_on_one_thread() {
+  if (std::getenv("OPENBLAS_NUM_THREADS")) return;
+  using SetThreads = void (*)(int);
+  if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
+}
+int blas_threads() {
+  using GetThreads = int (*)();
+  auto get = reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  return get ? get() : 0;
 }
 
 }  // namespace isochor
