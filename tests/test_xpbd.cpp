@@ -198,9 +198,9 @@ TEST(MassSpring, ForcesJacobiansAndVolumeConstraintMatchFiniteDifferences) {
   }
   const int n = sys.num_dofs();
   const SparsePattern& p = sys.pattern();
-  std::vector<double> K(p.nnz(), 0.0), D(p.nnz(), 0.0);
+  VectorXd K = VectorXd::Zero(p.nnz()), D = VectorXd::Zero(p.nnz());
   sys.add_force_jacobians(0.1, q, v, K.data(), D.data());
-  auto dense = [&](const std::vector<double>& vals) {
+  auto dense = [&](const VectorXd& vals) {
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
     for (Index c = 0; c < p.n; ++c)
       for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k) A(p.row_ind[k], c) = vals[k];
