@@ -238,7 +238,6 @@ int study_report(const std::string& dir) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  isochor::blas_on_one_thread();
   CLI::App app{"isochor: volume-preserving simulation of soft, nearly incompressible solids"};
   app.require_subcommand(1);
   // Bad command lines, like bad input, stop with one line.

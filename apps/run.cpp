@@ -146,7 +146,36 @@ std::vector<double> times_from(const std::vector<double>& times, int first, doub
 
 }  // namespace
 
+namespace {
+// While it lives, OpenBLAS (inside CHOLMOD) runs on one thread unless OPENBLAS_NUM_THREADS says
+// otherwise: its threads wait for work by spinning, against OpenMP's in the assembly and in CG.
+// On 2 idle cores the stiff cube on CHOLMOD took 6.7 s with them and 4.3 s without; the 13^3
+// pinned cube on PCG 1.7 s either way (README, "Threads"). The count before is restored after:
+// a Python process may share OpenBLAS with numpy. Looked up at run time, so a build against
+// another BLAS is untouched.
+class BlasOnOneThread {
+ public:
+  BlasOnOneThread() {
+    if (std::getenv("OPENBLAS_NUM_THREADS")) return;
+    set_ = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+    before_ = blas_threads();
+    if (set_ && before_ > 0) set_(1);
+  }
+  ~BlasOnOneThread() {
+    if (set_ && before_ > 0) set_(before_);
+  }
+  BlasOnOneThread(const BlasOnOneThread&) = delete;
+  BlasOnOneThread& operator=(const BlasOnOneThread&) = delete;
+
+ private:
+  using SetThreads = void (*)(int);
+  SetThreads set_ = nullptr;
+  int before_ = 0;
+};
+}  // namespace
+
 RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
+  const BlasOnOneThread blas_on_one_thread;
   RunSummary summary;
   summary.output = opt.output.empty() ? sc.output.path : opt.output;
   const bool resume = opt.mode == OutputWriter::Mode::resume;
@@ -243,11 +272,6 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   return summary;
 }
 
-void blas_on_one_thread() {
-  if (std::getenv("OPENBLAS_NUM_THREADS")) return;
-  using SetThreads = void (*)(int);
-  if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
-}
 int blas_threads() {
   using GetThreads = int (*)();
   auto get = reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));

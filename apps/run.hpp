@@ -47,12 +47,9 @@ class RunInterrupted : public Error {
 // so far and throws Error naming the time and the reason; an interrupt throws RunInterrupted.
 RunSummary run_scene(const Scene& scene, const RunOptions& options);
 
-// OpenBLAS (inside CHOLMOD) on one thread unless OPENBLAS_NUM_THREADS says otherwise: its threads
-// wait for work by spinning, against OpenMP's threads in the assembly and in CG (README,
-// "Threads"). Looked up at run time, so a build against another BLAS is untouched. The command
-// line calls it first; the Python module does not (its process may share OpenBLAS with numpy).
-void blas_on_one_thread();
-// OpenBLAS's threads now; 0 where the BLAS is not OpenBLAS.
+// OpenBLAS's threads now; 0 where the BLAS is not OpenBLAS. run_scene runs OpenBLAS (inside
+// CHOLMOD) on one thread unless OPENBLAS_NUM_THREADS says otherwise, and restores the count after
+// (README, "Threads").
 int blas_threads();
 inline RunSummary run_scene(const Scene& scene, const std::string& output = "", bool progress = true) {
   RunOptions opt;

@@ -5,6 +5,7 @@ line's message; isochor.open reads what was written; studies run from Python.
 Run by CTest (python.pytest) with PYTHONPATH=build/python, ISOCHOR_EXE and ISOCHOR_SOURCE set,
 and OMP_NUM_THREADS=1 (so that the module's run and the command line's are the same arithmetic).
 """
+import ctypes
 import os
 import subprocess
 import tomllib
@@ -50,6 +51,25 @@ def test_a_run_from_python_equals_the_command_lines_frame_by_frame(tmp_path):
             np.testing.assert_array_equal(f.volumes, b.volumes[f.index])
             assert f.time == b.times[f.index]
             assert f.pressure.shape == (len(b.tets),)
+
+
+def test_a_run_keeps_openblas_on_one_thread_and_gives_the_count_back(tmp_path, monkeypatch):
+    # The OpenBLAS that CHOLMOD (and numpy) use, as Debian installs it; run_scene sets it to one
+    # thread for the run unless OPENBLAS_NUM_THREADS is set (README, "Threads"), then restores it.
+    try:
+        blas = ctypes.CDLL("libopenblas.so.0")
+    except OSError:
+        pytest.skip("OpenBLAS is not the BLAS here")
+    monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
+    blas.openblas_set_num_threads(2)
+    isochor.run(SWING, tmp_path / "one.h5", overrides=SHORT)
+    assert blas.openblas_get_num_threads() == 2
+    with isochor.open(tmp_path / "one.h5") as r:
+        assert r.totals["blas_threads"] == 1
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
+    isochor.run(SWING, tmp_path / "two.h5", overrides=SHORT)
+    with isochor.open(tmp_path / "two.h5") as r:
+        assert r.totals["blas_threads"] == 2
 
 
 def test_the_callback_stops_the_run_and_the_run_resumes(tmp_path):
