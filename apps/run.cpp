@@ -21,6 +21,12 @@
 namespace isochor {
 
 namespace {
+// OpenBLAS's threads now; 0 where the BLAS is not OpenBLAS.
+int blas_threads() {
+  using GetThreads = int (*)();
+  auto get = reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  return get ? get() : 0;
+}
 
 void write_totals(OutputWriter& w, const RunStats& s) {
   w.set_stat("steps", static_cast<double>(s.steps));
@@ -272,10 +278,5 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   return summary;
 }
 
-int blas_threads() {
-  using GetThreads = int (*)();
-  auto get = reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
-  return get ? get() : 0;
-}
 
 }  // namespace isochor

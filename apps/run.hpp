@@ -45,12 +45,10 @@ class RunInterrupted : public Error {
 
 // Runs the scene and writes every frame to the output. A solver failure keeps the frames written
 // so far and throws Error naming the time and the reason; an interrupt throws RunInterrupted.
+// OpenBLAS runs on one thread meanwhile unless OPENBLAS_NUM_THREADS is set, its count restored
+// after (README, "Threads").
 RunSummary run_scene(const Scene& scene, const RunOptions& options);
 
-// OpenBLAS's threads now; 0 where the BLAS is not OpenBLAS. run_scene runs OpenBLAS (inside
-// CHOLMOD) on one thread unless OPENBLAS_NUM_THREADS says otherwise, and restores the count after
-// (README, "Threads").
-int blas_threads();
 inline RunSummary run_scene(const Scene& scene, const std::string& output = "", bool progress = true) {
   RunOptions opt;
   opt.output = output;

@@ -167,7 +167,7 @@ struct BackwardEuler::Impl {
       return;
     }
     const int extra = iterations - reference_iterations;
-    if (extra <= 0 || use_kkt || S == nullptr || opt.linear_solver == LinearSolverKind::amg) return;
+    if (extra <= 0 || use_kkt || opt.linear_solver == LinearSolverKind::amg) return;
     const double entries_S = static_cast<double>(sys.pattern().nnz());
     double flops = 0, entries = 0;
     const bool direct = S->symmetric().factor_cost(flops, entries);
@@ -330,8 +330,8 @@ struct BackwardEuler::Impl {
     double first = 0;              // |dq| of the first iteration since the last factorisation
     int since = 0;                 // iterations since then
     bool fresh_this_step = false;  // a factorisation of this step's matrix
-    int newton_this_step = 0, newton_since_fresh = 0;
-    const long cg_before = linear_iterations();
+    int newton_since_fresh = 0;  // Newton iterations since this step's last factorisation
+    const long newton_before = stats.newton_iterations, cg_before = linear_iterations();
     if (line_search) nu.setZero(m);
     double Vq = std::numeric_limits<double>::quiet_NaN();  // V(q), when known
     for (int it = 0; it < iterations; ++it) {
@@ -482,7 +482,6 @@ struct BackwardEuler::Impl {
       q += alpha * dq;
       if (m) lambda += alpha * dl;
       stats.newton_iterations++;
-      newton_this_step++;
       newton_since_fresh++;
       if (!q.allFinite()) {
         reason = "Newton produced a non-finite state";
@@ -515,7 +514,8 @@ struct BackwardEuler::Impl {
       const bool done = since == 0 ? size <= 1e-4 * tol || (size <= tol && ss <= 1.0 && !fresh) : ss * size <= tol;
       if (done) {
         v = (q - qn) / h;
-        charge_reuse(newton_this_step, newton_since_fresh, fresh_this_step, linear_iterations() - cg_before);
+        charge_reuse(static_cast<int>(stats.newton_iterations - newton_before), newton_since_fresh, fresh_this_step,
+                     linear_iterations() - cg_before);
         return true;
       }
     }
