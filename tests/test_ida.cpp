@@ -489,7 +489,6 @@ NewtonRun newton_run(double s0, bool call_setup, std::vector<double> setup_s, bo
   fake.s = s0;
   std::size_t next = 0;
   IdaNewtonHooks hooks;
-  hooks.follows_cj = [] { return true; };
   hooks.before_setup = [&](bool fresh) {
     fake.fresh_asked += fresh;
     fake.next_setup_s = setup_s.at(std::min(next++, setup_s.size() - 1));

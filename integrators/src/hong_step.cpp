@@ -1,6 +1,7 @@
 #include "isochor/hong_step.hpp"
 
 #include "isochor/fixed_step.hpp"
+#include "isochor/initial_state.hpp"
 
 #include <Eigen/LU>
 
@@ -13,8 +14,10 @@ RunStats HongStep::run(const std::vector<double>& times, const FrameCallback& on
   const Index n = sys_.num_dofs(), m = sys_.num_constraints();
   const int group = sys_.dofs_per_group();
   VectorXd w = VectorXd::Ones(n);
-  if (opt_.weights.size())
+  if (opt_.weights.size()) {
+    check_groups(sys_, "Hong's per-node weights");
     for (Index i = 0; i < n; ++i) w[i] = opt_.weights[i / group];
+  }
   const VectorXd& M = sys_.mass();
   const double h = opt_.dt;
   const auto& rows = sys_.constraint_rows();

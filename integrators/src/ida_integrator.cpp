@@ -73,6 +73,7 @@ struct IdaIntegrator::Impl {
           ggl, symmetric_solver_of(opt.linear_solver),
           opt.linear_tol > 0 ? opt.linear_tol : std::min(1e-12, 1e-6 * opt.rtol));
     else if (opt.ordering == KluOrdering::metis) {
+      check_groups(sys, "KLU's METIS ordering (integrator.ordering = \"metis\")");
       const auto t0 = Clock::now();
       order = metis_order(sys.pattern(), sys.dofs_per_group(), n, 2, sys.constraint_rows(), 2);
       stats.symbolic_seconds += seconds_since(t0);
@@ -327,18 +328,15 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   check(IDASetId(mem, id), "IDASetId", t0);
   check(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg", t0);
   if (s.reduced && s.reduced->can_retarget()) {
-    // The solves follow c_j (reduced_solve): a Newton iteration whose rate estimate survives a
-    // change of c_j (ida_newton.hpp). Set before the iteration limit, which it resets.
+    // The reduced solver can keep its matrix across setups (jacobian_age): IDA's iteration, told
+    // when a setup kept it (ida_newton.hpp). Set before the iteration limit, which it resets.
     IdaNewtonHooks hooks;
-    hooks.follows_cj = [&s]() { return s.reduced->can_retarget(); };
     hooks.before_setup = [&s](bool after_failure) { s.setup_after_failure = after_failure; };
     hooks.kept_matrix = [&s]() { return s.setup_in_place; };
     nls = check_ptr(make_ida_newton(yy, s.ctx, std::move(hooks)), "make_ida_newton");
     check(IDASetNonlinearSolver(mem, nls), "IDASetNonlinearSolver", t0);
   }
-  // The kept rate estimate is less cautious than IDA's reset to 100: 0.1 holds the positions to
-  // IDA's own accuracy on the collapse (docs/decisions.md).
-  const double newton_coef = s.opt.newton_coef > 0 ? s.opt.newton_coef : nls ? 0.1 : 0.33;
+  const double newton_coef = s.opt.newton_coef > 0 ? s.opt.newton_coef : IdaOptions::kDefaultNewtonCoef;
   check(IDASetNonlinConvCoef(mem, newton_coef), "IDASetNonlinConvCoef", t0);
   check(IDASetMaxOrd(mem, s.opt.max_order), "IDASetMaxOrd", t0);
   check(IDASetMaxNonlinIters(mem, s.opt.max_newton), "IDASetMaxNonlinIters", t0);

@@ -1,4 +1,4 @@
-// IDA's Newton iteration keeping its rate across c_j changes (ida_newton.hpp).
+// IDA's Newton iteration for matrices kept across setups (ida_newton.hpp).
 #include "ida_newton.hpp"
 
 #include <ida/ida.h>
@@ -45,7 +45,8 @@ int solve(SUNNonlinearSolver s, N_Vector, N_Vector ycor, N_Vector w, realtype to
   c.conv_fails = 0;
   double cj = 0;
   if (IDAGetCurrentCj(mem, &cj) < 0) return SUN_NLS_MEM_NULL;
-  if (cj != c.last_cj && !c.hooks.follows_cj()) c.ss = 100;
+  // As IDA: a new c_j forgets the rate (the matrix, or its shift to c_j, is not the one measured).
+  if (cj != c.last_cj) c.ss = 100;
   c.last_cj = cj;
   bool jbad = false;
   int r = SUN_NLS_SUCCESS;

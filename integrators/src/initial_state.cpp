@@ -11,11 +11,17 @@
 
 namespace isochor {
 
+void check_groups(const ConstrainedSystem& sys, const std::string& who) {
+  const Index n = sys.num_dofs(), per = sys.dofs_per_group();
+  if (n % per != 0)
+    throw std::invalid_argument(who + " orders the dofs by groups of dofs_per_group() = " + std::to_string(per) +
+                                ", but the system has " + std::to_string(n) +
+                                " dofs, not a multiple of it (override dofs_per_group() for groups other than x, y, z)");
+}
+
 void check_system(const ConstrainedSystem& sys) {
   const Index n = sys.num_dofs(), per = sys.dofs_per_group();
-  if (per < 1 || n % per != 0)
-    throw std::invalid_argument("the system has " + std::to_string(n) + " dofs, not a multiple of dofs_per_group() = " +
-                                std::to_string(per) + " (override dofs_per_group() for groups other than x, y, z)");
+  if (per < 1) throw std::invalid_argument("the system's dofs_per_group() must be at least 1, got " + std::to_string(per));
   if (sys.mass().size() != n || !(sys.mass().array() > 0).all())
     throw std::invalid_argument("the system's mass() must hold " + std::to_string(n) + " positive entries");
   if (static_cast<Index>(sys.constraint_rows().size()) != sys.num_constraints())

@@ -47,6 +47,8 @@ struct StaticSolver::Impl {
     g.resize(m);
     if (opt.linear_solver != LinearSolverKind::klu)
       bordered = std::make_unique<BorderedSolver>(S, sys.constraint_rows(), symmetric_solver_of(opt.linear_solver));
+    else
+      check_groups(sys, "statics' KLU (METIS ordering)");
   }
 
   int residual(N_Vector u, N_Vector fv) {

@@ -5,6 +5,7 @@
 // (sign convention of constrained_system.hpp).
 #pragma once
 #include "isochor/constrained_system.hpp"
+#include <string>
 
 namespace isochor {
 
@@ -25,8 +26,12 @@ bool constraints_dependent(ConstrainedSystem& sys, double t, const VectorXd& q);
 // max_j |g_j| / constraint_scale(j).
 double constraint_error(const ConstrainedSystem& sys, const VectorXd& g);
 
-// Throws std::invalid_argument when the system cannot be integrated as given (n not a multiple
-// of dofs_per_group(), a mass that is not positive, a constraint row outside the dofs).
+// Throws std::invalid_argument when the system cannot be integrated as given (dofs_per_group()
+// below 1, a mass that is not positive, a constraint row outside the dofs).
 void check_system(const ConstrainedSystem& sys);
+// Throws std::invalid_argument, naming `who`, when n is not a multiple of dofs_per_group(): only
+// the solvers that order the dofs by groups need it (METIS's node ordering for KLU, backward
+// Euler's KKT matrix, statics' KLU; Hong's per-node weights).
+void check_groups(const ConstrainedSystem& sys, const std::string& who);
 
 }  // namespace isochor
