@@ -271,10 +271,10 @@ struct BackwardEuler::Impl {
   // last factorisation (r^m = |dq_m| / |dq_0|), the error left after iteration m is about
   // r / (1 - r) |dq_m|; Newton stops once that is below the tolerance, newton_tol times the step's
   // displacement |q - q_n|_inf (so that the velocity (q - q_n) / h is as accurate at every h)
-  // plus newton_atol. The factor ss = r / (1 - r) carries over between steps and is reset to a
-  // cautious 20 by a factorisation; a reused matrix with r > 0.9 fails the attempt (step()
-  // redoes it with fresh matrices). An iteration whose update the line search cut is never the
-  // last, and the next one factors afresh.
+  // plus newton_atol. ss = r / (1 - r) is measured on the current matrix within the step (a first
+  // update has none: see the test after the update); a reused matrix with r > 0.9 fails the
+  // attempt (step() redoes it with fresh matrices). An iteration whose update the line search cut
+  // is never the last, and the next one factors afresh.
   double ss = 20.0;
 
   bool step_once(double t1, double h, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v,

@@ -3,8 +3,9 @@
 // solved by Newton with the matrix [M/h^2 + K + D/h + sum lambda_j H_j, G^T; G, 0]
 // (K = -df/dq, D = -df/dv), the symmetric block by CHOLMOD and the m borders by a Schur
 // complement; a factorisation is reused while Newton contracts fast (rate below 1/4). Newton stops
-// on its estimated error (contraction rate r: r / (1 - r) |dq|) relative to the step's
-// displacement. "Semi-implicit": exactly one Newton iteration per step, from q = q_n + h v_n,
+// on its estimated error (contraction rate r: r / (1 - r) |dq|, the rate measured on the current
+// matrix within the step) relative to the step's displacement; a first update on a matrix stops
+// it only when the multipliers barely moved and the step's residual at the new q confirms it. "Semi-implicit": exactly one Newton iteration per step, from q = q_n + h v_n,
 // with a fresh matrix. Step k ends at t0 + k h.
 //
 // As an optimisation (line_search, the default where the system has a potential): the step
