@@ -1,10 +1,13 @@
 // Accuracy of every IDA linear solver and of backward Euler on the two index-3 test DAEs
-// (tests/dae_problems.hpp): significant correct digits of the positions and velocities at the
-// end time against the published references, steps, Newton iterations and CPU time, one CSV row
-// per run on stdout. bench/dae_accuracy.sh runs it and draws docs/results/tolerance/.
+// (tests/dae_problems.hpp): correct digits of the positions and velocities at the end time
+// against the published references and along the run against the Runge-Kutta reference, the
+// multipliers' digits at the end, steps, Newton iterations and failures, and CPU time, one CSV
+// row per run on stdout. bench/dae_accuracy.sh runs it and draws docs/results/tolerance/.
+// DAE_NEWTON_COEF (IDA's integrator.newton_coef) and DAE_NEWTON_TOL (backward Euler's
+// integrator.newton_tol), when set, replace the defaults for every run.
 //
 //   isochor_bench_dae [ida|be|all]
-#include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -32,35 +35,20 @@ std::unique_ptr<test::TestDae> make_problem(const std::string& name) {
 }
 
 struct Outcome {
-  double digits = 0, lambda_digits = 0, trajectory_digits = 0, cpu = 0;
-  RunStats stats;
+  test::DaeRun run;
+  double cpu = 0;
   bool ok = true;
 };
-
-constexpr double kFrame = 0.01;  // frames every 10 ms, compared along the run
 
 template <class MakeIntegrator>
 Outcome run(test::TestDae& dae, MakeIntegrator make) {
   Outcome o;
-  std::vector<double> times;
-  for (int k = 0; k * kFrame <= dae.end_time() + 1e-12; ++k) times.push_back(k * kFrame);
-  times.back() = dae.end_time();
   std::vector<VectorXd> qr, vr;
-  dae.reference_trajectory(times, 2e-5, qr, vr);
+  dae.reference_trajectory(test::dae_frames(dae.end_time()), 2e-5, qr, vr);
   const auto c0 = std::clock();
   try {
     auto integ = make(dae);
-    std::vector<VectorXd> qs, vs;
-    VectorXd l;
-    o.stats = integ->run(times, [&](int, double, const VectorXd& qf, const VectorXd& vf, const VectorXd& lf,
-                                    const RunStats::FrameSample&) {
-      qs.push_back(qf);
-      vs.push_back(vf);
-      l = lf;
-    });
-    o.digits = dae.correct_digits(qs.back(), vs.back());
-    o.lambda_digits = dae.multiplier_digits(l);
-    o.trajectory_digits = test::TestDae::trajectory_digits(qs, vs, qr, vr);
+    o.run = test::run_dae(dae, *integ, qr, vr);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "failed: %s\n", e.what());
     o.ok = false;
@@ -71,8 +59,9 @@ Outcome run(test::TestDae& dae, MakeIntegrator make) {
 
 void print(const char* problem, const char* method, const char* solver, double tol, const Outcome& o) {
   std::printf("%s,%s,%s,%.3g,%d,%.4f,%.4f,%.4f,%ld,%ld,%ld,%ld,%ld,%.6f\n", problem, method, solver, tol, o.ok ? 1 : 0,
-              o.digits, o.trajectory_digits, o.lambda_digits, o.stats.steps, o.stats.newton_iterations,
-              o.stats.newton_failures, o.stats.error_test_failures, o.stats.fresh_factorisations, o.cpu);
+              o.run.end_digits, o.run.trajectory_digits, o.run.lambda_digits, o.run.stats.steps,
+              o.run.stats.newton_iterations, o.run.stats.newton_failures, o.run.stats.error_test_failures,
+              o.run.stats.fresh_factorisations, o.cpu);
 }
 
 }  // namespace

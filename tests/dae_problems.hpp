@@ -19,6 +19,7 @@
 #include <Eigen/Dense>
 
 #include "isochor/constrained_system.hpp"
+#include "isochor/integrator.hpp"
 
 namespace isochor::test {
 
@@ -287,5 +288,36 @@ class CarAxis : public TestDae {
   SparsePattern pattern_;
   std::vector<std::vector<Index>> rows_{{0, 1}, {0, 1, 2, 3}};
 };
+
+// Frames every 10 ms from 0 to `end`, the last one at `end`: where runs are compared along the way.
+inline std::vector<double> dae_frames(double end) {
+  std::vector<double> t;
+  for (int k = 0; k * 0.01 <= end + 1e-12; ++k) t.push_back(k * 0.01);
+  t.back() = end;
+  return t;
+}
+
+// A run of a test DAE over dae_frames(), measured against its reference on those frames.
+struct DaeRun {
+  double end_digits = 0, trajectory_digits = 0, lambda_digits = 0;
+  VectorXd q, v, lambda;  // at the end
+  RunStats stats;
+};
+inline DaeRun run_dae(TestDae& d, Integrator& integ, const std::vector<VectorXd>& qr, const std::vector<VectorXd>& vr) {
+  DaeRun r;
+  std::vector<VectorXd> qs, vs;
+  r.stats = integ.run(dae_frames(d.end_time()), [&](int, double, const VectorXd& q, const VectorXd& v, const VectorXd& l,
+                                                     const RunStats::FrameSample&) {
+    qs.push_back(q);
+    vs.push_back(v);
+    r.lambda = l;
+  });
+  r.q = qs.back();
+  r.v = vs.back();
+  r.end_digits = d.correct_digits(r.q, r.v);
+  r.trajectory_digits = TestDae::trajectory_digits(qs, vs, qr, vr);
+  r.lambda_digits = d.multiplier_digits(r.lambda);
+  return r;
+}
 
 }  // namespace isochor::test

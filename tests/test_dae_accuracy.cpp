@@ -16,7 +16,10 @@
 using namespace isochor;
 using test::CarAxis;
 using test::MebdfPendulum;
+using test::DaeRun;
 using test::TestDae;
+using test::dae_frames;
+using test::run_dae;
 
 namespace {
 
@@ -96,34 +99,6 @@ TEST(DaeProblems, ReferencesAgreeWithThePublishedValues) {
   }
 }
 
-constexpr double kFrame = 0.01;
-std::vector<double> frames(double end) {
-  std::vector<double> t;
-  for (int k = 0; k * kFrame <= end + 1e-12; ++k) t.push_back(k * kFrame);
-  return t;
-}
-
-struct Outcome {
-  double trajectory_digits = 0, end_digits = 0;
-  VectorXd q, v, lambda;
-  RunStats stats;
-};
-Outcome integrate(TestDae& d, Integrator& integ, const std::vector<VectorXd>& qr, const std::vector<VectorXd>& vr) {
-  Outcome r;
-  std::vector<VectorXd> qs, vs;
-  r.stats = integ.run(frames(d.end_time()), [&](int, double, const VectorXd& q, const VectorXd& v, const VectorXd& l,
-                                                 const RunStats::FrameSample&) {
-    qs.push_back(q);
-    vs.push_back(v);
-    r.lambda = l;
-  });
-  r.q = qs.back();
-  r.v = vs.back();
-  r.trajectory_digits = TestDae::trajectory_digits(qs, vs, qr, vr);
-  r.end_digits = d.correct_digits(r.q, r.v);
-  return r;
-}
-
 struct IdaSolver {
   const char* name;
   LinearSolverKind kind;
@@ -148,7 +123,7 @@ void expect_one_accuracy_per_tolerance(const char* problem) {
     return std::make_unique<CarAxis>();
   };
   std::vector<VectorXd> qr, vr;
-  make()->reference_trajectory(frames(make()->end_time()), 2e-5, qr, vr);
+  make()->reference_trajectory(dae_frames(make()->end_time()), 2e-5, qr, vr);
   for (const IdaSolver& s : kIdaSolvers) {
     std::vector<double> x, y;
     long newton = 0;
@@ -159,7 +134,7 @@ void expect_one_accuracy_per_tolerance(const char* problem) {
       o.linear_solver = s.kind;
       o.ordering = s.ordering;
       IdaIntegrator ida(*d, o);
-      const Outcome r = integrate(*d, ida, qr, vr);
+      const DaeRun r = run_dae(*d, ida, qr, vr);
       x.push_back(e);
       y.push_back(r.trajectory_digits);
       newton += r.stats.newton_iterations;
@@ -188,7 +163,7 @@ TEST(DaeAccuracy, BackwardEulerStepsConvergeWhateverIsReused) {
   for (double h : {1e-3, 1e-4}) {
     MebdfPendulum d;
     std::vector<VectorXd> qr, vr;
-    d.reference_trajectory(frames(d.end_time()), 2e-5, qr, vr);
+    d.reference_trajectory(dae_frames(d.end_time()), 2e-5, qr, vr);
     auto be_run = [&](LinearSolverKind kind, bool reuse) {
       MebdfPendulum p;
       BackwardEulerOptions o;
@@ -196,9 +171,9 @@ TEST(DaeAccuracy, BackwardEulerStepsConvergeWhateverIsReused) {
       o.linear_solver = kind;
       o.reuse_matrices = reuse;
       BackwardEuler be(p, o);
-      return integrate(p, be, qr, vr);
+      return run_dae(p, be, qr, vr);
     };
-    const Outcome exact = be_run(LinearSolverKind::klu, false), klu = be_run(LinearSolverKind::klu, true),
+    const DaeRun exact = be_run(LinearSolverKind::klu, false), klu = be_run(LinearSolverKind::klu, true),
               reduced = be_run(LinearSolverKind::reduced, true);
     std::printf("h %g: end digits exact %.4f, klu %.4f (%ld factorisations), reduced %.4f; |q_klu - q_exact| %.2e\n", h,
                 exact.end_digits, klu.end_digits, klu.stats.fresh_factorisations, reduced.end_digits,

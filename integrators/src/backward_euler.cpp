@@ -335,6 +335,14 @@ struct BackwardEuler::Impl {
     const long newton_before = stats.newton_iterations, cg_before = linear_iterations();
     if (line_search) nu.setZero(m);
     double Vq = std::numeric_limits<double>::quiet_NaN();  // V(q), when known
+    // Newton's tolerance on q at the current iterate; the step's end once converged.
+    auto tolerance = [&]() { return opt.newton_tol * (q - qn).cwiseAbs().maxCoeff() + opt.newton_atol; };
+    auto converged = [&]() {
+      v = (q - qn) / h;
+      charge_reuse(static_cast<int>(stats.newton_iterations - newton_before), newton_since_fresh, fresh_this_step,
+                   linear_iterations() - cg_before);
+      return true;
+    };
     bool verify = false;  // the last update was within the tolerance: check the residual here
     for (int it = 0; it < iterations; ++it) {
       const auto ta = Clock::now();
@@ -357,12 +365,9 @@ struct BackwardEuler::Impl {
       residual(fresh && !verify);
       if (verify) {
         verify = false;
-        if (R1.allFinite() && residual_error(h, R1, g) <= opt.newton_tol * (q - qn).cwiseAbs().maxCoeff() + opt.newton_atol) {
+        if (R1.allFinite() && residual_error(h, R1, g) <= tolerance()) {
           stats.assembly_seconds += seconds_since(ta);
-          v = (q - qn) / h;
-          charge_reuse(static_cast<int>(stats.newton_iterations - newton_before), newton_since_fresh, fresh_this_step,
-                       linear_iterations() - cg_before);
-          return true;
+          return converged();
         }
         if (fresh) residual(true);
       }
@@ -458,7 +463,7 @@ struct BackwardEuler::Impl {
       if (redo) continue;
       double alpha = 1.0;
       const double size = dq.cwiseAbs().maxCoeff();
-      const double tol = opt.newton_tol * (q - qn).cwiseAbs().maxCoeff() + opt.newton_atol;
+      const double tol = tolerance();
       if (line_search && size > 100.0 * tol) {
         // Backtracking (Armijo, halving) on the step's merit; rounding in its value is allowed. A
         // search that fails with a reused matrix is redone with a fresh one.
@@ -526,37 +531,34 @@ struct BackwardEuler::Impl {
         }
         ss = rate < 0.9 ? rate / (1.0 - rate) : 1e300;  // no estimate yet: iterate on
       }
-      // The first update on a matrix has no rate of its own: it is trusted only when tiny against
-      // the tolerance; within the tolerance, the step's residual at the new q decides (above,
-      // residual_error), without a solve. A rate carried from earlier steps, or from a matrix
-      // whose constraint rows have turned since (KLU's KKT matrix keeps G), says nothing of this
-      // one: trusting it left the MEBDFDAE pendulum's steps 1e-5 from their solution at
-      // h = 1e-4 (docs/results/tolerance.md).
-      // A first update is trusted only when the multipliers moved by little too (newton_tol of
-      // the larger of their size and the system's force scale): the residual check below is
-      // blind to them at small h (h^2 G^T dlambda / M), and KLU's kept KKT matrix left them off
-      // by its stale constraint rows, which moved the next steps' positions (the MEBDFDAE
-      // pendulum at h = 1e-4: 2.95 correct digits against 3.22; docs/results/tolerance.md). Once
-      // a rate is measured, the positions decide, as the multipliers' change near rounding has
-      // no rate to measure.
-      const double lsize = m ? alpha * dl.cwiseAbs().maxCoeff() : 0.0;
-      const double ltol = m ? opt.newton_tol * std::max(lambda.cwiseAbs().maxCoeff(), sys.force_scale()) : 0.0;
-      bool done = false;
-      if (since > 0) done = ss * size <= tol;
-      else if (size <= 1e-4 * tol && lsize <= ltol) done = true;
-      else verify = size <= tol && lsize <= ltol;
-      if (done) {
-        v = (q - qn) / h;
-        charge_reuse(static_cast<int>(stats.newton_iterations - newton_before), newton_since_fresh, fresh_this_step,
-                     linear_iterations() - cg_before);
-        return true;
-      }
+      const NewtonTest test = newton_test(since, size, tol, m ? dl.cwiseAbs().maxCoeff() : 0.0, lambda);
+      if (test == NewtonTest::done) return converged();
+      verify = test == NewtonTest::check_residual;
     }
     v = (q - qn) / h;
     if (opt.semi_implicit) return true;
     reason = "Newton did not converge in " + std::to_string(opt.max_newton) + " iterations";
     stats.newton_failures++;
     return false;
+  }
+
+  // Newton's test after a whole update of size `size` in q and `lsize` in the multipliers, `since`
+  // updates after the first on the current matrix. With a rate measured on this matrix within the
+  // step: done when ss |dq| <= tol. A first update has no rate of its own, and one carried from
+  // earlier steps, or from a matrix whose constraint rows have turned since (KLU's KKT matrix
+  // keeps G), says nothing of this one: trusting it left the MEBDFDAE pendulum 0.27 digit less
+  // accurate at h = 1e-4 (docs/results/tolerance.md). So a first update counts only when the
+  // multipliers moved by little too (newton_tol of the larger of their size and the system's
+  // force scale; the residual check is blind to them at small h, h^2 G^T dlambda / M) and it is
+  // tiny against the tolerance, or within it and the step's residual at the new q confirms it
+  // (residual_error, checked at the next iteration's residual, without a solve). Once a rate is
+  // measured, the positions decide: the multipliers' change near rounding has no rate to measure.
+  enum class NewtonTest { go_on, done, check_residual };
+  NewtonTest newton_test(int since, double size, double tol, double lsize, const VectorXd& lambda) const {
+    if (since > 0) return ss * size <= tol ? NewtonTest::done : NewtonTest::go_on;
+    const double ltol = m ? opt.newton_tol * std::max(lambda.cwiseAbs().maxCoeff(), sys.force_scale()) : 0.0;
+    if (size > tol || lsize > ltol) return NewtonTest::go_on;
+    return size <= 1e-4 * tol ? NewtonTest::done : NewtonTest::check_residual;
   }
 
   // An upper estimate of the distance from q to the step's solution, from the residual alone:

@@ -6,10 +6,10 @@
 // matrix) with two differences: a setup that kept the matrix leaves ss as it was, and a kept
 // matrix is not current, so a recoverable failure with it earns one retry with a fresh setup.
 //
-// Keeping the rate estimate across changes of c_j as well (it was, to save the second iteration
-// on steps whose size changed) let a rate measured right after a fresh setup, where Newton
-// converges fastest, accept later steps after one iteration on an older matrix: the pendulum of
-// the MEBDFDAE test set lost 0.9 digits at rtol 1e-10 against every other solver
+// Keeping the rate estimate across changes of c_j too would save the second iteration on steps
+// whose size changed, but a rate measured right after a fresh setup, where Newton converges
+// fastest, then accepts later steps after one iteration on an older matrix: measured so, the
+// pendulum of the MEBDFDAE test set lost 0.9 digit at rtol 1e-10 against every other solver
 // (docs/results/tolerance.md).
 #pragma once
 #include <sundials/sundials_nonlinearsolver.h>

@@ -5,8 +5,9 @@
 // complement; a factorisation is reused while Newton contracts fast (rate below 1/4). Newton stops
 // on its estimated error (contraction rate r: r / (1 - r) |dq|, the rate measured on the current
 // matrix within the step) relative to the step's displacement; a first update on a matrix stops
-// it only when the multipliers barely moved and the step's residual at the new q confirms it. "Semi-implicit": exactly one Newton iteration per step, from q = q_n + h v_n,
-// with a fresh matrix. Step k ends at t0 + k h.
+// it only when the multipliers barely moved and the step's residual at the new q confirms it.
+// "Semi-implicit": exactly one Newton iteration per step, from q = q_n + h v_n, with a fresh
+// matrix. Step k ends at t0 + k h.
 //
 // As an optimisation (line_search, the default where the system has a potential): the step
 // minimises the incremental potential
