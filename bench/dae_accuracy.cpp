@@ -18,6 +18,7 @@
 #include "../tests/dae_problems.hpp"
 #include "isochor/backward_euler.hpp"
 #include "isochor/ida_integrator.hpp"
+#include "isochor/sparse_factor.hpp"
 
 using namespace isochor;
 
@@ -72,11 +73,13 @@ int main(int argc, char** argv) {
                             {"klu_colamd", LinearSolverKind::klu, KluOrdering::colamd},
                             {"klu_amd", LinearSolverKind::klu, KluOrdering::amd},
                             {"reduced", LinearSolverKind::reduced, KluOrdering::metis},
-                            {"krylov", LinearSolverKind::krylov, KluOrdering::metis}};
+                            {"krylov", LinearSolverKind::krylov, KluOrdering::metis},
+                            {"amg", LinearSolverKind::amg, KluOrdering::metis}};
   std::printf("problem,method,solver,tol,ok,digits,trajectory_digits,lambda_digits,steps,newton,newton_failures,error_test_failures,factorisations,cpu_s\n");
   for (const char* problem : {"pendulum", "caraxis"}) {
     if (what == "all" || what == "ida")
-      for (const Solver& s : solvers)
+      for (const Solver& s : solvers) {
+        if (s.kind == LinearSolverKind::amg && !amg_available()) continue;
         for (double rtol : {1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10}) {
           auto dae = make_problem(problem);
           const Outcome o = run(*dae, [&](test::TestDae& d) {
@@ -89,6 +92,7 @@ int main(int argc, char** argv) {
           });
           print(problem, "ida", s.name, rtol, o);
         }
+      }
     if (what == "all" || what == "be")
       for (const char* solver : {"reduced", "klu", "klu_exact"})
         for (double h : {1e-3, 1e-4, 1e-5}) {
