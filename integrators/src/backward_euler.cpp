@@ -46,6 +46,7 @@ struct BackwardEuler::Impl {
       layout = std::make_unique<KktLayout>(s.pattern(), s.constraint_rows());
       kkt = std::make_unique<KktFactor>(*layout, s.pattern(), s.dofs_per_group(), s.constraint_rows());
       kv.resize(layout->p.nnz());
+      work.kr.resize(n + m);
     }
     const SparsePattern& p = sys.pattern();
     K.resize(p.nnz());
@@ -277,69 +278,58 @@ struct BackwardEuler::Impl {
   // is never the last, and the next one factors afresh.
   double ss = 20.0;
 
-  bool step_once(double t1, double h, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v,
-                 VectorXd& lambda, std::string& reason, bool always_fresh) {
-    const VectorXd& M = sys.mass();
-    const VectorXd qt = qn + h * vn;  // where inertia alone would carry the nodes
-    // Variational damping: freeze Dn and fd0 at the step's start (q_n, v_n: the same whatever the
-    // predictor, so a resumed run repeats the steps), before the predictor's merit needs them; the
-    // system's damping stays off until the step returns.
-    struct DampingOff {
-      ConstrainedSystem* sys = nullptr;
-      ~DampingOff() {
-        if (sys) sys->set_damping_forces(true);
-      }
-    } damping_off;
-    // hybrid: each step starts projected (Dn included) and may switch to the exact Hessian.
-    struct ProjectionOn {
-      ConstrainedSystem* sys = nullptr;
-      ~ProjectionOn() {
-        if (sys) sys->set_hessian_projection(true);
-      }
-    } projection_on;
-    if (opt.exact_near_solution) projection_on.sys = &sys;
-    int whole_in_a_row = 0;
-    bool exact_now = false;
-    if (variational) {
-      sys.set_damping_forces(true);
-      std::fill(Dn.begin(), Dn.end(), 0.0);
-      sys.add_force_jacobians(t1, qn, vn, nullptr, Dn.data());
-      const VectorXd still = VectorXd::Zero(n);
-      VectorXd fa, fb;
-      sys.force(t1, qn, still, fa);
-      sys.set_damping_forces(false);
-      damping_off.sys = &sys;
-      sys.force(t1, qn, still, fb);
-      fd0 = fa - fb;
+  // Restore the system's switches when a step returns (or throws): damping forces back on after
+  // variational damping froze them, the projected Hessian back on after "hybrid" switched it off.
+  struct DampingOff {
+    ConstrainedSystem* sys = nullptr;
+    ~DampingOff() {
+      if (sys) sys->set_damping_forces(true);
     }
-    // Predictor: the velocity extrapolated linearly from the last two steps (the first step and
-    // the semi-implicit variant, whose single iteration starts from it, use q_n + h v_n).
-    // With the line search, the extrapolation is kept only where its merit (the multipliers of the
-    // last step weighing the constraints) is below that of q_n + h v_n: at large steps in an
-    // oscillating body the extrapolated velocity can overshoot by far.
-    if (have_previous && !opt.semi_implicit) q = qn + h * (2 * vn - v_previous);
-    else q = qt;
-    if (line_search && have_previous && !opt.semi_implicit) {
-      const VectorXd w = 2.0 * lambda.cwiseAbs();
-      double V;
-      VectorXd gx(m);
-      if (!(merit_at(t1, h, q, qn, qt, w, V, gx) <= merit_at(t1, h, qt, qn, qt, w, V, gx))) q = qt;
+  };
+  struct ProjectionOn {
+    ConstrainedSystem* sys = nullptr;
+    ~ProjectionOn() {
+      if (sys) sys->set_hessian_projection(true);
     }
-    VectorXd f(n), R1(n), R0, R2(m), g(m), dq(n), dl(m), rhs(n), qtrial, gtrial(m);
-    VectorXd kr(use_kkt ? n + m : 0);
-    const int iterations = opt.semi_implicit ? 1 : opt.max_newton;
+  };
+  // A step's working vectors: forces, the residual's blocks (R1 dynamic rows, R0 the incremental
+  // potential's gradient, R2 = g the constraints), the Newton direction and the line search's
+  // trial point; kept across steps.
+  struct Work {
+    VectorXd f, R1, R0, R2, g, dq, dl, rhs, qtrial, gtrial, kr;
+  } work;
+  // Newton's verdict after an update: iterate on, converged, converged if the step's residual at
+  // the new q confirms it (checked at the next iteration), or the attempt failed.
+  enum class NewtonTest { go_on, done, check_residual, failed };
+  // What one step's Newton iterations carry from one to the next.
+  struct NewtonState {
     double first = 0;              // |dq| of the first iteration since the last factorisation
     int since = 0;                 // iterations since then
     bool fresh_this_step = false;  // a factorisation of this step's matrix
-    int newton_since_fresh = 0;  // Newton iterations since this step's last factorisation
+    int newton_since_fresh = 0;    // Newton iterations since this step's last factorisation
+    int whole_in_a_row = 0;        // updates taken whole in a row (hybrid)
+    bool exact_now = false;        // hybrid: switched to the exact Hessian
+    double Vq = std::numeric_limits<double>::quiet_NaN();  // V(q), when known
+  };
+
+  bool step_once(double t1, double h, const VectorXd& qn, const VectorXd& vn, VectorXd& q, VectorXd& v,
+                 VectorXd& lambda, std::string& reason, bool always_fresh) {
+    const VectorXd qt = qn + h * vn;  // where inertia alone would carry the nodes
+    DampingOff damping_off;
+    ProjectionOn projection_on;  // hybrid: each step starts projected and may switch to exact
+    if (opt.exact_near_solution) projection_on.sys = &sys;
+    if (variational) freeze_damping(t1, qn, vn, damping_off);
+    predict(t1, h, qn, vn, qt, lambda, q);
+    Work& w = work;
+    const int iterations = opt.semi_implicit ? 1 : opt.max_newton;
+    NewtonState ns;
     const long newton_before = stats.newton_iterations, cg_before = linear_iterations();
     if (line_search) nu.setZero(m);
-    double Vq = std::numeric_limits<double>::quiet_NaN();  // V(q), when known
     // Newton's tolerance on q at the current iterate; the step's end once converged.
     auto tolerance = [&]() { return opt.newton_tol * (q - qn).cwiseAbs().maxCoeff() + opt.newton_atol; };
     auto converged = [&]() {
       v = (q - qn) / h;
-      charge_reuse(static_cast<int>(stats.newton_iterations - newton_before), newton_since_fresh, fresh_this_step,
+      charge_reuse(static_cast<int>(stats.newton_iterations - newton_before), ns.newton_since_fresh, ns.fresh_this_step,
                    linear_iterations() - cg_before);
       return true;
     };
@@ -347,31 +337,19 @@ struct BackwardEuler::Impl {
     for (int it = 0; it < iterations; ++it) {
       const auto ta = Clock::now();
       v = (q - qn) / h;
-      bool fresh = always_fresh || refresh || !factored || opt.semi_implicit || !opt.reuse_matrices;
-      // The step's residual at q: forces (and, for a fresh matrix, their Jacobians; a check that
-      // passes needs none, so they are evaluated after it).
-      auto residual = [&](bool jacobians) {
-        if (jacobians) {
-          std::fill(K.begin(), K.end(), 0.0);
-          std::fill(D.begin(), D.end(), 0.0);
-        }
-        sys.force_and_jacobians(t1, q, v, f, jacobians ? K.data() : nullptr, jacobians ? D.data() : nullptr);
-        R1 = M.cwiseProduct(q - qt) / (h * h) - f;
-        if (variational) R1 += damping_times(q - qn) / h - fd0;
-        if (line_search) R0 = R1;  // the gradient of the incremental potential
-        add_constraint_terms(sys, t1, q, lambda, G, g, R1.data());
-        if (m) R2 = g;
-      };
-      residual(fresh && !verify);
+      const bool fresh = always_fresh || refresh || !factored || opt.semi_implicit || !opt.reuse_matrices;
+      // Forces with their Jacobians for a fresh matrix; a residual check that passes needs none,
+      // so they are evaluated after it.
+      step_residual(t1, h, q, v, qn, qt, lambda, fresh && !verify);
       if (verify) {
         verify = false;
-        if (R1.allFinite() && residual_error(h, R1, g) <= tolerance()) {
+        if (w.R1.allFinite() && residual_error(h, w.R1, w.g) <= tolerance()) {
           stats.assembly_seconds += seconds_since(ta);
           return converged();
         }
-        if (fresh) residual(true);
+        if (fresh) step_residual(t1, h, q, v, qn, qt, lambda, true);
       }
-      if (!R1.allFinite()) {
+      if (!w.R1.allFinite()) {
         if (it == 0 && line_search && q != qn) {
           // The predictor landed where the forces are not defined (UNH beyond J = 0): start from
           // q_n instead, where the last step left every force finite.
@@ -382,156 +360,35 @@ struct BackwardEuler::Impl {
         reason = "the forces are not finite (an element inverted or exploded)";
         return false;
       }
-      if (fresh) {
-        if (m) sys.add_constraint_hessian(t1, q, lambda, 1.0, K.data());
-        const std::vector<double>& Dm = variational ? Dn : D;
-        for (std::size_t k = 0; k < Sv.size(); ++k) Sv[k] = K[k] + Dm[k] / h;
-        for (Index i = 0; i < n; ++i) Sv[diag[i]] += M[i] / (h * h);
-      }
+      if (fresh) assemble_step_matrix(t1, h, q, lambda);
       stats.assembly_seconds += seconds_since(ta);
-      // Factor (when fresh) and solve; with the line search, a matrix that cannot be factored or
-      // a direction that does not descend is shifted by more inertia, shift M / h^2.
       double shift = 0.0, slope = 0.0;
-      bool redo = false;  // a reused matrix gave no descent: iterate again with a fresh one
-      for (;;) {
-        if (fresh) {
-          const auto tf = Clock::now();
-          bool ok;
-          if (use_kkt) {
-            layout->fill(Sv.data(), G, kv.data());
-            ok = kkt->factor(kv.data());
-          } else {
-            ok = S->factor(Sv.data());
-            stats.symbolic_seconds = analyse_seconds();
-          }
-          stats.factor_seconds += seconds_since(tf);
-          stats.jacobian_evals++;
-          stats.fresh_factorisations++;
-          factored = ok;
-          refresh = false;
-          fresh_this_step = true;
-          newton_since_fresh = 0;
-          if (buying) bought++;
-          buying = false;
-          ss = 20.0;
-          if (!ok) {
-            if (line_search && add_shift(shift, h)) continue;
-            reason = "the step matrix is singular";
-            return false;
-          }
-        }
-        const auto ts = Clock::now();
-        bool solved = true;
-        if (use_kkt) {
-          kr << -R1, -R2;
-          kkt->solve(kr.data());
-          dq = kr.head(n);
-          dl = kr.tail(m);
-          solved = kr.allFinite();
-        } else {
-          // The current borders with the (possibly reused) factor of the step matrix.
-          rhs = -R1;
-          const VectorXd r2 = -R2;
-          solved = S->set_borders(G);
-          solved = S->solve(rhs.data(), r2.data(), dq.data(), dl.data()) && solved;
-          stats.linear_iterations = linear_iterations();
-        }
-        stats.solve_seconds += seconds_since(ts);
-        if (!solved && !line_search) {
-          reason = "the linear solve failed (PCG did not converge, or the step matrix is indefinite)";
-          return false;
-        }
-        if (!line_search) break;
-        if (solved) {
-          // The l1 merit's weights exceed the new multipliers, so that a Newton direction of a
-          // positive definite matrix descends; its slope along dq.
-          for (Index j = 0; j < m; ++j) nu[j] = std::max(nu[j], 2.0 * std::abs(lambda[j] + dl[j]));
-          slope = R0.dot(dq) - l1(g);
-          if (slope < 0) break;
-        }
-        if (!fresh) {  // a reused matrix: try a fresh one before shifting
-          refresh = true;
-          redo = true;
-          break;
-        }
-        if (!add_shift(shift, h)) {
-          reason = solved ? "Newton's direction does not descend the merit function even with the inertia scaled by 1e6"
-                          : "the linear solve failed (PCG did not converge, or the step matrix is indefinite)";
-          return false;
-        }
-      }
-      if (redo) continue;
+      const Direction direction = newton_direction(fresh, h, lambda, shift, slope, ns, reason);
+      if (direction == Direction::failed) return false;
+      if (direction == Direction::redo) continue;
       double alpha = 1.0;
-      const double size = dq.cwiseAbs().maxCoeff();
+      const double size = w.dq.cwiseAbs().maxCoeff();
       const double tol = tolerance();
       if (line_search && size > 100.0 * tol) {
-        // Backtracking (Armijo, halving) on the step's merit; rounding in its value is allowed. A
-        // search that fails with a reused matrix is redone with a fresh one.
-        if (!std::isfinite(Vq) && !sys.potential(t1, q, Vq)) Vq = std::numeric_limits<double>::infinity();
-        const double phi_q = phi(h, Vq, q, qn, qt);
-        const double merit0 = phi_q + l1(g);
-        const double noise = 1e-13 * (std::abs(phi_q) + std::abs(Vq) + l1(g));
-        bool found = false;
-        for (; alpha >= 1e-10; alpha *= 0.5) {
-          qtrial = q + alpha * dq;
-          double Vt;
-          const double merit = merit_at(t1, h, qtrial, qn, qt, nu, Vt, gtrial);
-          if (std::isfinite(merit) && merit <= merit0 + 1e-4 * alpha * slope + noise) {
-            Vq = Vt;
-            if (opt.on_line_search) opt.on_line_search(merit0, merit, alpha);
-            found = true;
-            break;
-          }
-        }
-        if (!found) {
-          if (!fresh) {
-            refresh = true;
-            Vq = std::numeric_limits<double>::quiet_NaN();
-            continue;
-          }
+        const Search found = search_along(t1, h, q, qn, qt, fresh, slope, ns.Vq, alpha);
+        if (found == Search::retry_fresh) continue;
+        if (found == Search::failed) {
           reason = "the line search found no decrease of the merit function along Newton's direction";
           return false;
         }
-        if (alpha < 1.0) {
-          stats.line_search_cuts++;
-          refresh = true;
-        }
       } else {
-        Vq = std::numeric_limits<double>::quiet_NaN();
+        ns.Vq = std::numeric_limits<double>::quiet_NaN();
       }
       if (trace_from <= t1)
         std::fprintf(stderr, "newton t=%.9g it=%d fresh=%d shift=%g |dq|=%.3e tol=%.3e alpha=%g slope=%.3e |R|=%.3e\n", t1,
-                     it, static_cast<int>(fresh), shift, size, tol, alpha, slope, R1.norm());
-      q += alpha * dq;
-      if (m) lambda += alpha * dl;
-      stats.newton_iterations++;
-      newton_since_fresh++;
-      if (!q.allFinite()) {
+                     it, static_cast<int>(fresh), shift, size, tol, alpha, slope, w.R1.norm());
+      if (!take_update(alpha, q, lambda, ns)) {
         reason = "Newton produced a non-finite state";
         return false;
       }
       if (opt.semi_implicit) break;
-      whole_in_a_row = alpha < 1.0 ? 0 : whole_in_a_row + 1;
-      if (opt.exact_near_solution && line_search && whole_in_a_row == 2 && !exact_now) {
-        sys.set_hessian_projection(false);  // near the solution: the exact Hessian from here on
-        exact_now = true;
-        refresh = true;
-      }
-      if (alpha < 1.0) continue;  // not converged; the next iteration factors afresh
-      if (fresh || it == 0) {  // the rate is measured from the last factorisation on
-        first = size;
-        since = 0;
-      } else {
-        const double rate = std::pow(size / first, 1.0 / ++since);
-        if (rate > 0.25) refresh = true;  // slow contraction: a fresh matrix for the next step
-        if (rate > 0.9 && !fresh_this_step) {
-          // A reused matrix that no longer contracts: step() redoes the step with fresh ones.
-          reason = "Newton stalled with a reused matrix (contraction rate " + std::to_string(rate) + ")";
-          return false;
-        }
-        ss = rate < 0.9 ? rate / (1.0 - rate) : 1e300;  // no estimate yet: iterate on
-      }
-      const NewtonTest test = newton_test(since, size, tol, m ? dl.cwiseAbs().maxCoeff() : 0.0, lambda);
+      const NewtonTest test = after_update(fresh, it, alpha, size, tol, lambda, ns, reason);
+      if (test == NewtonTest::failed) return false;
       if (test == NewtonTest::done) return converged();
       verify = test == NewtonTest::check_residual;
     }
@@ -540,6 +397,221 @@ struct BackwardEuler::Impl {
     reason = "Newton did not converge in " + std::to_string(opt.max_newton) + " iterations";
     stats.newton_failures++;
     return false;
+  }
+
+  // q and lambda moved by alpha (work.dq, work.dl), counted as a Newton iteration; false where q
+  // is no longer finite.
+  bool take_update(double alpha, VectorXd& q, VectorXd& lambda, NewtonState& ns) {
+    q += alpha * work.dq;
+    if (m) lambda += alpha * work.dl;
+    stats.newton_iterations++;
+    ns.newton_since_fresh++;
+    return q.allFinite();
+  }
+
+  // After an update of length alpha along work.dq (|dq| = size, at tolerance tol): hybrid's
+  // switch to the exact Hessian after two whole updates in a row; for a whole update, the
+  // contraction rate of the current matrix (from its first update in this step on: slow, a fresh
+  // matrix for the next step; a reused one that no longer contracts fails the attempt, and step()
+  // redoes it with fresh ones) and Newton's test. A cut update is never the last.
+  NewtonTest after_update(bool fresh, int it, double alpha, double size, double tol, const VectorXd& lambda, NewtonState& ns,
+                          std::string& reason) {
+    ns.whole_in_a_row = alpha < 1.0 ? 0 : ns.whole_in_a_row + 1;
+    if (opt.exact_near_solution && line_search && ns.whole_in_a_row == 2 && !ns.exact_now) {
+      sys.set_hessian_projection(false);  // near the solution: the exact Hessian from here on
+      ns.exact_now = true;
+      refresh = true;
+    }
+    if (alpha < 1.0) return NewtonTest::go_on;  // the next iteration factors afresh
+    if (fresh || it == 0) {  // the rate is measured from the last factorisation on
+      ns.first = size;
+      ns.since = 0;
+    } else {
+      const double rate = std::pow(size / ns.first, 1.0 / ++ns.since);
+      if (rate > 0.25) refresh = true;  // slow contraction: a fresh matrix for the next step
+      if (rate > 0.9 && !ns.fresh_this_step) {
+        reason = "Newton stalled with a reused matrix (contraction rate " + std::to_string(rate) + ")";
+        return NewtonTest::failed;
+      }
+      ss = rate < 0.9 ? rate / (1.0 - rate) : 1e300;  // no estimate yet: iterate on
+    }
+    return newton_test(ns.since, size, tol, m ? work.dl.cwiseAbs().maxCoeff() : 0.0, lambda);
+  }
+
+  // Variational damping: Dn and fd0 frozen at the step's start (q_n, v_n: the same whatever the
+  // predictor, so a resumed run repeats the steps), before the predictor's merit needs them; the
+  // system's damping stays off until the step returns (`off` turns it back on).
+  void freeze_damping(double t1, const VectorXd& qn, const VectorXd& vn, DampingOff& off) {
+    sys.set_damping_forces(true);
+    std::fill(Dn.begin(), Dn.end(), 0.0);
+    sys.add_force_jacobians(t1, qn, vn, nullptr, Dn.data());
+    const VectorXd still = VectorXd::Zero(n);
+    VectorXd fa, fb;
+    sys.force(t1, qn, still, fa);
+    sys.set_damping_forces(false);
+    off.sys = &sys;
+    sys.force(t1, qn, still, fb);
+    fd0 = fa - fb;
+  }
+
+  // The predictor: the velocity extrapolated linearly from the last two steps (the first step and
+  // the semi-implicit variant, whose single iteration starts from it, use q_n + h v_n). With the
+  // line search, the extrapolation is kept only where its merit (the multipliers of the last step
+  // weighing the constraints) is below that of q_n + h v_n: at large steps in an oscillating body
+  // the extrapolated velocity can overshoot by far.
+  void predict(double t1, double h, const VectorXd& qn, const VectorXd& vn, const VectorXd& qt, const VectorXd& lambda,
+               VectorXd& q) {
+    if (have_previous && !opt.semi_implicit) q = qn + h * (2 * vn - v_previous);
+    else q = qt;
+    if (line_search && have_previous && !opt.semi_implicit) {
+      const VectorXd w = 2.0 * lambda.cwiseAbs();
+      double V;
+      VectorXd gx(m);
+      if (!(merit_at(t1, h, q, qn, qt, w, V, gx) <= merit_at(t1, h, qt, qn, qt, w, V, gx))) q = qt;
+    }
+  }
+
+  // The step's residual at (q, v) into work: the forces (with their Jacobians into K and D when
+  // asked), R1 = M (q - q~) / h^2 - f (+ the frozen damping) + G^T lambda, R0 without the
+  // constraint forces (the incremental potential's gradient, for the line search), R2 = g.
+  void step_residual(double t1, double h, const VectorXd& q, const VectorXd& v, const VectorXd& qn, const VectorXd& qt,
+                     const VectorXd& lambda, bool jacobians) {
+    Work& w = work;
+    if (jacobians) {
+      std::fill(K.begin(), K.end(), 0.0);
+      std::fill(D.begin(), D.end(), 0.0);
+    }
+    sys.force_and_jacobians(t1, q, v, w.f, jacobians ? K.data() : nullptr, jacobians ? D.data() : nullptr);
+    w.R1 = sys.mass().cwiseProduct(q - qt) / (h * h) - w.f;
+    if (variational) w.R1 += damping_times(q - qn) / h - fd0;
+    if (line_search) w.R0 = w.R1;
+    add_constraint_terms(sys, t1, q, lambda, G, w.g, w.R1.data());
+    if (m) w.R2 = w.g;
+  }
+
+  // The step matrix Sv = M / h^2 + K + sum_j lambda_j H_j + D / h (Dn with variational damping)
+  // from the Jacobians step_residual() assembled.
+  void assemble_step_matrix(double t1, double h, const VectorXd& q, const VectorXd& lambda) {
+    if (m) sys.add_constraint_hessian(t1, q, lambda, 1.0, K.data());
+    const std::vector<double>& Dm = variational ? Dn : D;
+    for (std::size_t k = 0; k < Sv.size(); ++k) Sv[k] = K[k] + Dm[k] / h;
+    const VectorXd& M = sys.mass();
+    for (Index i = 0; i < n; ++i) Sv[diag[i]] += M[i] / (h * h);
+  }
+
+  // Newton's direction (work.dq, work.dl): the step matrix factored (when fresh) and solved; with
+  // the line search, a matrix that cannot be factored or a direction that does not descend is
+  // shifted by more inertia (shift M / h^2), and a reused matrix that gives no descent asks for a
+  // fresh one (redo). slope: the l1 merit's slope along dq (line search only).
+  enum class Direction { ok, redo, failed };
+  Direction newton_direction(bool fresh, double h, const VectorXd& lambda, double& shift, double& slope, NewtonState& ns,
+                             std::string& reason) {
+    Work& w = work;
+    for (;;) {
+      if (fresh) {
+        const auto tf = Clock::now();
+        bool ok;
+        if (use_kkt) {
+          layout->fill(Sv.data(), G, kv.data());
+          ok = kkt->factor(kv.data());
+        } else {
+          ok = S->factor(Sv.data());
+          stats.symbolic_seconds = analyse_seconds();
+        }
+        stats.factor_seconds += seconds_since(tf);
+        stats.jacobian_evals++;
+        stats.fresh_factorisations++;
+        factored = ok;
+        refresh = false;
+        ns.fresh_this_step = true;
+        ns.newton_since_fresh = 0;
+        if (buying) bought++;
+        buying = false;
+        ss = 20.0;
+        if (!ok) {
+          if (line_search && add_shift(shift, h)) continue;
+          reason = "the step matrix is singular";
+          return Direction::failed;
+        }
+      }
+      const auto ts = Clock::now();
+      bool solved = true;
+      if (use_kkt) {
+        w.kr << -w.R1, -w.R2;
+        kkt->solve(w.kr.data());
+        w.dq = w.kr.head(n);
+        w.dl = w.kr.tail(m);
+        solved = w.kr.allFinite();
+      } else {
+        // The current borders with the (possibly reused) factor of the step matrix.
+        w.dq.resize(n);
+        w.dl.resize(m);
+        w.rhs = -w.R1;
+        const VectorXd r2 = -w.R2;
+        solved = S->set_borders(G);
+        solved = S->solve(w.rhs.data(), r2.data(), w.dq.data(), w.dl.data()) && solved;
+        stats.linear_iterations = linear_iterations();
+      }
+      stats.solve_seconds += seconds_since(ts);
+      if (!solved && !line_search) {
+        reason = "the linear solve failed (PCG did not converge, or the step matrix is indefinite)";
+        return Direction::failed;
+      }
+      if (!line_search) return Direction::ok;
+      if (solved) {
+        // The l1 merit's weights exceed the new multipliers, so that a Newton direction of a
+        // positive definite matrix descends; its slope along dq.
+        for (Index j = 0; j < m; ++j) nu[j] = std::max(nu[j], 2.0 * std::abs(lambda[j] + w.dl[j]));
+        slope = w.R0.dot(w.dq) - l1(w.g);
+        if (slope < 0) return Direction::ok;
+      }
+      if (!fresh) {  // a reused matrix: try a fresh one before shifting
+        refresh = true;
+        return Direction::redo;
+      }
+      if (!add_shift(shift, h)) {
+        reason = solved ? "Newton's direction does not descend the merit function even with the inertia scaled by 1e6"
+                        : "the linear solve failed (PCG did not converge, or the step matrix is indefinite)";
+        return Direction::failed;
+      }
+    }
+  }
+
+  // Backtracking (Armijo, halving) on the step's merit along work.dq from q; rounding in its value
+  // is allowed. alpha: the length taken. A search that fails with a reused matrix is redone with a
+  // fresh one (retry_fresh); a cut search asks for a fresh matrix at the next iteration. Vq: V(q)
+  // when known, V at the point taken on return.
+  enum class Search { taken, retry_fresh, failed };
+  Search search_along(double t1, double h, const VectorXd& q, const VectorXd& qn, const VectorXd& qt, bool fresh, double slope,
+                      double& Vq, double& alpha) {
+    Work& w = work;
+    if (!std::isfinite(Vq) && !sys.potential(t1, q, Vq)) Vq = std::numeric_limits<double>::infinity();
+    const double phi_q = phi(h, Vq, q, qn, qt);
+    const double merit0 = phi_q + l1(w.g);
+    const double noise = 1e-13 * (std::abs(phi_q) + std::abs(Vq) + l1(w.g));
+    bool found = false;
+    for (; alpha >= 1e-10; alpha *= 0.5) {
+      w.qtrial = q + alpha * w.dq;
+      double Vt;
+      const double merit = merit_at(t1, h, w.qtrial, qn, qt, nu, Vt, w.gtrial);
+      if (std::isfinite(merit) && merit <= merit0 + 1e-4 * alpha * slope + noise) {
+        Vq = Vt;
+        if (opt.on_line_search) opt.on_line_search(merit0, merit, alpha);
+        found = true;
+        break;
+      }
+    }
+    if (!found) {
+      if (fresh) return Search::failed;
+      refresh = true;
+      Vq = std::numeric_limits<double>::quiet_NaN();
+      return Search::retry_fresh;
+    }
+    if (alpha < 1.0) {
+      stats.line_search_cuts++;
+      refresh = true;
+    }
+    return Search::taken;
   }
 
   // Newton's test after a whole update of size `size` in q and `lsize` in the multipliers, `since`
@@ -553,7 +625,6 @@ struct BackwardEuler::Impl {
   // tiny against the tolerance, or within it and the step's residual at the new q confirms it
   // (residual_error, checked at the next iteration's residual, without a solve). Once a rate is
   // measured, the positions decide: the multipliers' change near rounding has no rate to measure.
-  enum class NewtonTest { go_on, done, check_residual };
   NewtonTest newton_test(int since, double size, double tol, double lsize, const VectorXd& lambda) const {
     if (since > 0) return ss * size <= tol ? NewtonTest::done : NewtonTest::go_on;
     const double ltol = m ? opt.newton_tol * std::max(lambda.cwiseAbs().maxCoeff(), sys.force_scale()) : 0.0;
