@@ -10,13 +10,14 @@
 #include <functional>
 #include <thread>
 
-#include "isochor/error.hpp"
-#include "isochor/interrupt.hpp"
-#include "isochor/output.hpp"
-#include "isochor/output_reader.hpp"
-#include "isochor/scene.hpp"
-#include "run.hpp"
-#include "study.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/integrators/interrupt.hpp"
+#include "isochor/core/output.hpp"
+#include "isochor/core/output_reader.hpp"
+#include "isochor/scene/scene.hpp"
+#include "isochor/app/run.hpp"
+#include "isochor/app/shell.hpp"
+#include "isochor/app/study.hpp"
 #ifdef ISOCHOR_MPI
 #define OMPI_SKIP_MPICXX 1  // the C interface only
 #define MPICH_SKIP_MPICXX 1
@@ -61,8 +62,7 @@ std::string resume_command(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--overwrite" || a == "--resume") continue;
-    const bool plain = a.find_first_of(" \t'\"$`\\[]{}*?;&|<>()") == std::string::npos && !a.empty();
-    cmd += " " + (plain ? a : "'" + a + "'");
+    cmd += " " + shell_quoted(a);
   }
   return cmd + " --resume";
 }
@@ -93,12 +93,6 @@ int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& over
       std::printf("  bone %-16s %zu nodes bound\n", b.name.c_str(), b.nodes.size());
   std::printf("wrote %s and %s\n", out.c_str(), w.xdmf_path().c_str());
   return 0;
-}
-
-std::string shell_quoted(const std::string& a) {
-  std::string q = "'";
-  for (char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
 }
 
 int study_report(const std::string& dir);
@@ -229,7 +223,7 @@ int run_blender(const std::string& h5_path, const std::vector<std::string>& opti
 int study_report(const std::string& dir) {
   if (!std::filesystem::exists(std::filesystem::path(dir) / "results.csv"))
     throw Error(dir + ": no results.csv (expected the output directory of `isochor study`)");
-  const std::string cmd = "/usr/bin/python3 '" ISOCHOR_TOOLS_DIR "/study_report.py' '" + dir + "'";
+  const std::string cmd = "/usr/bin/python3 " + shell_quoted(ISOCHOR_TOOLS_DIR "/study_report.py") + " " + shell_quoted(dir);
   const int rc = std::system(cmd.c_str());
   if (rc != 0) throw Error(dir + ": the report tool failed (" + cmd + ")");
   return 0;

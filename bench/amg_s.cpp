@@ -24,7 +24,7 @@
 
 #include <metis.h>
 
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
 
 using namespace isochor;
 

@@ -9,8 +9,8 @@
 #include <map>
 #include <vector>
 
-#include "isochor/assembly.hpp"
-#include "isochor/meshing.hpp"
+#include "isochor/models/assembly.hpp"
+#include "isochor/core/meshing.hpp"
 
 namespace {
 using namespace isochor;

@@ -1,7 +1,7 @@
 // Meshing and mesh-building cost: procedural box (adjacency, surface) and Gmsh spheres.
 #include <benchmark/benchmark.h>
 
-#include "isochor/meshing.hpp"
+#include "isochor/core/meshing.hpp"
 
 static void BM_Box(benchmark::State& state) {
   const long n = state.range(0);

@@ -8,9 +8,9 @@
 #include <fstream>
 #include <string>
 
-#include "isochor/memory.hpp"
-#include "isochor/meshing.hpp"
-#include "isochor/output.hpp"
+#include "isochor/core/memory.hpp"
+#include "isochor/core/meshing.hpp"
+#include "isochor/core/output.hpp"
 
 
 int main(int argc, char** argv) {

@@ -18,8 +18,8 @@
 
 #include <Eigen/Dense>
 
-#include "isochor/constrained_system.hpp"
-#include "isochor/integrator.hpp"
+#include "isochor/integrators/constrained_system.hpp"
+#include "isochor/integrators/integrator.hpp"
 
 namespace isochor::test {
 

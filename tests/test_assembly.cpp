@@ -7,10 +7,10 @@
 #include <Eigen/Dense>
 #include <random>
 
-#include "isochor/assembly.hpp"
-#include "isochor/constraints.hpp"
-#include "isochor/drivers.hpp"
-#include "isochor/meshing.hpp"
+#include "isochor/models/assembly.hpp"
+#include "isochor/models/constraints.hpp"
+#include "isochor/models/drivers.hpp"
+#include "isochor/core/meshing.hpp"
 
 using namespace isochor;
 

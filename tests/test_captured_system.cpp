@@ -7,10 +7,10 @@
 #include <filesystem>
 #include <fstream>
 
-#include "isochor/ida_integrator.hpp"
-#include "isochor/mesh_system.hpp"
-#include "isochor/scene.hpp"
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/ida_integrator.hpp"
+#include "isochor/scene/mesh_system.hpp"
+#include "isochor/scene/scene.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
 
 using namespace isochor;
 

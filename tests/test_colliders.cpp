@@ -10,17 +10,17 @@
 #include <map>
 #include <random>
 
-#include "isochor/colliders.hpp"
-#include "isochor/forces.hpp"
-#include "isochor/material.hpp"
-#include "isochor/meshing.hpp"
-#include "isochor/self_contact.hpp"
-#include "isochor/paint.hpp"
+#include "isochor/models/colliders.hpp"
+#include "isochor/models/forces.hpp"
+#include "isochor/models/material.hpp"
+#include "isochor/core/meshing.hpp"
+#include "isochor/models/self_contact.hpp"
+#include "isochor/core/paint.hpp"
 #include <limits>
 #include <sstream>
-#include "isochor/output_reader.hpp"
-#include "run.hpp"
-#include "isochor/scene.hpp"
+#include "isochor/core/output_reader.hpp"
+#include "isochor/app/run.hpp"
+#include "isochor/scene/scene.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

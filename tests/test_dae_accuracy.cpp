@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "dae_problems.hpp"
-#include "isochor/backward_euler.hpp"
-#include "isochor/ida_integrator.hpp"
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/backward_euler.hpp"
+#include "isochor/integrators/ida_integrator.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
 
 using namespace isochor;
 using test::CarAxis;

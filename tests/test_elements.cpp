@@ -5,7 +5,7 @@
 #include <functional>
 #include <random>
 
-#include "isochor/elements.hpp"
+#include "isochor/models/elements.hpp"
 
 using namespace isochor;
 

@@ -3,9 +3,9 @@
 #include <Eigen/Dense>
 #include <random>
 
-#include "isochor/elements.hpp"
-#include "isochor/forces.hpp"
-#include "isochor/meshing.hpp"
+#include "isochor/models/elements.hpp"
+#include "isochor/models/forces.hpp"
+#include "isochor/core/meshing.hpp"
 
 using namespace isochor;
 

@@ -7,11 +7,11 @@
 #include <cmath>
 #include <random>
 
-#include "isochor/ggl.hpp"
-#include "isochor/ida_integrator.hpp"
-#include "isochor/scene.hpp"
-#include "isochor/mesh_system.hpp"
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/ggl.hpp"
+#include "isochor/integrators/ida_integrator.hpp"
+#include "isochor/scene/scene.hpp"
+#include "isochor/scene/mesh_system.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
 
 using namespace isochor;
 

@@ -4,9 +4,9 @@
 
 #include <cmath>
 
-#include "isochor/backward_euler.hpp"
-#include "isochor/ida_integrator.hpp"
-#include "isochor/initial_state.hpp"
+#include "isochor/integrators/backward_euler.hpp"
+#include "isochor/integrators/ida_integrator.hpp"
+#include "isochor/integrators/initial_state.hpp"
 #include "sundials_util.hpp"
 #include "ida_newton.hpp"
 
@@ -418,13 +418,14 @@ TEST(Ida, ARunThatMakesNoProgressStopsAndSaysSo) {
 // parts, against the definition sqrt(sum_i (x_i w_i)^2 [id_i > 0] / N) summed in long double:
 // every length up to 9 (each remainder of the four-way loop) and a long one.
 TEST(SerialVector, WeightedRmsNormsAreTheDefinition) {
-  SUNContext ctx = nullptr;
-  ASSERT_EQ(SUNContext_Create(nullptr, &ctx), 0);
+  const sun::Context context = sun::make_context(0.0);
+  SUNContext ctx = context.get();
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (sunindextype n : {1, 2, 3, 4, 5, 6, 7, 8, 9, 1001}) {
-    N_Vector x = new_serial_vector(n, ctx), w = new_serial_vector(n, ctx), id = new_serial_vector(n, ctx);
-    N_Vector c = N_VClone(x);  // clones carry the same operations
+    const sun::Vector xo = new_serial_vector(n, ctx), wo = new_serial_vector(n, ctx), ido = new_serial_vector(n, ctx);
+    const sun::Vector co(N_VClone(xo.get()));  // clones carry the same operations
+    N_Vector x = xo.get(), w = wo.get(), id = ido.get(), c = co.get();
     long double plain = 0, masked = 0;
     for (sunindextype i = 0; i < n; ++i) {
       NV_Ith_S(x, i) = 1e3 * u(rng);
@@ -439,9 +440,7 @@ TEST(SerialVector, WeightedRmsNormsAreTheDefinition) {
     EXPECT_NEAR(N_VWrmsNorm(x, w), ref_plain, 1e-14 * ref_plain) << n;
     EXPECT_NEAR(N_VWrmsNorm(c, w), ref_plain, 1e-14 * ref_plain) << n;
     EXPECT_NEAR(N_VWrmsNormMask(c, w, id), ref_masked, 1e-14 * ref_plain) << n;
-    for (N_Vector v : {x, w, id, c}) N_VDestroy(v);
   }
-  SUNContext_Free(&ctx);
 }
 
 // The Newton iteration that replaces IDA's with `krylov` (ida_newton.hpp), on its own: a linear
@@ -460,7 +459,7 @@ int fake_sys(N_Vector y, N_Vector F, void*) {
   for (int i = 0; i < 3; ++i) NV_Ith_S(F, i) = kA[i] * NV_Ith_S(y, i) - kB[i];
   return 0;
 }
-int fake_setup(booleantype, booleantype* jcur, void*) {
+int fake_setup(sunbooleantype, sunbooleantype* jcur, void*) {
   fake.s = fake.next_setup_s;
   fake.setups++;
   *jcur = SUNTRUE;
@@ -478,10 +477,11 @@ struct NewtonRun {
 // One SUNNonlinSolSolve from a zero correction, with the held matrix s0 A, a setup asked or not,
 // and each setup installing the matrices listed in turn.
 NewtonRun newton_run(double s0, bool call_setup, std::vector<double> setup_s, bool kept) {
-  SUNContext ctx = nullptr;
-  EXPECT_EQ(SUNContext_Create(nullptr, &ctx), 0);
+  const sun::Context context = sun::make_context(0.0);
+  SUNContext ctx = context.get();
   void* mem = IDACreate(ctx);  // only for IDAGetCurrentCj
-  N_Vector y = new_serial_vector(3, ctx), ycor = N_VClone(y), w = N_VClone(y);
+  const sun::Vector yo = new_serial_vector(3, ctx), ycoro(N_VClone(yo.get())), wo(N_VClone(yo.get()));
+  N_Vector y = yo.get(), ycor = ycoro.get(), w = wo.get();
   N_VConst(0.0, y);
   N_VConst(0.0, ycor);
   N_VConst(1.0, w);
@@ -494,7 +494,8 @@ NewtonRun newton_run(double s0, bool call_setup, std::vector<double> setup_s, bo
     fake.next_setup_s = setup_s.at(std::min(next++, setup_s.size() - 1));
   };
   hooks.kept_matrix = [&] { return kept && fake.fresh_asked == 0; };
-  SUNNonlinearSolver nls = make_ida_newton(y, ctx, hooks);
+  const sun::NonlinearSolver owner(make_ida_newton(y, ctx, hooks));
+  SUNNonlinearSolver nls = owner.get();
   SUNNonlinSolSetSysFn(nls, fake_sys);
   SUNNonlinSolSetLSetupFn(nls, fake_setup);
   SUNNonlinSolSetLSolveFn(nls, fake_solve);
@@ -504,10 +505,7 @@ NewtonRun newton_run(double s0, bool call_setup, std::vector<double> setup_s, bo
   SUNNonlinSolGetNumIters(nls, &r.iterations);
   SUNNonlinSolGetNumConvFails(nls, &r.conv_fails);
   for (int i = 0; i < 3; ++i) r.error = std::max(r.error, std::abs(NV_Ith_S(ycor, i) - kB[i] / kA[i]));
-  SUNNonlinSolFree(nls);
-  for (N_Vector v : {y, ycor, w}) N_VDestroy(v);
   IDAFree(&mem);
-  SUNContext_Free(&ctx);
   return r;
 }
 }  // namespace
@@ -517,7 +515,7 @@ TEST(IdaNewton, AStaleMatrixThatDivergesEarnsOneFreshSetup) {
   // the attempt is redone from a zero correction with a setup flagged fresh, which installs A:
   // one correction lands on A^-1 b, a second (zero) confirms it.
   const NewtonRun r = newton_run(0.3, false, {1.0}, false);
-  EXPECT_EQ(r.result, SUN_NLS_SUCCESS);
+  EXPECT_EQ(r.result, sun::kSuccess);
   EXPECT_EQ(fake.setups, 1);
   EXPECT_EQ(fake.fresh_asked, 1);
   EXPECT_EQ(r.iterations, 4);
@@ -539,7 +537,7 @@ TEST(IdaNewton, AKeptMatrixIsNotCurrent) {
   // A setup that only moved the old matrix to the new c_j (kept) counts as stale: when it
   // diverges, the attempt is redone with a fresh setup, which converges.
   const NewtonRun r = newton_run(1.0, true, {0.3, 1.0}, true);
-  EXPECT_EQ(r.result, SUN_NLS_SUCCESS);
+  EXPECT_EQ(r.result, sun::kSuccess);
   EXPECT_EQ(fake.setups, 2);
   EXPECT_EQ(fake.fresh_asked, 1);
   EXPECT_LT(r.error, 1e-14);

@@ -7,10 +7,10 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "isochor/sparse_factor.hpp"
-#include "isochor/backward_euler.hpp"
-#include "isochor/ida_integrator.hpp"
-#include "isochor/statics.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
+#include "isochor/integrators/backward_euler.hpp"
+#include "isochor/integrators/ida_integrator.hpp"
+#include "isochor/integrators/statics.hpp"
 
 #include "test_util.hpp"
 
@@ -173,7 +173,7 @@ TEST(Integrators, DofsNotAMultipleOfTheGroupSizeAreRejectedWhereGroupsOrderTheSo
   auto message = [](auto&& make) {
     try {
       make();
-    } catch (const std::invalid_argument& e) {
+    } catch (const Error& e) {
       return std::string(e.what());
     }
     return std::string("no error");

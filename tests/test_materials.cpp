@@ -5,7 +5,7 @@
 #include <Eigen/Dense>
 #include <random>
 
-#include "isochor/material.hpp"
+#include "isochor/models/material.hpp"
 
 using namespace isochor;
 

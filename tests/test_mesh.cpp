@@ -3,8 +3,8 @@
 #include <Eigen/Geometry>
 #include <random>
 
-#include "isochor/error.hpp"
-#include "isochor/meshing.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/meshing.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

@@ -9,10 +9,10 @@
 #include <cmath>
 #include <random>
 
-#include "isochor/backward_euler.hpp"
-#include "isochor/mesh_system.hpp"
-#include "isochor/scene.hpp"
-#include "isochor/statics.hpp"
+#include "isochor/integrators/backward_euler.hpp"
+#include "isochor/scene/mesh_system.hpp"
+#include "isochor/scene/scene.hpp"
+#include "isochor/integrators/statics.hpp"
 
 using namespace isochor;
 

@@ -4,11 +4,11 @@
 
 #include <cmath>
 
-#include "isochor/error.hpp"
-#include "isochor/meshing.hpp"
-#include "isochor/output.hpp"
-#include "isochor/output_reader.hpp"
-#include "isochor/progress.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/meshing.hpp"
+#include "isochor/core/output.hpp"
+#include "isochor/core/output_reader.hpp"
+#include "isochor/core/progress.hpp"
 
 #include <chrono>
 #include <thread>

@@ -8,8 +8,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "isochor/paint.hpp"
-#include "isochor/scene.hpp"
+#include "isochor/core/paint.hpp"
+#include "isochor/scene/scene.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

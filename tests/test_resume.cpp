@@ -10,13 +10,13 @@
 #include <fstream>
 #include <sstream>
 
-#include "isochor/error.hpp"
-#include "isochor/interrupt.hpp"
-#include "isochor/output.hpp"
-#include "isochor/output_reader.hpp"
-#include "isochor/scene.hpp"
-#include "isochor/meshing.hpp"
-#include "run.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/integrators/interrupt.hpp"
+#include "isochor/core/output.hpp"
+#include "isochor/core/output_reader.hpp"
+#include "isochor/scene/scene.hpp"
+#include "isochor/core/meshing.hpp"
+#include "isochor/app/run.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

@@ -5,13 +5,14 @@
 #include <cmath>
 #include <map>
 
-#include "isochor/backward_euler.hpp"
-#include "isochor/error.hpp"
-#include "isochor/integrator_registry.hpp"
-#include "isochor/mesh_system.hpp"
-#include "isochor/output_reader.hpp"
-#include "isochor/scene.hpp"
-#include "run.hpp"
+#include "isochor/integrators/backward_euler.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/scene/integrator_registry.hpp"
+#include "isochor/scene/mesh_system.hpp"
+#include "isochor/core/output_reader.hpp"
+#include "isochor/scene/scene.hpp"
+#include "isochor/app/run.hpp"
+#include "isochor/app/shell.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;
@@ -530,4 +531,22 @@ TEST(Statics, TheSameEquilibriaWithEveryLinearSolver) {
   EXPECT_GT(totals[2].at("linear_iterations"), 0.0);
   // The beam bends: the tip comes down by decimetres (docs/demos.md: 0.596 m for these patches).
   EXPECT_GT((frames[0][10] - frames[0][0]).cwiseAbs().maxCoeff(), 0.3);
+}
+
+// The one quoting function: every word comes back from /bin/sh as it went in (quotes, spaces,
+// expansions, a newline, the empty word), and words the shell takes literally stay unquoted
+// (the resume command that isochor prints stays readable).
+TEST(ShellQuoting, WordsComeBackFromTheShellUnchanged) {
+  const std::vector<std::string> words = {"it's", "a b", "$HOME", "`id`", "\\", "a\nb", "", "*", "'", "''x'", "out/run.h5"};
+  for (const std::string& w : words) {
+    const std::string cmd = "printf %s " + shell_quoted(w);
+    FILE* p = popen(cmd.c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    std::string out;
+    for (int c; (c = std::fgetc(p)) != EOF;) out += static_cast<char>(c);
+    EXPECT_EQ(pclose(p), 0) << cmd;
+    EXPECT_EQ(out, w) << cmd;
+  }
+  EXPECT_EQ(shell_quoted("demos/ball_drop.toml"), "demos/ball_drop.toml");
+  EXPECT_EQ(shell_quoted("material.mu=2e3"), "material.mu=2e3");
 }

@@ -4,8 +4,8 @@
 #include <regex>
 #include <set>
 
-#include "isochor/error.hpp"
-#include "isochor/scene.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/scene/scene.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

@@ -5,9 +5,9 @@
 
 #include <cmath>
 
-#include "isochor/error.hpp"
-#include "isochor/mesh_system.hpp"
-#include "isochor/scene.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/scene/mesh_system.hpp"
+#include "isochor/scene/scene.hpp"
 
 using namespace isochor;
 

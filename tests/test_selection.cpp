@@ -1,9 +1,9 @@
 #include <gtest/gtest.h>
 
-#include "isochor/error.hpp"
-#include "isochor/meshing.hpp"
-#include "isochor/scene_file.hpp"
-#include "isochor/selection.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/meshing.hpp"
+#include "isochor/core/scene_file.hpp"
+#include "isochor/core/selection.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "isochor/meshing.hpp"
+#include "isochor/core/meshing.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

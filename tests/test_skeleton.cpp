@@ -6,12 +6,12 @@
 #include <Eigen/LU>
 #include <cmath>
 
-#include "isochor/bvh.hpp"
-#include "isochor/mesh_system.hpp"
-#include "isochor/output_reader.hpp"
-#include "isochor/paint.hpp"
-#include "run.hpp"
-#include "isochor/scene.hpp"
+#include "isochor/core/bvh.hpp"
+#include "isochor/scene/mesh_system.hpp"
+#include "isochor/core/output_reader.hpp"
+#include "isochor/core/paint.hpp"
+#include "isochor/app/run.hpp"
+#include "isochor/scene/scene.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

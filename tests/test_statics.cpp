@@ -7,9 +7,9 @@
 #include <cmath>
 #include <cstdio>
 
-#include "isochor/output_reader.hpp"
-#include "isochor/scene.hpp"
-#include "run.hpp"
+#include "isochor/core/output_reader.hpp"
+#include "isochor/scene/scene.hpp"
+#include "isochor/app/run.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

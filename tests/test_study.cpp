@@ -9,7 +9,7 @@
 #include <set>
 #include <sstream>
 
-#include "study.hpp"
+#include "isochor/app/study.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

@@ -8,12 +8,12 @@
 #include <fstream>
 #include <sstream>
 
-#include "isochor/integrator_registry.hpp"
-#include "isochor/output_reader.hpp"
-#include "run.hpp"
-#include "isochor/meshing.hpp"
-#include "isochor/scene.hpp"
-#include "isochor/scene_system.hpp"
+#include "isochor/scene/integrator_registry.hpp"
+#include "isochor/core/output_reader.hpp"
+#include "isochor/app/run.hpp"
+#include "isochor/core/meshing.hpp"
+#include "isochor/scene/scene.hpp"
+#include "isochor/scene/scene_system.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "isochor/error.hpp"
-#include "isochor/mesh.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/mesh.hpp"
 
 namespace isochor::test {
 

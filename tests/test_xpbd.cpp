@@ -6,11 +6,11 @@
 #include <cmath>
 #include <random>
 
-#include "isochor/output_reader.hpp"
-#include "isochor/scene.hpp"
-#include "isochor/mass_spring_system.hpp"
-#include "isochor/xpbd_system.hpp"
-#include "run.hpp"
+#include "isochor/core/output_reader.hpp"
+#include "isochor/scene/scene.hpp"
+#include "isochor/scene/mass_spring_system.hpp"
+#include "isochor/scene/xpbd_system.hpp"
+#include "isochor/app/run.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;

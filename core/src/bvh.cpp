@@ -1,9 +1,9 @@
-#include "isochor/bvh.hpp"
+#include "isochor/core/bvh.hpp"
 
 #include <fstream>
 #include <sstream>
 
-#include "isochor/error.hpp"
+#include "isochor/base/error.hpp"
 
 namespace isochor {
 

@@ -17,8 +17,8 @@
 #include <mutex>
 #include <unordered_map>
 
-#include "isochor/error.hpp"
-#include "isochor/meshing.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/meshing.hpp"
 
 namespace isochor {
 

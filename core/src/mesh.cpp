@@ -1,11 +1,11 @@
-#include "isochor/mesh.hpp"
+#include "isochor/core/mesh.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
 
-#include "isochor/error.hpp"
+#include "isochor/base/error.hpp"
 
 namespace isochor {
 

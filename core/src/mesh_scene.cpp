@@ -4,10 +4,10 @@
 #include <cmath>
 #include <cstdio>
 
-#include "isochor/error.hpp"
-#include "isochor/memory.hpp"
-#include "isochor/meshing.hpp"
-#include "isochor/scene_file.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/memory.hpp"
+#include "isochor/core/meshing.hpp"
+#include "isochor/core/scene_file.hpp"
 
 namespace isochor {
 

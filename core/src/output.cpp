@@ -1,4 +1,4 @@
-#include "isochor/output.hpp"
+#include "isochor/core/output.hpp"
 
 #include <hdf5.h>
 
@@ -17,7 +17,7 @@
 #include <limits>
 #include <sstream>
 
-#include "isochor/error.hpp"
+#include "isochor/base/error.hpp"
 
 #ifndef ISOCHOR_VERSION
 #define ISOCHOR_VERSION "0.0.0"

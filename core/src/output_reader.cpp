@@ -1,4 +1,4 @@
-#include "isochor/output_reader.hpp"
+#include "isochor/core/output_reader.hpp"
 
 #include <hdf5.h>
 
@@ -9,8 +9,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "isochor/error.hpp"
-#include "isochor/output.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/output.hpp"
 
 namespace isochor {
 

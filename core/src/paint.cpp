@@ -1,4 +1,4 @@
-#include "isochor/paint.hpp"
+#include "isochor/core/paint.hpp"
 
 #include <nanoflann.hpp>
 
@@ -10,7 +10,7 @@
 #include <numeric>
 #include <sstream>
 
-#include "isochor/error.hpp"
+#include "isochor/base/error.hpp"
 
 namespace isochor {
 

@@ -1,4 +1,4 @@
-#include "isochor/progress.hpp"
+#include "isochor/core/progress.hpp"
 
 #include <unistd.h>
 

@@ -1,4 +1,4 @@
-#include "isochor/scene_file.hpp"
+#include "isochor/core/scene_file.hpp"
 
 #include <toml++/toml.h>
 
@@ -8,7 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "isochor/error.hpp"
+#include "isochor/base/error.hpp"
 
 namespace isochor {
 

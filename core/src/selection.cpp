@@ -1,10 +1,10 @@
-#include "isochor/selection.hpp"
+#include "isochor/core/selection.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "isochor/error.hpp"
-#include "isochor/scene_file.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/scene_file.hpp"
 
 namespace isochor {
 

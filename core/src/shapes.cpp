@@ -1,8 +1,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "isochor/error.hpp"
-#include "isochor/meshing.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/meshing.hpp"
 
 namespace isochor {
 

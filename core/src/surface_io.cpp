@@ -7,8 +7,8 @@
 #include <map>
 #include <sstream>
 
-#include "isochor/error.hpp"
-#include "isochor/meshing.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/meshing.hpp"
 
 namespace isochor {
 

@@ -4,8 +4,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "isochor/error.hpp"
-#include "isochor/meshing.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/meshing.hpp"
 
 namespace isochor {
 

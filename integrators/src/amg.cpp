@@ -1,7 +1,7 @@
 // Conjugate gradients preconditioned by algebraic multigrid (hypre's BoomerAMG, Debian's
 // libhypre) on the effective stiffness S: linear_solver = "amg" (sparse_factor.hpp). One rank
 // (MPI_COMM_SELF); hypre needs MPI initialised, which is done here when nobody did it before.
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
 
 #ifdef ISOCHOR_HYPRE
 #define OMPI_SKIP_MPICXX 1

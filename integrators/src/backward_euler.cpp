@@ -1,4 +1,4 @@
-#include "isochor/backward_euler.hpp"
+#include "isochor/integrators/backward_euler.hpp"
 #include "timing.hpp"
 
 #include <Eigen/Dense>
@@ -9,9 +9,10 @@
 #include <limits>
 #include <stdexcept>
 
-#include "isochor/fixed_step.hpp"
-#include "isochor/initial_state.hpp"
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/fixed_step.hpp"
+#include "isochor/integrators/initial_state.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
+#include "isochor/base/error.hpp"
 #include "bordered.hpp"
 #include "kkt.hpp"
 
@@ -40,7 +41,7 @@ struct BackwardEuler::Impl {
       : sys(s), opt(o), n((check_system(s), s.num_dofs())), m(s.num_constraints()),
         use_kkt(o.linear_solver == LinearSolverKind::klu || m > o.schur_max_constraints) {
     if (o.project_hessian && !s.set_hessian_projection(true))
-      throw std::invalid_argument("integrator.hessian = \"projected\": this model has no element Hessians to project");
+      throw Error("integrator.hessian = \"projected\": this model has no element Hessians to project");
     if (use_kkt) {
       check_groups(s, "backward Euler's KKT matrix (KLU, METIS ordering)");
       layout = std::make_unique<KktLayout>(s.pattern(), s.constraint_rows());

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
 
 namespace isochor {
 

@@ -6,7 +6,8 @@
 #include <memory>
 #include <stdexcept>
 
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
+#include "isochor/base/error.hpp"
 
 namespace isochor {
 
@@ -18,12 +19,12 @@ using File = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
 
 template <class T>
 void put(std::FILE* f, const T* data, std::size_t count, const std::string& path) {
-  if (std::fwrite(data, sizeof(T), count, f) != count) throw std::runtime_error(path + ": cannot write the captured system");
+  if (std::fwrite(data, sizeof(T), count, f) != count) throw Error(path + ": cannot write the captured system");
 }
 template <class T>
 void get(std::FILE* f, T* data, std::size_t count, const std::string& path) {
   if (std::fread(data, sizeof(T), count, f) != count)
-    throw std::runtime_error(path + ": not a captured system (the file ends early)");
+    throw Error(path + ": not a captured system (the file ends early)");
 }
 
 }  // namespace
@@ -34,7 +35,7 @@ void write_system(const std::string& path, const SparsePattern& p, const double*
   const std::string part = path + ".part";
   {
     File f(std::fopen(part.c_str(), "wb"), &std::fclose);
-    if (!f) throw std::runtime_error(path + ": cannot open for writing");
+    if (!f) throw Error(path + ": cannot open for writing");
     const std::int64_t head[2] = {p.n, p.nnz()};
     const double ct[2] = {cj, t};
     put(f.get(), kMagic, 8, path);
@@ -44,24 +45,24 @@ void write_system(const std::string& path, const SparsePattern& p, const double*
     put(f.get(), p.row_ind.data(), p.row_ind.size(), path);
     put(f.get(), values, static_cast<std::size_t>(p.nnz()), path);
     put(f.get(), b, static_cast<std::size_t>(p.n), path);
-    if (std::fflush(f.get()) != 0) throw std::runtime_error(path + ": cannot write the captured system");
+    if (std::fflush(f.get()) != 0) throw Error(path + ": cannot write the captured system");
   }
-  if (std::rename(part.c_str(), path.c_str()) != 0) throw std::runtime_error(path + ": cannot rename " + part);
+  if (std::rename(part.c_str(), path.c_str()) != 0) throw Error(path + ": cannot rename " + part);
 }
 
 CapturedSystem read_system(const std::string& path) {
   File f(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!f) throw std::runtime_error(path + ": cannot open");
+  if (!f) throw Error(path + ": cannot open");
   char magic[8];
   get(f.get(), magic, 8, path);
-  if (std::memcmp(magic, kMagic, 8) != 0) throw std::runtime_error(path + ": not a captured system (no ISOCHORS header)");
+  if (std::memcmp(magic, kMagic, 8) != 0) throw Error(path + ": not a captured system (no ISOCHORS header)");
   std::int64_t head[2];
   double ct[2];
   get(f.get(), head, 2, path);
   get(f.get(), ct, 2, path);
   const std::int64_t n = head[0], nnz = head[1];
   if (n <= 0 || nnz < n || nnz / n > 100000)
-    throw std::runtime_error(path + ": not a captured system (n = " + std::to_string(n) + ", nnz = " + std::to_string(nnz) + ")");
+    throw Error(path + ": not a captured system (n = " + std::to_string(n) + ", nnz = " + std::to_string(nnz) + ")");
   CapturedSystem s;
   s.cj = ct[0], s.t = ct[1];
   s.pattern.n = n;
@@ -73,12 +74,12 @@ CapturedSystem read_system(const std::string& path) {
   get(f.get(), s.pattern.row_ind.data(), s.pattern.row_ind.size(), path);
   get(f.get(), s.values.data(), s.values.size(), path);
   get(f.get(), s.b.data(), s.b.size(), path);
-  if (std::fgetc(f.get()) != EOF) throw std::runtime_error(path + ": not a captured system (bytes after the right-hand side)");
+  if (std::fgetc(f.get()) != EOF) throw Error(path + ": not a captured system (bytes after the right-hand side)");
   const auto& cp = s.pattern.col_ptr;
   bool ok = cp[0] == 0 && cp[static_cast<std::size_t>(n)] == nnz;
   for (std::int64_t c = 0; ok && c < n; ++c) ok = cp[c] <= cp[c + 1];
   for (std::int64_t k = 0; ok && k < nnz; ++k) ok = s.pattern.row_ind[k] >= 0 && s.pattern.row_ind[k] < n;
-  if (!ok) throw std::runtime_error(path + ": not a captured system (its column pointers or row indices are out of range)");
+  if (!ok) throw Error(path + ": not a captured system (its column pointers or row indices are out of range)");
   return s;
 }
 

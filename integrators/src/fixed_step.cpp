@@ -1,5 +1,5 @@
-#include "isochor/fixed_step.hpp"
-#include "isochor/interrupt.hpp"
+#include "isochor/integrators/fixed_step.hpp"
+#include "isochor/integrators/interrupt.hpp"
 #include "timing.hpp"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-#include "isochor/ggl.hpp"
+#include "isochor/integrators/ggl.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
-#include "isochor/hong_step.hpp"
+#include "isochor/integrators/hong_step.hpp"
 
-#include "isochor/fixed_step.hpp"
-#include "isochor/initial_state.hpp"
+#include "isochor/integrators/fixed_step.hpp"
+#include "isochor/integrators/initial_state.hpp"
 
 #include <Eigen/LU>
 

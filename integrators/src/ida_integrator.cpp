@@ -1,12 +1,13 @@
-#include "isochor/ida_integrator.hpp"
+#include "isochor/integrators/ida_integrator.hpp"
 #include "ida_newton.hpp"
 #include "klu_order.hpp"
 #include "sundials_util.hpp"
 #include "timing.hpp"
 
-#include "isochor/ggl.hpp"
-#include "isochor/initial_state.hpp"
-#include "isochor/interrupt.hpp"
+#include "isochor/integrators/ggl.hpp"
+#include "isochor/integrators/initial_state.hpp"
+#include "isochor/integrators/interrupt.hpp"
+#include "isochor/base/error.hpp"
 
 #include <ida/ida.h>
 #include <klu.h>
@@ -35,11 +36,31 @@ struct IdaIntegrator::Impl {
   std::unique_ptr<ReducedSolver> reduced;
   std::vector<Index> order;
   RunStats stats;
+  // SUNDIALS' objects of the run in progress (begin() to finish()), released in reverse order.
+  struct IdaFree {
+    void operator()(void* mem) const { IDAFree(&mem); }
+  };
+  sun::Context context;
+  sun::Vector yy, yp, id, atol, yout, ele, ewt;
+  sun::Matrix J;
+  sun::LinearSolver klu_owner, LS_owner;
+  sun::NonlinearSolver nls;
+  std::unique_ptr<void, IdaFree> mem;
   SUNContext ctx = nullptr;
   SUNLinearSolver LS = nullptr;   // what IDA calls: the reduced solver, or KLU wrapped to time it
   SUNLinearSolver klu = nullptr;  // klu: SUNDIALS' KLU solver inside LS
-  long last_newton_failures = 0;
   void* ida_mem = nullptr;
+  std::exception_ptr caught;  // thrown inside a callback, rethrown when IDA returns
+  long last_newton_failures = 0;
+  // The run's course: frame times, the next frame, the time reached, where steps must end.
+  std::vector<double> times;
+  FrameCallback on_frame;
+  std::vector<double> stops;
+  std::size_t next_stop = 0, frame = 0;
+  double tcur = 0, frame_interval = 1;
+  long stalled = 0;
+  Clock::time_point wall0;
+  bool running = false;
   // ISOCHOR_TRACE_IDA=T (docs/scenes.md): steps and Newton residuals after time T, and at any
   // time why a residual or linear solve failed.
   const char* trace_env = std::getenv("ISOCHOR_TRACE_IDA");
@@ -57,9 +78,9 @@ struct IdaIntegrator::Impl {
     char* end = nullptr;
     capture_from = std::strtod(v.c_str(), &end);
     if (colon == std::string::npos || colon == 0 || colon + 1 == v.size() || end != v.c_str() + colon)
-      throw std::runtime_error("ISOCHOR_CAPTURE_S: expected TIME:PATH, got \"" + v + "\"");
+      throw Error("ISOCHOR_CAPTURE_S: expected TIME:PATH, got \"" + v + "\"");
     if (opt.linear_solver == LinearSolverKind::klu)
-      throw std::runtime_error("ISOCHOR_CAPTURE_S: captures the effective stiffness S of linear_solver = \"reduced\", \"krylov\" or \"amg\", not \"klu\"");
+      throw Error("ISOCHOR_CAPTURE_S: captures the effective stiffness S of linear_solver = \"reduced\", \"krylov\" or \"amg\", not \"klu\"");
     capture_path = v.substr(colon + 1);
   }
 
@@ -119,7 +140,8 @@ struct IdaIntegrator::Impl {
     setup_in_place = false;
     // A Newton failure since the last Jacobian: the pivot order of KLU's first factorisation may
     // have gone stale (c_j changed, contact): ask KLU for a fresh factorisation.
-    if (klu && failed && stats.jacobian_evals > 0) SUNLinSol_KLUReInit(klu, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL);
+    if (klu && failed && stats.jacobian_evals > 0)
+      check(SUNLinSol_KLUReInit(klu, J, SM_NNZ_S(J), SUNKLU_REINIT_PARTIAL), "SUNLinSol_KLUReInit", t);
     const bool reuse = opt.jacobian_age > 0 && !failed && fresh_step >= 0 && nst - fresh_step < opt.jacobian_age;
     if (reuse && reduced_holds_fresh && reduced->can_retarget()) {
       // The reduced solver holds the last assembled Jacobian in its own copies: its setup moves
@@ -156,60 +178,67 @@ struct IdaIntegrator::Impl {
 };
 
 namespace {
-int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* data) {
-  return static_cast<IdaIntegrator::Impl*>(data)->residual(t, yy, yp, rr);
+using Impl = IdaIntegrator::Impl;
+
+int res_fn(sunrealtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* data) {
+  auto& s = *static_cast<Impl*>(data);
+  return guarded(s.caught, [&] { return s.residual(t, yy, yp, rr); });
 }
-int jac_fn(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector, SUNMatrix J, void* data, N_Vector, N_Vector,
+int jac_fn(sunrealtype t, sunrealtype cj, N_Vector yy, N_Vector yp, N_Vector, SUNMatrix J, void* data, N_Vector, N_Vector,
            N_Vector) {
-  return static_cast<IdaIntegrator::Impl*>(data)->jacobian(t, cj, yy, yp, J);
+  auto& s = *static_cast<Impl*>(data);
+  return guarded(s.caught, [&] { return s.jacobian(t, cj, yy, yp, J); });
 }
 // KLU inside a custom linear solver whose content is the integration, to time its setup
 // (factorisation) and solve.
 int timed_klu_setup(SUNLinearSolver S, SUNMatrix A) {
-  auto& s = *static_cast<IdaIntegrator::Impl*>(S->content);
-  if (!SUNLinSol_KLUGetSymbolic(s.klu)) {
-    // KLU's symbolic analysis happens inside SUNDIALS' first setup; to report it apart, the same
-    // analysis (same ordering and options) is timed once on its own and discarded.
-    klu_l_common c = *SUNLinSol_KLUGetCommon(s.klu);
-    const auto ta = Clock::now();
-    klu_l_symbolic* sym = klu_l_analyze(SM_COLUMNS_S(A), SM_INDEXPTRS_S(A), SM_INDEXVALS_S(A), &c);
-    s.stats.symbolic_seconds += seconds_since(ta);
-    if (sym) klu_l_free_symbolic(&sym, &c);
-  }
-  const auto t0 = Clock::now();
-  const klu_l_numeric* before = SUNLinSol_KLUGetNumeric(s.klu);
-  const int r = SUNLinSolSetup(s.klu, A);
-  s.stats.factor_seconds += seconds_since(t0);
-  const klu_l_numeric* num = SUNLinSol_KLUGetNumeric(s.klu);
-  if (num != before) s.stats.fresh_factorisations++;
-  if (num) s.stats.factor_nnz = static_cast<double>(num->lnz + num->unz);
-  return r;
+  auto& s = *static_cast<Impl*>(S->content);
+  return guarded(s.caught, [&] {
+    if (!SUNLinSol_KLUGetSymbolic(s.klu)) {
+      // KLU's symbolic analysis happens inside SUNDIALS' first setup; to report it apart, the same
+      // analysis (same ordering and options) is timed once on its own and discarded.
+      klu_l_common c = *SUNLinSol_KLUGetCommon(s.klu);
+      const auto ta = Clock::now();
+      klu_l_symbolic* sym = klu_l_analyze(SM_COLUMNS_S(A), SM_INDEXPTRS_S(A), SM_INDEXVALS_S(A), &c);
+      s.stats.symbolic_seconds += seconds_since(ta);
+      if (sym) klu_l_free_symbolic(&sym, &c);
+    }
+    const auto t0 = Clock::now();
+    const klu_l_numeric* before = SUNLinSol_KLUGetNumeric(s.klu);
+    const int r = SUNLinSolSetup(s.klu, A);
+    s.stats.factor_seconds += seconds_since(t0);
+    const klu_l_numeric* num = SUNLinSol_KLUGetNumeric(s.klu);
+    if (num != before) s.stats.fresh_factorisations++;
+    if (num) s.stats.factor_nnz = static_cast<double>(num->lnz + num->unz);
+    return r;
+  });
 }
-int timed_klu_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, realtype tol) {
-  auto& s = *static_cast<IdaIntegrator::Impl*>(S->content);
-  const auto t0 = Clock::now();
-  const int r = SUNLinSolSolve(s.klu, A, x, b, tol);
-  s.stats.solve_seconds += seconds_since(t0);
-  return r;
+int timed_klu_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, sunrealtype tol) {
+  auto& s = *static_cast<Impl*>(S->content);
+  return guarded(s.caught, [&] {
+    const auto t0 = Clock::now();
+    const int r = SUNLinSolSolve(s.klu, A, x, b, tol);
+    s.stats.solve_seconds += seconds_since(t0);
+    return r;
+  });
 }
 // The reduced solver reads the filled GGL matrix.
-int reduced_setup(SUNLinearSolver S, SUNMatrix A) {
-  auto& s = *static_cast<IdaIntegrator::Impl*>(S->content);
+int reduced_setup_body(Impl& s, SUNMatrix A) {
   const auto t0 = Clock::now();
   double cj = 0;
-  if (IDAGetCurrentCj(s.ida_mem, &cj) < 0) return SUNLS_PACKAGE_FAIL_UNREC;
+  check(IDAGetCurrentCj(s.ida_mem, &cj), "IDAGetCurrentCj");
   if (s.setup_in_place) {
     const bool moved = s.reduced->retarget(cj, nullptr);  // A was zeroed by IDA: not read
     s.stats.retargets++;
     s.stats.factor_seconds += seconds_since(t0);
     s.reduced_holds_fresh = moved;
-    return moved ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;
+    return moved ? sun::kSuccess : SUNLS_PACKAGE_FAIL_REC;
   }
   const bool ok = s.reduced->setup(cj, SM_DATA_S(A));
   s.reduced_holds_fresh = ok && s.opt.jacobian_age > 0;
   if (!s.capture_path.empty()) {
-    realtype t = 0;
-    IDAGetCurrentTime(s.ida_mem, &t);
+    sunrealtype t = 0;
+    check(IDAGetCurrentTime(s.ida_mem, &t), "IDAGetCurrentTime");
     if (t >= s.capture_from) {
       s.reduced->capture_next(s.capture_path, t);
       s.capture_path.clear();
@@ -220,16 +249,19 @@ int reduced_setup(SUNLinearSolver S, SUNMatrix A) {
   s.stats.factor_nnz = s.reduced->factor_nnz();
   s.stats.symbolic_seconds = s.reduced->analyse_seconds();
   if (!ok && s.trace) std::fprintf(stderr, "ida: the reduced setup failed (c_j = %.3g)\n", cj);
-  return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;  // not positive definite: retry smaller step
+  return ok ? sun::kSuccess : SUNLS_PACKAGE_FAIL_REC;  // not positive definite: retry smaller step
 }
-int reduced_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype) {
-  auto& s = *static_cast<IdaIntegrator::Impl*>(S->content);
+int reduced_setup(SUNLinearSolver S, SUNMatrix A) {
+  auto& s = *static_cast<Impl*>(S->content);
+  return guarded(s.caught, [&] { return reduced_setup_body(s, A); });
+}
+int reduced_solve_body(Impl& s, N_Vector x, N_Vector b) {
   const auto t0 = Clock::now();
   // IDA's solution scaling is off for this solver (IDASetLinearSolutionScaling): a c_j that moved
   // since the setup is followed exactly where S is cheap to refactor (PCG), and otherwise the
   // correction is scaled as IDA would, by 2 / (1 + c_j / c_j,setup).
   double cj = 0, scale = 1;
-  if (IDAGetCurrentCj(s.ida_mem, &cj) < 0) return SUNLS_PACKAGE_FAIL_UNREC;
+  check(IDAGetCurrentCj(s.ida_mem, &cj), "IDAGetCurrentCj");
   if (cj != s.reduced->cj()) {
     if (!s.reduced->can_retarget()) {
       scale = 2.0 / (1.0 + cj / s.reduced->cj());
@@ -247,51 +279,23 @@ int reduced_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype
   s.stats.linear_iterations = s.reduced->iterations();
   s.stats.linear_fallbacks = s.reduced->fallbacks();
   if (!ok && s.trace) std::fprintf(stderr, "ida: the reduced solve failed\n");
-  return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_REC;  // PCG did not converge: IDA retries a smaller step
+  return ok ? sun::kSuccess : SUNLS_PACKAGE_FAIL_REC;  // PCG did not converge: IDA retries a smaller step
+}
+int reduced_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) {
+  auto& s = *static_cast<Impl*>(S->content);
+  return guarded(s.caught, [&] { return reduced_solve_body(s, x, b); });
 }
 
-}  // namespace
-
-IdaIntegrator::IdaIntegrator(ConstrainedSystem& system, IdaOptions options) : impl_(new Impl(system, std::move(options))) {}
-IdaIntegrator::~IdaIntegrator() { delete impl_; }
-
-RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallback& on_frame) {
-  Impl& s = *impl_;
-  const auto wall0 = Clock::now();
+// The state vectors (q, v, lambda, mu and their derivatives) from a consistent initial state,
+// IDA's id vector (differential q and v, algebraic multipliers) and the absolute tolerances.
+void make_vectors(Impl& s, double t0, const VectorXd& q0, const VectorXd& v0, const VectorXd& a0, const VectorXd& l0) {
   const Index n = s.n, m = s.m, N = 2 * n + 2 * m;
-  const double t0 = times.front();
-  VectorXd q0, v0, a0, l0;
-  consistent_initial_state(s.sys, t0, q0, v0, a0, l0);
-  if (!s.reduced && constraints_dependent(s.sys, t0, q0))
-    throw IntegrationError(t0, "the constraints are linearly dependent (e.g. zones.global together with zones that partition the "
-                               "mesh), which makes the matrix that KLU factors singular: remove the redundant zones, or set "
-                               "integrator.linear_solver = \"reduced\" or \"krylov\", which take the multipliers of smallest norm");
-
-  // Everything SUNDIALS allocates is released by this guard, on success or on a throw.
-  N_Vector yy = nullptr, yp = nullptr, id = nullptr, atol = nullptr, yout = nullptr, ele = nullptr, ewt = nullptr;
-  SUNMatrix J = nullptr;
-  SUNNonlinearSolver nls = nullptr;
-  void* mem = nullptr;
-  const OnExit release{[&]() {
-    if (mem) IDAFree(&mem);
-    if (nls) SUNNonlinSolFree(nls);
-    if (s.LS) SUNLinSolFree(s.LS);
-    if (s.klu) SUNLinSolFree(s.klu);
-    s.LS = s.klu = nullptr;
-    if (J) SUNMatDestroy(J);
-    for (N_Vector* v : {&yy, &yp, &id, &atol, &yout, &ele, &ewt})
-      if (*v) N_VDestroy(*v);
-    if (s.ctx) SUNContext_Free(&s.ctx);
-    s.ida_mem = nullptr;
-  }};
-
-  check(SUNContext_Create(nullptr, &s.ctx), "SUNContext_Create", t0);
-  yy = new_serial_vector(N, s.ctx);
-  yp = new_serial_vector(N, s.ctx);
-  id = new_serial_vector(N, s.ctx);
-  atol = new_serial_vector(N, s.ctx);
-  double* y = N_VGetArrayPointer(yy);
-  double* d = N_VGetArrayPointer(yp);
+  s.yy = new_serial_vector(N, s.ctx);
+  s.yp = new_serial_vector(N, s.ctx);
+  s.id = new_serial_vector(N, s.ctx);
+  s.atol = new_serial_vector(N, s.ctx);
+  double* y = N_VGetArrayPointer(s.yy.get());
+  double* d = N_VGetArrayPointer(s.yp.get());
   Eigen::Map<VectorXd>(y, N).setZero();
   Eigen::Map<VectorXd>(d, N).setZero();
   Eigen::Map<VectorXd>(y, n) = q0;
@@ -299,33 +303,52 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
   if (m) Eigen::Map<VectorXd>(y + 2 * n, m) = l0;
   Eigen::Map<VectorXd>(d, n) = v0;
   Eigen::Map<VectorXd>(d + n, n) = a0;
-  double* idv = N_VGetArrayPointer(id);
-  double* av = N_VGetArrayPointer(atol);
+  double* idv = N_VGetArrayPointer(s.id.get());
+  double* av = N_VGetArrayPointer(s.atol.get());
   const double atol_v = s.opt.atol_v > 0 ? s.opt.atol_v : 100.0 * s.opt.atol_q;
   const double atol_l = s.opt.atol_lambda > 0 ? s.opt.atol_lambda : 1e-6 * s.sys.force_scale();
   for (Index i = 0; i < N; ++i) {
     idv[i] = i < 2 * n ? 1.0 : 0.0;
     av[i] = i < n ? s.opt.atol_q : i < 2 * n ? atol_v : atol_l;
   }
+  if (!m) return;
   // mu multiplies G^T in the velocity equation: its natural scale is atol_v / |G_j|.
-  if (m) {
-    std::vector<std::vector<double>> G(m);
-    for (Index j = 0; j < m; ++j) G[j].resize(s.sys.constraint_rows()[j].size());
-    s.sys.constraint_jacobian(t0, q0, G, nullptr);
-    for (Index j = 0; j < m; ++j) {
-      double nrm = 0;
-      for (double x : G[j]) nrm += x * x;
-      av[2 * n + m + j] = atol_v / std::max(1e-300, std::sqrt(nrm));
-      av[2 * n + j] = atol_l / std::max(1e-300, std::sqrt(nrm));
-    }
+  std::vector<std::vector<double>> G(m);
+  for (Index j = 0; j < m; ++j) G[j].resize(s.sys.constraint_rows()[j].size());
+  s.sys.constraint_jacobian(t0, q0, G, nullptr);
+  for (Index j = 0; j < m; ++j) {
+    double nrm = 0;
+    for (double x : G[j]) nrm += x * x;
+    av[2 * n + m + j] = atol_v / std::max(1e-300, std::sqrt(nrm));
+    av[2 * n + j] = atol_l / std::max(1e-300, std::sqrt(nrm));
   }
+}
 
-  mem = check_ptr(IDACreate(s.ctx), "IDACreate");
-  s.ida_mem = mem;
-  check(IDAInit(mem, res_fn, t0, yy, yp), "IDAInit", t0);
-  check(IDASVtolerances(mem, s.opt.rtol, atol), "IDASVtolerances", t0);
+// A position-based first step: the error 1/2 a h^2 of a first step equals the position tolerance,
+// h0 = sqrt(2 / |a|_wrms) (IDA's own, 0.5 / |y'|, is too small for Newton on the GGL matrix at
+// tight tolerances: docs/decisions.md). 0 when the acceleration is zero.
+double first_step(const Impl& s, const VectorXd& q0, const VectorXd& a0, double span) {
+  double sum = 0;
+  for (Index i = 0; i < s.n; ++i) {
+    const double w = a0[i] / (s.opt.rtol * std::abs(q0[i]) + s.opt.atol_q);
+    sum += w * w;
+  }
+  const double anorm = std::sqrt(sum / static_cast<double>(std::max<Index>(s.n, 1)));
+  if (anorm <= 0) return 0;
+  double h0 = std::min(std::sqrt(2.0 / anorm), 1e-3 * span);
+  if (s.opt.max_step > 0) h0 = std::min(h0, s.opt.max_step);
+  return h0;
+}
+
+// IDA's memory with the run's options: tolerances, the algebraic components, our Newton iteration
+// where the reduced solver keeps its matrix, orders, step limits and the first step.
+void create_ida(Impl& s, double t0, double t_end, const VectorXd& q0, const VectorXd& a0) {
+  s.mem.reset(check_ptr(IDACreate(s.ctx), "IDACreate"));
+  void* mem = s.ida_mem = s.mem.get();
+  check(IDAInit(mem, res_fn, t0, s.yy.get(), s.yp.get()), "IDAInit", t0);
+  check(IDASVtolerances(mem, s.opt.rtol, s.atol.get()), "IDASVtolerances", t0);
   check(IDASetUserData(mem, &s), "IDASetUserData", t0);
-  check(IDASetId(mem, id), "IDASetId", t0);
+  check(IDASetId(mem, s.id.get()), "IDASetId", t0);
   check(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg", t0);
   if (s.reduced && s.reduced->can_retarget()) {
     // The reduced solver can keep its matrix across setups (jacobian_age): IDA's iteration, told
@@ -333,183 +356,267 @@ RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallbac
     IdaNewtonHooks hooks;
     hooks.before_setup = [&s](bool after_failure) { s.setup_after_failure = after_failure; };
     hooks.kept_matrix = [&s]() { return s.setup_in_place; };
-    nls = check_ptr(make_ida_newton(yy, s.ctx, std::move(hooks)), "make_ida_newton");
-    check(IDASetNonlinearSolver(mem, nls), "IDASetNonlinearSolver", t0);
+    s.nls.reset(check_ptr(make_ida_newton(s.yy.get(), s.ctx, std::move(hooks)), "make_ida_newton"));
+    check(IDASetNonlinearSolver(mem, s.nls.get()), "IDASetNonlinearSolver", t0);
   }
   const double newton_coef = s.opt.newton_coef > 0 ? s.opt.newton_coef : IdaOptions::kDefaultNewtonCoef;
   check(IDASetNonlinConvCoef(mem, newton_coef), "IDASetNonlinConvCoef", t0);
   check(IDASetMaxOrd(mem, s.opt.max_order), "IDASetMaxOrd", t0);
   check(IDASetMaxNonlinIters(mem, s.opt.max_newton), "IDASetMaxNonlinIters", t0);
   if (s.opt.max_step > 0) check(IDASetMaxStep(mem, s.opt.max_step), "IDASetMaxStep", t0);
-  if (s.opt.initial_step > 0) {
-    check(IDASetInitStep(mem, s.opt.initial_step), "IDASetInitStep", t0);
-  } else if (a0.size() > 0 && times.back() > t0) {
-    // A position-based first step: the error 1/2 a h^2 of a first step equals the position
-    // tolerance, h0 = sqrt(2 / |a|_wrms) (IDA's own, 0.5 / |y'|, is too small for Newton on the
-    // GGL matrix at tight tolerances: docs/decisions.md).
-    double sum = 0;
-    for (Index i = 0; i < n; ++i) {
-      const double w = a0[i] / (s.opt.rtol * std::abs(q0[i]) + s.opt.atol_q);
-      sum += w * w;
-    }
-    const double anorm = std::sqrt(sum / static_cast<double>(std::max<Index>(n, 1)));
-    if (anorm > 0) {
-      double h0 = std::min(std::sqrt(2.0 / anorm), 1e-3 * (times.back() - t0));
-      if (s.opt.max_step > 0) h0 = std::min(h0, s.opt.max_step);
-      check(IDASetInitStep(mem, h0), "IDASetInitStep", t0);
-    }
-  }
-  check(IDASetStopTime(mem, times.back()), "IDASetStopTime", t0);
+  const double h0 = s.opt.initial_step > 0 ? s.opt.initial_step
+                    : a0.size() > 0 && t_end > t0 ? first_step(s, q0, a0, t_end - t0)
+                                                  : 0.0;
+  if (h0 > 0) check(IDASetInitStep(mem, h0), "IDASetInitStep", t0);
+  check(IDASetStopTime(mem, t_end), "IDASetStopTime", t0);
   check(IDASetMaxNumSteps(mem, 100000), "IDASetMaxNumSteps", t0);
-  J = check_ptr(SUNSparseMatrix(N, N, s.ggl.pattern().nnz(), CSC_MAT, s.ctx), "SUNSparseMatrix");
+}
+
+// The Jacobian matrix and the linear solver: the reduced solver, or KLU (in METIS's node-grouped
+// order or its own) inside a wrapper that times it.
+void attach_linear_solver(Impl& s, double t0) {
+  const Index N = 2 * s.n + 2 * s.m;
+  s.J.reset(check_ptr(SUNSparseMatrix(N, N, s.ggl.pattern().nnz(), CSC_MAT, s.ctx), "SUNSparseMatrix"));
   if (s.reduced) {
-    s.LS = make_custom_linear_solver(s.ctx, &s, reduced_setup, reduced_solve);
+    s.LS_owner = make_custom_linear_solver(s.ctx, &s, reduced_setup, reduced_solve);
   } else {
-    s.klu = check_ptr(SUNLinSol_KLU(yy, J, s.ctx), "SUNLinSol_KLU");
+    s.klu_owner.reset(check_ptr(SUNLinSol_KLU(s.yy.get(), s.J.get(), s.ctx), "SUNLinSol_KLU"));
+    s.klu = s.klu_owner.get();
     if (s.opt.ordering == KluOrdering::metis)
       use_klu_order(s.klu, &s.order);
     else
       check(SUNLinSol_KLUSetOrdering(s.klu, s.opt.ordering == KluOrdering::amd ? 0 : 1), "SUNLinSol_KLUSetOrdering", t0);
     check(SUNLinSolInitialize(s.klu), "SUNLinSolInitialize", t0);
-    s.LS = make_custom_linear_solver(s.ctx, &s, timed_klu_setup, timed_klu_solve);
+    s.LS_owner = make_custom_linear_solver(s.ctx, &s, timed_klu_setup, timed_klu_solve);
   }
-  check(IDASetLinearSolver(mem, s.LS, J), "IDASetLinearSolver", t0);
-  if (s.reduced) check(IDASetLinearSolutionScaling(mem, SUNFALSE), "IDASetLinearSolutionScaling", t0);
-  check(IDASetJacFn(mem, jac_fn), "IDASetJacFn", t0);
+  s.LS = s.LS_owner.get();
+  check(IDASetLinearSolver(s.ida_mem, s.LS, s.J.get()), "IDASetLinearSolver", t0);
+  if (s.reduced) check(IDASetLinearSolutionScaling(s.ida_mem, SUNFALSE), "IDASetLinearSolutionScaling", t0);
+  check(IDASetJacFn(s.ida_mem, jac_fn), "IDASetJacFn", t0);
+}
 
-  auto collect = [&](double t) {
-    check(IDAGetNumSteps(mem, &s.stats.steps), "IDAGetNumSteps", t);
-    check(IDAGetNumResEvals(mem, &s.stats.residual_evals), "IDAGetNumResEvals", t);
-    check(IDAGetNumLinSolvSetups(mem, &s.stats.linear_setups), "IDAGetNumLinSolvSetups", t);
-    check(IDAGetNumNonlinSolvIters(mem, &s.stats.newton_iterations), "IDAGetNumNonlinSolvIters", t);
-    check(IDAGetNumNonlinSolvConvFails(mem, &s.stats.newton_failures), "IDAGetNumNonlinSolvConvFails", t);
-    check(IDAGetNumErrTestFails(mem, &s.stats.error_test_failures), "IDAGetNumErrTestFails", t);
-    int order = 0;
-    double h = 0;
-    check(IDAGetLastOrder(mem, &order), "IDAGetLastOrder", t);
-    check(IDAGetLastStep(mem, &h), "IDAGetLastStep", t);
-    s.stats.frames.push_back({s.stats.steps, s.stats.newton_iterations, s.stats.error_test_failures,
-                              s.stats.newton_failures, s.stats.jacobian_evals, order, h});
-  };
+// The statistics at time t, with a sample for the frame.
+void collect(Impl& s, double t) {
+  void* mem = s.ida_mem;
+  check(IDAGetNumSteps(mem, &s.stats.steps), "IDAGetNumSteps", t);
+  check(IDAGetNumResEvals(mem, &s.stats.residual_evals), "IDAGetNumResEvals", t);
+  check(IDAGetNumLinSolvSetups(mem, &s.stats.linear_setups), "IDAGetNumLinSolvSetups", t);
+  check(IDAGetNumNonlinSolvIters(mem, &s.stats.newton_iterations), "IDAGetNumNonlinSolvIters", t);
+  check(IDAGetNumNonlinSolvConvFails(mem, &s.stats.newton_failures), "IDAGetNumNonlinSolvConvFails", t);
+  check(IDAGetNumErrTestFails(mem, &s.stats.error_test_failures), "IDAGetNumErrTestFails", t);
+  int order = 0;
+  double h = 0;
+  check(IDAGetLastOrder(mem, &order), "IDAGetLastOrder", t);
+  check(IDAGetLastStep(mem, &h), "IDAGetLastStep", t);
+  s.stats.frames.push_back({s.stats.steps, s.stats.newton_iterations, s.stats.error_test_failures, s.stats.newton_failures,
+                            s.stats.jacobian_evals, order, h});
+}
 
-  // Steps end only where the scene is not smooth (its breakpoints), at the last frame and, with
-  // stop_at_frames, at every frame; frames in between come from IDA's interpolant.
+// ISOCHOR_TRACE_IDA=T: one line per step ending after time T, on stderr: the step, order,
+// failures so far, the share of the weighted local error estimate held by positions and by
+// velocities (the multipliers are out of the error test), and the three dofs (free node.axis,
+// block) that weigh most.
+void trace_step(Impl& s, double t) {
+  void* mem = s.ida_mem;
+  const Index n = s.n, N = 2 * s.n + 2 * s.m;
+  long nst = 0, netf = 0, ncfn = 0, nni = 0;
+  int order = 0;
+  double h = 0;
+  check(IDAGetNumSteps(mem, &nst), "IDAGetNumSteps", t);
+  check(IDAGetNumErrTestFails(mem, &netf), "IDAGetNumErrTestFails", t);
+  check(IDAGetNumNonlinSolvConvFails(mem, &ncfn), "IDAGetNumNonlinSolvConvFails", t);
+  check(IDAGetNumNonlinSolvIters(mem, &nni), "IDAGetNumNonlinSolvIters", t);
+  check(IDAGetLastOrder(mem, &order), "IDAGetLastOrder", t);
+  check(IDAGetLastStep(mem, &h), "IDAGetLastStep", t);
+  check(IDAGetEstLocalErrors(mem, s.ele.get()), "IDAGetEstLocalErrors", t);
+  check(IDAGetErrWeights(mem, s.ewt.get()), "IDAGetErrWeights", t);
+  const double* e = N_VGetArrayPointer(s.ele.get());
+  const double* w = N_VGetArrayPointer(s.ewt.get());
+  double share[2] = {0, 0}, total = 0;
+  std::vector<std::pair<double, Index>> top;
+  for (Index i = 0; i < 2 * n; ++i) {
+    const double x = (e[i] * w[i]) * (e[i] * w[i]);
+    share[i < n ? 0 : 1] += x;
+    total += x;
+    top.emplace_back(x, i);
+  }
+  const std::size_t k3 = std::min<std::size_t>(3, top.size());
+  std::partial_sort(top.begin(), top.begin() + static_cast<std::ptrdiff_t>(k3), top.end(),
+                    [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::fprintf(stderr, "ida t=%.9g h=%.3g k=%d steps=%ld netf=%ld ncfn=%ld nni=%ld err=%.3g q=%.2f v=%.2f top:", t, h, order,
+               nst, netf, ncfn, nni, std::sqrt(total / static_cast<double>(N)), share[0] / std::max(total, 1e-300),
+               share[1] / std::max(total, 1e-300));
+  for (std::size_t j = 0; j < k3; ++j) {
+    const Index i = top[j].second % n;
+    std::fprintf(stderr, " %ld.%ld%s(%.2f)", static_cast<long>(i / 3), static_cast<long>(i % 3),
+                 top[j].second < n ? "q" : "v", top[j].first / std::max(total, 1e-300));
+  }
+  std::fprintf(stderr, "\n");
+}
+
+// Steps end only where the scene is not smooth (its breakpoints), at the last frame and, with
+// stop_at_frames, at every frame; frames in between come from IDA's interpolant.
+std::vector<double> step_stops(Impl& s, double t0) {
+  const std::vector<double>& times = s.times;
   std::vector<double> stops{times.back()};
   for (double tb : s.sys.breakpoints())
     if (tb > t0 && tb < times.back()) stops.push_back(tb);
   if (s.opt.stop_at_frames) stops.insert(stops.end(), times.begin(), times.end());
   std::sort(stops.begin(), stops.end());
   stops.erase(std::unique(stops.begin(), stops.end()), stops.end());
-  auto next_stop = stops.begin();
+  return stops;
+}
 
-  // ISOCHOR_TRACE_IDA=T: one line per step ending after time T, on stderr: the step, order,
-  // failures so far, the share of the weighted local error estimate held by positions and by
-  // velocities (the multipliers are out of the error test), and the three dofs (free node.axis,
-  // block) that weigh most.
-  if (s.trace) {
-    ele = check_ptr(N_VClone(yy), "N_VClone");
-    ewt = check_ptr(N_VClone(yy), "N_VClone");
+// Delivers every frame at or before the time reached: a step that ended on the frame is taken as
+// it is, the others are interpolated; either way the frame is projected back onto g = 0 and
+// G v + dg/dt = 0 (the interpolant holds the constraints to the integration error only).
+void deliver_frames(Impl& s) {
+  const Index n = s.n, m = s.m;
+  VectorXd qf(n), vf(n), lf(m);
+  while (s.frame < s.times.size() && s.times[s.frame] <= s.tcur) {
+    const double tf = s.times[s.frame];
+    if (tf == s.tcur)
+      N_VScale(1.0, s.yy.get(), s.yout.get());
+    else if (IDAGetDky(s.ida_mem, tf, 0, s.yout.get()) < 0)
+      throw IntegrationError(tf, "IDAGetDky could not interpolate the frame");
+    const double* yo = N_VGetArrayPointer(s.yout.get());
+    qf = Eigen::Map<const VectorXd>(yo, n);
+    vf = Eigen::Map<const VectorXd>(yo + n, n);
+    lf = Eigen::Map<const VectorXd>(yo + 2 * n, m);
+    const auto tp = Clock::now();
+    project_state(s.sys, tf, qf, vf);
+    s.stats.projection_seconds += seconds_since(tp);
+    collect(s, tf);
+    s.on_frame(static_cast<int>(s.frame), tf, qf, vf, lf, s.stats.frames.back());
+    ++s.frame;
   }
-  auto trace_step = [&](double t) {
-    long nst = 0, netf = 0, ncfn = 0, nni = 0;
-    int order = 0;
-    double h = 0;
-    IDAGetNumSteps(mem, &nst);
-    IDAGetNumErrTestFails(mem, &netf);
-    IDAGetNumNonlinSolvConvFails(mem, &ncfn);
-    IDAGetNumNonlinSolvIters(mem, &nni);
-    IDAGetLastOrder(mem, &order);
-    IDAGetLastStep(mem, &h);
-    IDAGetEstLocalErrors(mem, ele);
-    IDAGetErrWeights(mem, ewt);
-    const double* e = N_VGetArrayPointer(ele);
-    const double* w = N_VGetArrayPointer(ewt);
-    double share[3] = {0, 0, 0}, total = 0;
-    std::vector<std::pair<double, Index>> top;
-    for (Index i = 0; i < 2 * n; ++i) {
-      const double x = (e[i] * w[i]) * (e[i] * w[i]);
-      share[i < n ? 0 : 1] += x;
-      total += x;
-      top.emplace_back(x, i);
-    }
-    const std::size_t k3 = std::min<std::size_t>(3, top.size());
-    std::partial_sort(top.begin(), top.begin() + static_cast<std::ptrdiff_t>(k3), top.end(),
-                      [](const auto& a, const auto& b) { return a.first > b.first; });
-    std::fprintf(stderr, "ida t=%.9g h=%.3g k=%d steps=%ld netf=%ld ncfn=%ld nni=%ld err=%.3g q=%.2f v=%.2f top:", t, h,
-                 order, nst, netf, ncfn, nni, std::sqrt(total / static_cast<double>(N)), share[0] / std::max(total, 1e-300),
-                 share[1] / std::max(total, 1e-300));
-    for (std::size_t j = 0; j < k3; ++j) {
-      const Index i = top[j].second % n;
-      std::fprintf(stderr, " %ld.%ld%s(%.2f)", static_cast<long>(i / 3), static_cast<long>(i % 3), top[j].second < n ? "q" : "v",
-                   top[j].first / std::max(total, 1e-300));
-    }
-    std::fprintf(stderr, "\n");
-  };
+}
 
-  const double frame_interval = times.size() > 1 ? times[1] - times[0] : std::max(times.back() - t0, 1.0);
+// After a step: the step limit and progress. No progress means steps below kStall of the frame
+// interval, kStallSteps of them in a row (a million steps per frame or more; the ball's impact,
+// the stiffest event in the demos, steps at 5e-3 of it). Such a run would take days, so it stops
+// and says why.
+void check_progress(Impl& s) {
   constexpr double kStall = 1e-7;
   constexpr long kStallSteps = 1000;
-  long stalled = 0;
-  yout = check_ptr(N_VClone(yy), "N_VClone");
-  VectorXd qf(n), vf(n), lf(m);
-  double tcur = t0;
-  std::size_t k = 0;
-  while (k < times.size()) {
-    if (times[k] <= tcur) {
-      const double tf = times[k];
-      if (tf == tcur) {  // a step ended on the frame: no interpolation
-        N_VScale(1.0, yy, yout);
-      } else if (IDAGetDky(mem, tf, 0, yout) < 0) {
-        throw IntegrationError(tf, "IDAGetDky could not interpolate the frame");
-      }
-      const double* yo = N_VGetArrayPointer(yout);
-      qf = Eigen::Map<const VectorXd>(yo, n);
-      vf = Eigen::Map<const VectorXd>(yo + n, n);
-      lf = Eigen::Map<const VectorXd>(yo + 2 * n, m);
-      // The interpolant holds the constraints to the integration error only, a step's end to the
-      // Newton tolerance: either way the frame is projected back onto g = 0 and G v + dg/dt = 0.
-      const auto tp = Clock::now();
-      project_state(s.sys, tf, qf, vf);
-      s.stats.projection_seconds += seconds_since(tp);
-      collect(tf);
-      on_frame(static_cast<int>(k), tf, qf, vf, lf, s.stats.frames.back());
-      ++k;
-      continue;
-    }
-    step_boundary(tcur);
-    while (next_stop != stops.end() && *next_stop <= tcur) ++next_stop;
-    check(IDASetStopTime(mem, *next_stop), "IDASetStopTime", tcur);
-    double tret = tcur;
-    const int flag = IDASolve(mem, times[k], &tret, yy, yp, IDA_ONE_STEP);
-    if (flag < 0) {
-      char* name = IDAGetReturnFlagName(flag);
-      std::string reason = name ? name : "unknown IDA failure";
-      free(name);
-      throw IntegrationError(tret, reason);
-    }
-    tcur = tret;
-    if (tcur >= s.trace_from) trace_step(tcur);
-    long steps = 0;
-    check(IDAGetNumSteps(mem, &steps), "IDAGetNumSteps", tcur);
-    if (steps > s.opt.max_steps)
-      throw IntegrationError(tcur, "more than " + std::to_string(s.opt.max_steps) + " steps (integrator.max_steps)");
-    // No progress: steps below kStall of the frame interval, kStallSteps of them in a row (a
-    // million steps per frame or more; the ball's impact, the stiffest event in the demos, steps
-    // at 5e-3 of it). Such a run would take days, so it stops and says why.
-    double h = 0;
-    check(IDAGetLastStep(mem, &h), "IDAGetLastStep", tcur);
-    stalled = std::abs(h) < kStall * frame_interval ? stalled + 1 : 0;
-    if (stalled >= kStallSteps) {
-      char buf[240];
-      std::snprintf(buf, sizeof buf,
-                    "no progress: %ld steps in a row below %g of the frame interval (the last step %.3g s; the model or its "
-                    "state is too stiff to integrate, e.g. a body starting inside a contact or an inverted mesh)",
-                    kStallSteps, kStall, h);
-      throw IntegrationError(tcur, buf);
-    }
+  long steps = 0;
+  check(IDAGetNumSteps(s.ida_mem, &steps), "IDAGetNumSteps", s.tcur);
+  if (steps > s.opt.max_steps)
+    throw IntegrationError(s.tcur, "more than " + std::to_string(s.opt.max_steps) + " steps (integrator.max_steps)");
+  double h = 0;
+  check(IDAGetLastStep(s.ida_mem, &h), "IDAGetLastStep", s.tcur);
+  s.stalled = std::abs(h) < kStall * s.frame_interval ? s.stalled + 1 : 0;
+  if (s.stalled >= kStallSteps) {
+    char buf[240];
+    std::snprintf(buf, sizeof buf,
+                  "no progress: %ld steps in a row below %g of the frame interval (the last step %.3g s; the model or its "
+                  "state is too stiff to integrate, e.g. a body starting inside a contact or an inverted mesh)",
+                  kStallSteps, kStall, h);
+    throw IntegrationError(s.tcur, buf);
   }
-  s.stats.wall_seconds = seconds_since(wall0);
+}
+
+// One IDA step towards `target`, ending at the next stop at the latest.
+void one_step(Impl& s, double target) {
+  step_boundary(s.tcur);
+  while (s.next_stop < s.stops.size() && s.stops[s.next_stop] <= s.tcur) ++s.next_stop;
+  check(IDASetStopTime(s.ida_mem, s.stops[std::min(s.next_stop, s.stops.size() - 1)]), "IDASetStopTime", s.tcur);
+  double tret = s.tcur;
+  const int flag = IDASolve(s.ida_mem, target, &tret, s.yy.get(), s.yp.get(), IDA_ONE_STEP);
+  rethrow_caught(s.caught);
+  if (flag < 0) {
+    char* name = IDAGetReturnFlagName(flag);
+    std::string reason = name ? name : "unknown IDA failure";
+    free(name);
+    throw IntegrationError(tret, reason);
+  }
+  s.tcur = tret;
+  if (s.tcur >= s.trace_from) trace_step(s, s.tcur);
+  check_progress(s);
+}
+
+// Releases SUNDIALS' objects of the run (IDA's memory first, the context last).
+void release(Impl& s) {
+  s.mem.reset();
+  s.nls.reset();
+  s.LS_owner.reset();
+  s.klu_owner.reset();
+  s.J.reset();
+  for (sun::Vector* v : {&s.yy, &s.yp, &s.id, &s.atol, &s.yout, &s.ele, &s.ewt}) v->reset();
+  s.context.reset();
+  s.ctx = nullptr;
+  s.LS = s.klu = nullptr;
+  s.ida_mem = nullptr;
+  s.running = false;
+}
+
+}  // namespace
+
+IdaIntegrator::IdaIntegrator(ConstrainedSystem& system, IdaOptions options)
+    : impl_(std::make_unique<Impl>(system, std::move(options))) {}
+IdaIntegrator::~IdaIntegrator() = default;
+
+void IdaIntegrator::begin(const std::vector<double>& times, const FrameCallback& on_frame) {
+  Impl& s = *impl_;
+  if (times.empty()) throw Error("IDA: no frame times to integrate to");
+  release(s);
+  s.wall0 = Clock::now();
+  s.times = times;
+  s.on_frame = on_frame;
+  const double t0 = times.front();
+  VectorXd q0, v0, a0, l0;
+  consistent_initial_state(s.sys, t0, q0, v0, a0, l0);
+  if (!s.reduced && constraints_dependent(s.sys, t0, q0))
+    throw IntegrationError(t0, "the constraints are linearly dependent (e.g. zones.global together with zones that partition the "
+                               "mesh), which makes the matrix that KLU factors singular: remove the redundant zones, or set "
+                               "integrator.linear_solver = \"reduced\" or \"krylov\", which take the multipliers of smallest norm");
+  s.running = true;
+  s.context = sun::make_context(t0);
+  s.ctx = s.context.get();
+  make_vectors(s, t0, q0, v0, a0, l0);
+  create_ida(s, t0, times.back(), q0, a0);
+  attach_linear_solver(s, t0);
+  s.stops = step_stops(s, t0);
+  s.next_stop = 0;
+  if (s.trace) {
+    s.ele.reset(check_ptr(N_VClone(s.yy.get()), "N_VClone"));
+    s.ewt.reset(check_ptr(N_VClone(s.yy.get()), "N_VClone"));
+  }
+  s.yout.reset(check_ptr(N_VClone(s.yy.get()), "N_VClone"));
+  s.frame_interval = times.size() > 1 ? times[1] - times[0] : std::max(times.back() - t0, 1.0);
+  s.stalled = 0;
+  s.frame = 0;
+  s.tcur = t0;
+  deliver_frames(s);
+}
+
+double IdaIntegrator::step(double t_out) {
+  Impl& s = *impl_;
+  if (!s.running) throw Error("IDA: step() before begin()");
+  const double target = std::min(t_out, s.times.back());
+  while (s.tcur < target) {
+    one_step(s, s.frame < s.times.size() ? s.times[s.frame] : s.times.back());
+    deliver_frames(s);
+  }
+  return s.tcur;
+}
+
+RunStats IdaIntegrator::finish() {
+  Impl& s = *impl_;
+  s.stats.wall_seconds = seconds_since(s.wall0);
+  release(s);
   return s.stats;
+}
+
+RunStats IdaIntegrator::run(const std::vector<double>& times, const FrameCallback& on_frame) {
+  try {
+    begin(times, on_frame);
+    step(times.back());
+  } catch (...) {
+    release(*impl_);
+    throw;
+  }
+  return finish();
 }
 
 }  // namespace isochor

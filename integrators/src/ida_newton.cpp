@@ -1,5 +1,6 @@
 // IDA's Newton iteration for matrices kept across setups (ida_newton.hpp).
 #include "ida_newton.hpp"
+#include "sundials_compat.hpp"
 
 #include <ida/ida.h>
 
@@ -30,49 +31,49 @@ Newton& content(SUNNonlinearSolver s) { return *static_cast<Newton*>(s->content)
 int test(Newton& c, double norm, double tol) {
   if (c.cur_iter == 0) {
     c.first_norm = norm;
-    if (norm <= 1e-4 * tol) return SUN_NLS_SUCCESS;
+    if (norm <= 1e-4 * tol) return sun::kSuccess;
   } else {
     const double rate = std::pow(norm / c.first_norm, 1.0 / c.cur_iter);
     if (rate > 0.9) return SUN_NLS_CONV_RECVR;
     c.ss = rate / (1.0 - rate);
   }
-  return c.ss * norm <= tol ? SUN_NLS_SUCCESS : SUN_NLS_CONTINUE;
+  return c.ss * norm <= tol ? sun::kSuccess : SUN_NLS_CONTINUE;
 }
 
-int solve(SUNNonlinearSolver s, N_Vector, N_Vector ycor, N_Vector w, realtype tol, booleantype call_setup, void* mem) {
+int solve(SUNNonlinearSolver s, N_Vector, N_Vector ycor, N_Vector w, sunrealtype tol, sunbooleantype call_setup, void* mem) {
   Newton& c = content(s);
   c.iters = 0;
   c.conv_fails = 0;
   double cj = 0;
-  if (IDAGetCurrentCj(mem, &cj) < 0) return SUN_NLS_MEM_NULL;
+  if (IDAGetCurrentCj(mem, &cj) < 0) return sun::kNonlinearMemNull;
   // As IDA: a new c_j forgets the rate (the matrix, or its shift to c_j, is not the one measured).
   if (cj != c.last_cj) c.ss = 100;
   c.last_cj = cj;
   bool jbad = false;
-  int r = SUN_NLS_SUCCESS;
+  int r = sun::kSuccess;
   for (;;) {  // an attempt: residual, setup if asked, the corrections
     r = c.sys(ycor, c.delta, mem);
-    if (r != SUN_NLS_SUCCESS) break;
+    if (r != sun::kSuccess) break;
     if (call_setup) {
-      booleantype jc = SUNFALSE;
+      sunbooleantype jc = SUNFALSE;
       c.hooks.before_setup(jbad);
       r = c.lsetup(jbad, &jc, mem);
       // A kept matrix is not current: a failure with it earns a fresh one.
       const bool kept = c.hooks.kept_matrix();
       c.jcur = jc && !kept;
       if (!kept) c.ss = 20;
-      if (r != SUN_NLS_SUCCESS) break;
+      if (r != sun::kSuccess) break;
     }
     for (c.cur_iter = 0;;) {
       c.iters++;
       N_VScale(-1.0, c.delta, c.delta);
       r = c.lsolve(c.delta, mem);
-      if (r != SUN_NLS_SUCCESS) break;
+      if (r != sun::kSuccess) break;
       N_VLinearSum(1.0, ycor, 1.0, c.delta, ycor);
       r = test(c, N_VWrmsNorm(c.delta, w), tol);
-      if (r == SUN_NLS_SUCCESS) {
+      if (r == sun::kSuccess) {
         c.jcur = false;
-        return SUN_NLS_SUCCESS;
+        return sun::kSuccess;
       }
       if (r != SUN_NLS_CONTINUE) break;
       if (++c.cur_iter >= c.max_iters) {
@@ -80,7 +81,7 @@ int solve(SUNNonlinearSolver s, N_Vector, N_Vector ycor, N_Vector w, realtype to
         break;
       }
       r = c.sys(ycor, c.delta, mem);
-      if (r != SUN_NLS_SUCCESS) break;
+      if (r != sun::kSuccess) break;
     }
     // A recoverable failure with a matrix from an earlier step: once more with a fresh setup.
     if (r > 0 && !c.jcur && c.lsetup) {
@@ -101,48 +102,48 @@ int initialize(SUNNonlinearSolver s) {
   Newton& c = content(s);
   c.iters = c.conv_fails = 0;
   c.jcur = false;
-  return c.sys && c.lsolve ? SUN_NLS_SUCCESS : SUN_NLS_MEM_NULL;
+  return c.sys && c.lsolve ? sun::kSuccess : sun::kNonlinearMemNull;
 }
 int free_solver(SUNNonlinearSolver s) {
-  if (!s) return SUN_NLS_SUCCESS;
+  if (!s) return sun::kSuccess;
   if (s->content) {
     if (content(s).delta) N_VDestroy(content(s).delta);
     delete &content(s);
     s->content = nullptr;
   }
   SUNNonlinSolFreeEmpty(s);
-  return SUN_NLS_SUCCESS;
+  return sun::kSuccess;
 }
 int set_sys(SUNNonlinearSolver s, SUNNonlinSolSysFn f) {
   content(s).sys = f;
-  return f ? SUN_NLS_SUCCESS : SUN_NLS_ILL_INPUT;
+  return f ? sun::kSuccess : sun::kNonlinearIllInput;
 }
 int set_lsetup(SUNNonlinearSolver s, SUNNonlinSolLSetupFn f) {
   content(s).lsetup = f;
-  return SUN_NLS_SUCCESS;
+  return sun::kSuccess;
 }
 int set_lsolve(SUNNonlinearSolver s, SUNNonlinSolLSolveFn f) {
   content(s).lsolve = f;
-  return f ? SUN_NLS_SUCCESS : SUN_NLS_ILL_INPUT;
+  return f ? sun::kSuccess : sun::kNonlinearIllInput;
 }
 // IDA hands its own test (and its memory); this solver uses its own (above) instead.
-int set_ctest(SUNNonlinearSolver, SUNNonlinSolConvTestFn f, void*) { return f ? SUN_NLS_SUCCESS : SUN_NLS_ILL_INPUT; }
+int set_ctest(SUNNonlinearSolver, SUNNonlinSolConvTestFn f, void*) { return f ? sun::kSuccess : sun::kNonlinearIllInput; }
 int set_max_iters(SUNNonlinearSolver s, int n) {
-  if (n < 1) return SUN_NLS_ILL_INPUT;
+  if (n < 1) return sun::kNonlinearIllInput;
   content(s).max_iters = n;
-  return SUN_NLS_SUCCESS;
+  return sun::kSuccess;
 }
 int get_iters(SUNNonlinearSolver s, long* n) {
   *n = content(s).iters;
-  return SUN_NLS_SUCCESS;
+  return sun::kSuccess;
 }
 int get_cur_iter(SUNNonlinearSolver s, int* n) {
   *n = content(s).cur_iter;
-  return SUN_NLS_SUCCESS;
+  return sun::kSuccess;
 }
 int get_conv_fails(SUNNonlinearSolver s, long* n) {
   *n = content(s).conv_fails;
-  return SUN_NLS_SUCCESS;
+  return sun::kSuccess;
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
-#include "isochor/initial_state.hpp"
+#include "isochor/integrators/initial_state.hpp"
+#include "isochor/base/error.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
@@ -14,22 +15,22 @@ namespace isochor {
 void check_groups(const ConstrainedSystem& sys, const std::string& who) {
   const Index n = sys.num_dofs(), per = sys.dofs_per_group();
   if (n % per != 0)
-    throw std::invalid_argument(who + " orders the dofs by groups of dofs_per_group() = " + std::to_string(per) +
+    throw Error(who + " orders the dofs by groups of dofs_per_group() = " + std::to_string(per) +
                                 ", but the system has " + std::to_string(n) +
                                 " dofs, not a multiple of it (override dofs_per_group() for groups other than x, y, z)");
 }
 
 void check_system(const ConstrainedSystem& sys) {
   const Index n = sys.num_dofs(), per = sys.dofs_per_group();
-  if (per < 1) throw std::invalid_argument("the system's dofs_per_group() must be at least 1, got " + std::to_string(per));
+  if (per < 1) throw Error("the system's dofs_per_group() must be at least 1, got " + std::to_string(per));
   if (sys.mass().size() != n || !(sys.mass().array() > 0).all())
-    throw std::invalid_argument("the system's mass() must hold " + std::to_string(n) + " positive entries");
+    throw Error("the system's mass() must hold " + std::to_string(n) + " positive entries");
   if (static_cast<Index>(sys.constraint_rows().size()) != sys.num_constraints())
-    throw std::invalid_argument("the system's constraint_rows() must hold num_constraints() = " +
+    throw Error("the system's constraint_rows() must hold num_constraints() = " +
                                 std::to_string(sys.num_constraints()) + " rows");
   for (const auto& row : sys.constraint_rows())
     for (Index d : row)
-      if (d < 0 || d >= n) throw std::invalid_argument("a constraint row names dof " + std::to_string(d) + " outside 0.." + std::to_string(n - 1));
+      if (d < 0 || d >= n) throw Error("a constraint row names dof " + std::to_string(d) + " outside 0.." + std::to_string(n - 1));
 }
 
 namespace {
@@ -71,7 +72,7 @@ class GramSolver {
       I.setIdentity();
       ldlt_.compute(A + 1e-12 * scale * I);
       if (ldlt_.info() != Eigen::Success)
-        throw std::runtime_error(std::to_string(A.rows()) + " constraints that are linearly dependent (e.g. zones.global together with zones that partition the mesh): remove the redundant zones");
+        throw Error(std::to_string(A.rows()) + " constraints that are linearly dependent (e.g. zones.global together with zones that partition the mesh): remove the redundant zones");
       return;
     }
     dense_ = true;
@@ -96,7 +97,7 @@ bool constraints_dependent(ConstrainedSystem& sys, double t, const VectorXd& q) 
   sys.constraint_jacobian(t, q, G, nullptr);
   try {
     return GramSolver(sparse_rows(sys, G), sys.mass().cwiseInverse()).dependent();
-  } catch (const std::runtime_error&) {  // too many to decompose densely: dependent all the same
+  } catch (const Error&) {  // too many to decompose densely: dependent all the same
     return true;
   }
 }

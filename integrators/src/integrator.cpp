@@ -1,6 +1,6 @@
-#include "isochor/integrator.hpp"
+#include "isochor/integrators/integrator.hpp"
 
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
 
 namespace isochor {
 

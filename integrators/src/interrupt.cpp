@@ -1,4 +1,4 @@
-#include "isochor/interrupt.hpp"
+#include "isochor/integrators/interrupt.hpp"
 
 #include <atomic>
 #include <limits>

@@ -8,8 +8,8 @@
 #include <memory>
 #include <vector>
 
-#include "isochor/constrained_system.hpp"
-#include "isochor/sparse_pattern.hpp"
+#include "isochor/integrators/constrained_system.hpp"
+#include "isochor/integrators/sparse_pattern.hpp"
 
 namespace isochor {
 

@@ -7,7 +7,7 @@
 
 #include <vector>
 
-#include "isochor/sparse_pattern.hpp"
+#include "isochor/integrators/sparse_pattern.hpp"
 
 namespace isochor {
 

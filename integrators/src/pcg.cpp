@@ -3,7 +3,7 @@
 #include <cmath>
 #include <vector>
 
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
 
 namespace isochor {
 

@@ -16,8 +16,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "isochor/ggl.hpp"
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/ggl.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
+#include "isochor/base/error.hpp"
 
 namespace isochor {
 
@@ -209,7 +210,7 @@ bool ReducedSolver::can_retarget() const { return !impl_->use_direct && impl_->S
 bool ReducedSolver::retarget(double cj, double* vals) {
   Impl& s = *impl_;
   if (cj == s.cj) return true;
-  if (!can_retarget() || (vals && vals != s.vals)) throw std::logic_error("ReducedSolver::retarget: not after this setup's factor");
+  if (!can_retarget() || (vals && vals != s.vals)) throw Error("ReducedSolver::retarget: not after this setup's factor");
   const GglForm& f = s.form;
   const VectorXd& M = f.system().mass();
   const double d = cj - s.cj, ratio = cj / s.cj;

@@ -1,4 +1,4 @@
-#include "isochor/sparse_factor.hpp"
+#include "isochor/integrators/sparse_factor.hpp"
 
 #include <cholmod.h>
 

@@ -1,4 +1,4 @@
-#include "isochor/statics.hpp"
+#include "isochor/integrators/statics.hpp"
 
 #include <functional>
 #include "bordered.hpp"
@@ -7,8 +7,8 @@
 #include "sundials_util.hpp"
 #include "timing.hpp"
 
-#include "isochor/initial_state.hpp"
-#include "isochor/interrupt.hpp"
+#include "isochor/integrators/initial_state.hpp"
+#include "isochor/integrators/interrupt.hpp"
 
 #include <kinsol/kinsol.h>
 #include <nvector/nvector_serial.h>
@@ -32,7 +32,18 @@ struct StaticSolver::Impl {
   VectorXd q, v0, lambda, f, g;
   double t = 0;
   RunStats stats;
+  // SUNDIALS' objects of the run, released in reverse order (KINSOL's memory first).
+  struct KinFree {
+    void operator()(void* mem) const { KINFree(&mem); }
+  };
+  sun::Context context;
+  sun::Vector u, uscale, fscale;
+  sun::Matrix J;
+  sun::LinearSolver LS;
+  std::unique_ptr<void, KinFree> kin;
   SUNContext ctx = nullptr;
+  void* mem = nullptr;
+  std::exception_ptr caught;  // thrown inside a callback, rethrown when KINSOL returns
   std::vector<Index> order;  // METIS order for KLU
   std::unique_ptr<BorderedSolver> bordered;  // reduced/krylov: A = K + H_lambda and the borders
 
@@ -88,32 +99,158 @@ struct StaticSolver::Impl {
 };
 
 namespace {
+#if SUNDIALS_VERSION_MAJOR < 7
 void kin_quiet(int, const char*, const char*, char*, void*) {}  // failures are reported by the caller
-int kin_res(N_Vector u, N_Vector f, void* data) { return static_cast<StaticSolver::Impl*>(data)->residual(u, f); }
+#endif
+int kin_res(N_Vector u, N_Vector f, void* data) {
+  auto& s = *static_cast<StaticSolver::Impl*>(data);
+  return guarded(s.caught, [&] { return s.residual(u, f); });
+}
 int kin_jac(N_Vector u, N_Vector, SUNMatrix J, void* data, N_Vector, N_Vector) {
-  return static_cast<StaticSolver::Impl*>(data)->jacobian(u, J);
+  auto& s = *static_cast<StaticSolver::Impl*>(data);
+  return guarded(s.caught, [&] { return s.jacobian(u, J); });
 }
 // The bordered solver as a matrix-based SUNLinearSolver: setup factors A = K + H_lambda and the
 // borders that the Jacobian function just assembled; the KKT matrix itself is not filled.
 int bordered_setup(SUNLinearSolver LS, SUNMatrix) {
   auto& s = *static_cast<StaticSolver::Impl*>(LS->content);
+  return guarded(s.caught, [&] {
   const auto t0 = Clock::now();
   const bool ok = s.bordered->factor(s.K.data()) && s.bordered->set_borders(s.G);
   s.stats.factor_seconds += seconds_since(t0);
   s.stats.fresh_factorisations++;
   s.stats.factor_nnz = s.bordered->symmetric().factor_nnz();
   s.stats.symbolic_seconds = s.bordered->symmetric().analyse_seconds();
-  return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_UNREC;
+  return ok ? sun::kSuccess : sun::kLinearFailUnrecoverable;
+  });
 }
-int bordered_solve(SUNLinearSolver LS, SUNMatrix, N_Vector x, N_Vector b, realtype) {
+int bordered_solve(SUNLinearSolver LS, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) {
   auto& s = *static_cast<StaticSolver::Impl*>(LS->content);
+  return guarded(s.caught, [&] {
   const auto t0 = Clock::now();
   const double* r = N_VGetArrayPointer(b);
   double* y = N_VGetArrayPointer(x);
   const bool ok = s.bordered->solve(r, r + s.n, y, y + s.n);
   s.stats.solve_seconds += seconds_since(t0);
   s.stats.linear_iterations = s.bordered->symmetric().iterations();
-  return ok ? SUNLS_SUCCESS : SUNLS_PACKAGE_FAIL_UNREC;
+  return ok ? sun::kSuccess : sun::kLinearFailUnrecoverable;
+  });
+}
+}  // namespace
+
+namespace {
+using Impl = StaticSolver::Impl;
+
+// KINSOL on the (n + m) KKT system from the initial state: unknowns u = (q, lambda), forces
+// measured against the system's force scale and constraint rows against theirs (volumes), exact
+// Newton (a fresh Jacobian every iteration), KLU in METIS's order or the bordered solver.
+void setup_kinsol(Impl& s, double t0) {
+  const Index N = s.n + s.m;
+  s.context = sun::make_context(t0);
+  s.ctx = s.context.get();
+  s.u = new_serial_vector(N, s.ctx);
+  s.uscale = new_serial_vector(N, s.ctx);
+  s.fscale = new_serial_vector(N, s.ctx);
+  VectorXd q0, v0dummy;
+  s.sys.initial_state(t0, q0, v0dummy);
+  double* x = N_VGetArrayPointer(s.u.get());
+  Eigen::Map<VectorXd>(x, N).setZero();
+  Eigen::Map<VectorXd>(x, s.n) = q0;
+  N_VConst(1.0, s.uscale.get());
+  double* fs = N_VGetArrayPointer(s.fscale.get());
+  for (Index i = 0; i < N; ++i)
+    fs[i] = i < s.n ? 1.0 / s.sys.force_scale() : 1.0 / s.sys.constraint_scale(static_cast<int>(i - s.n));
+  s.kin.reset(check_ptr(KINCreate(s.ctx), "KINCreate"));
+  void* mem = s.mem = s.kin.get();
+  check(KINInit(mem, kin_res, s.u.get()), "KINInit", t0);
+  check(KINSetUserData(mem, &s), "KINSetUserData", t0);
+#if SUNDIALS_VERSION_MAJOR < 7
+  check(KINSetErrHandlerFn(mem, kin_quiet, nullptr), "KINSetErrHandlerFn", t0);
+#endif
+  check(KINSetFuncNormTol(mem, s.opt.residual_tol), "KINSetFuncNormTol", t0);
+  check(KINSetScaledStepTol(mem, 1e-14), "KINSetScaledStepTol", t0);
+  check(KINSetMaxSetupCalls(mem, 1), "KINSetMaxSetupCalls", t0);
+  check(KINSetNumMaxIters(mem, s.opt.max_iterations), "KINSetNumMaxIters", t0);
+  check(KINSetMaxNewtonStep(mem, 1e10), "KINSetMaxNewtonStep", t0);
+  s.J.reset(check_ptr(SUNSparseMatrix(N, N, s.kkt.p.nnz(), CSC_MAT, s.ctx), "SUNSparseMatrix"));
+  if (s.bordered) {
+    s.LS = make_custom_linear_solver(s.ctx, &s, bordered_setup, bordered_solve);
+  } else {
+    s.LS.reset(check_ptr(SUNLinSol_KLU(s.u.get(), s.J.get(), s.ctx), "SUNLinSol_KLU"));
+    s.order = metis_order(s.sys.pattern(), s.sys.dofs_per_group(), s.n, 1, s.sys.constraint_rows(), 1);
+    use_klu_order(s.LS.get(), &s.order);
+  }
+  check(KINSetLinearSolver(mem, s.LS.get(), s.J.get()), "KINSetLinearSolver", t0);
+  check(KINSetJacFn(mem, kin_jac), "KINSetJacFn", t0);
+}
+
+// KINSOL's solve from u with this strategy; its iterations counted. Rethrows what a callback threw.
+int kinsol(Impl& s, int strategy) {
+  const int flag = KINSol(s.mem, s.u.get(), strategy, s.uscale.get(), s.fscale.get());
+  rethrow_caught(s.caught);
+  long iters = 0;
+  check(KINGetNumNonlinSolvIters(s.mem, &iters), "KINGetNumNonlinSolvIters", s.t);
+  s.stats.newton_iterations += iters;
+  return flag;
+}
+
+// Equilibrium at pseudo-time `to` from the one in u: full Newton steps first (the merit function
+// |F| of a KKT system often rises on a step that converges; measured: the cantilever's first load
+// increment takes 4 full steps and 116 line-searched ones), then from the same start with
+// KINSOL's line search. Returns KINSOL's flag and the residual norm; u is the start again on
+// failure.
+int solve_at(Impl& s, double to, double& fnorm) {
+  s.t = to;
+  const Index N = s.n + s.m;
+  auto solution = [&] { return Eigen::Map<VectorXd>(N_VGetArrayPointer(s.u.get()), N); };
+  const VectorXd start = solution();
+  check(KINSetNumMaxIters(s.mem, std::min<long>(s.opt.max_iterations, 40)), "KINSetNumMaxIters", s.t);
+  int flag = kinsol(s, KIN_NONE);
+  if (flag < 0 || !solution().allFinite()) {
+    s.stats.newton_failures++;
+    solution() = start;
+    check(KINSetNumMaxIters(s.mem, s.opt.max_iterations), "KINSetNumMaxIters", s.t);
+    flag = kinsol(s, KIN_LINESEARCH);
+  }
+  check(KINGetFuncNorm(s.mem, &fnorm), "KINGetFuncNorm", s.t);
+  s.stats.steps++;
+  if (flag < 0 || !solution().allFinite()) {
+    solution() = start;
+    if (flag >= 0) flag = KIN_SYSFUNC_FAIL;
+  }
+  return flag;
+}
+
+// The increment from `from` to `to`, halved on failure up to substeps_on_failure levels (an
+// interrupt is taken before each part, so a long halving does not hold it up).
+void increment(Impl& s, double from, double to, int depth) {
+  step_boundary(from);
+  double fnorm = 0;
+  const int flag = solve_at(s, to, fnorm);
+  if (flag >= 0) return;
+  if (depth < s.opt.substeps_on_failure) {
+    s.stats.step_halvings++;
+    increment(s, from, 0.5 * (from + to), depth + 1);
+    increment(s, 0.5 * (from + to), to, depth + 1);
+    return;
+  }
+  char* name = KINGetReturnFlagName(flag);
+  std::string reason = std::string(name ? name : "KINSOL failure") + ", scaled residual " + std::to_string(fnorm);
+  if (s.opt.substeps_on_failure > 0)
+    reason += " (from pseudo-time " + std::to_string(from) + ", after " + std::to_string(depth) + " halvings of the increment)";
+  free(name);
+  throw IntegrationError(to, reason);
+}
+
+// Releases SUNDIALS' objects of the run (KINSOL's memory first, the context last).
+void release(Impl& s) {
+  s.kin.reset();
+  s.LS.reset();
+  s.J.reset();
+  for (sun::Vector* v : {&s.u, &s.uscale, &s.fscale}) v->reset();
+  s.context.reset();
+  s.ctx = nullptr;
+  s.mem = nullptr;
 }
 }  // namespace
 
@@ -124,112 +261,26 @@ StaticSolver::~StaticSolver() = default;
 RunStats StaticSolver::run(const std::vector<double>& times, const FrameCallback& on_frame) {
   Impl& s = *impl_;
   const auto wall0 = Clock::now();
-  const Index N = s.n + s.m;
-  N_Vector u = nullptr, uscale = nullptr, fscale = nullptr;
-  SUNMatrix J = nullptr;
-  SUNLinearSolver LS = nullptr;
-  void* mem = nullptr;
-  const OnExit release{[&]() {
-    if (mem) KINFree(&mem);
-    if (LS) SUNLinSolFree(LS);
-    if (J) SUNMatDestroy(J);
-    for (N_Vector* v : {&u, &uscale, &fscale})
-      if (*v) N_VDestroy(*v);
-    if (s.ctx) SUNContext_Free(&s.ctx);
-  }};
   const double t0 = times.front();
-  check(SUNContext_Create(nullptr, &s.ctx), "SUNContext_Create", t0);
-  u = new_serial_vector(N, s.ctx);
-  uscale = new_serial_vector(N, s.ctx);
-  fscale = new_serial_vector(N, s.ctx);
-  VectorXd q0, v0dummy;
-  s.sys.initial_state(t0, q0, v0dummy);
-  double* x = N_VGetArrayPointer(u);
-  Eigen::Map<VectorXd>(x, N).setZero();
-  Eigen::Map<VectorXd>(x, s.n) = q0;
-  N_VConst(1.0, uscale);
-  // Forces are measured against the system's force scale, constraint rows against theirs (volumes).
-  double* fs = N_VGetArrayPointer(fscale);
-  for (Index i = 0; i < N; ++i) fs[i] = i < s.n ? 1.0 / s.sys.force_scale() : 1.0 / s.sys.constraint_scale(static_cast<int>(i - s.n));
-  mem = check_ptr(KINCreate(s.ctx), "KINCreate");
-  check(KINInit(mem, kin_res, u), "KINInit", t0);
-  check(KINSetUserData(mem, &s), "KINSetUserData", t0);
-  check(KINSetErrHandlerFn(mem, kin_quiet, nullptr), "KINSetErrHandlerFn", t0);
-  check(KINSetFuncNormTol(mem, s.opt.residual_tol), "KINSetFuncNormTol", t0);
-  check(KINSetScaledStepTol(mem, 1e-14), "KINSetScaledStepTol", t0);
-  check(KINSetMaxSetupCalls(mem, 1), "KINSetMaxSetupCalls", t0);  // exact Newton: a fresh Jacobian every iteration
-  check(KINSetNumMaxIters(mem, s.opt.max_iterations), "KINSetNumMaxIters", t0);
-  check(KINSetMaxNewtonStep(mem, 1e10), "KINSetMaxNewtonStep", t0);
-  J = check_ptr(SUNSparseMatrix(N, N, s.kkt.p.nnz(), CSC_MAT, s.ctx), "SUNSparseMatrix");
-  if (s.bordered) {
-    LS = make_custom_linear_solver(s.ctx, &s, bordered_setup, bordered_solve);
-  } else {
-    LS = check_ptr(SUNLinSol_KLU(u, J, s.ctx), "SUNLinSol_KLU");
-    s.order = metis_order(s.sys.pattern(), s.sys.dofs_per_group(), s.n, 1, s.sys.constraint_rows(), 1);
-    use_klu_order(LS, &s.order);
-  }
-  check(KINSetLinearSolver(mem, LS, J), "KINSetLinearSolver", t0);
-  check(KINSetJacFn(mem, kin_jac), "KINSetJacFn", t0);
-  // Equilibrium at pseudo-time `to` from the one in u: full Newton steps first (the merit function
-  // |F| of a KKT system often rises on a step that converges; measured: the cantilever's first
-  // load increment takes 4 full steps and 116 line-searched ones), then from the same start with
-  // KINSOL's line search. Returns KINSOL's flag and the residual norm; u is the start again on
-  // failure.
-  auto solve_at = [&](double to, double& fnorm) {
-    s.t = to;
-    const VectorXd start = Eigen::Map<const VectorXd>(N_VGetArrayPointer(u), N);
-    check(KINSetNumMaxIters(mem, std::min<long>(s.opt.max_iterations, 40)), "KINSetNumMaxIters", s.t);
-    int flag = KINSol(mem, u, KIN_NONE, uscale, fscale);
-    long iters = 0;
-    check(KINGetNumNonlinSolvIters(mem, &iters), "KINGetNumNonlinSolvIters", s.t);
-    s.stats.newton_iterations += iters;
-    if (flag < 0 || !Eigen::Map<const VectorXd>(N_VGetArrayPointer(u), N).allFinite()) {
-      s.stats.newton_failures++;
-      Eigen::Map<VectorXd>(N_VGetArrayPointer(u), N) = start;
-      check(KINSetNumMaxIters(mem, s.opt.max_iterations), "KINSetNumMaxIters", s.t);
-      flag = KINSol(mem, u, KIN_LINESEARCH, uscale, fscale);
-      check(KINGetNumNonlinSolvIters(mem, &iters), "KINGetNumNonlinSolvIters", s.t);
-      s.stats.newton_iterations += iters;
+  try {
+    setup_kinsol(s, t0);
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      increment(s, k > 0 ? times[k - 1] : t0, times[k], 0);
+      double fnorm = 0;
+      check(KINGetFuncNorm(s.mem, &fnorm), "KINGetFuncNorm", s.t);
+      s.stats.frames.push_back(
+          {s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 0, fnorm});
+      const double* y = N_VGetArrayPointer(s.u.get());
+      on_frame(static_cast<int>(k), s.t, Eigen::Map<const VectorXd>(y, s.n), s.v0, Eigen::Map<const VectorXd>(y + s.n, s.m),
+               s.stats.frames.back());
     }
-    check(KINGetFuncNorm(mem, &fnorm), "KINGetFuncNorm", s.t);
-    s.stats.steps++;
-    if (flag < 0 || !Eigen::Map<const VectorXd>(N_VGetArrayPointer(u), N).allFinite()) {
-      Eigen::Map<VectorXd>(N_VGetArrayPointer(u), N) = start;
-      if (flag >= 0) flag = KIN_SYSFUNC_FAIL;
-    }
-    return flag;
-  };
-  // The increment from `from` to `to`, halved on failure up to substeps_on_failure levels (an
-  // interrupt is taken before each part, so a long halving does not hold it up).
-  std::function<void(double, double, int)> increment = [&](double from, double to, int depth) {
-    step_boundary(from);
-    double fnorm = 0;
-    const int flag = solve_at(to, fnorm);
-    if (flag >= 0) return;
-    if (depth < s.opt.substeps_on_failure) {
-      s.stats.step_halvings++;
-      increment(from, 0.5 * (from + to), depth + 1);
-      increment(0.5 * (from + to), to, depth + 1);
-      return;
-    }
-    char* name = KINGetReturnFlagName(flag);
-    std::string reason = std::string(name ? name : "KINSOL failure") + ", scaled residual " + std::to_string(fnorm);
-    if (s.opt.substeps_on_failure > 0)
-      reason += " (from pseudo-time " + std::to_string(from) + ", after " + std::to_string(depth) + " halvings of the increment)";
-    free(name);
+  } catch (...) {
     s.stats.wall_seconds = seconds_since(wall0);
-    throw IntegrationError(to, reason);
-  };
-  for (std::size_t k = 0; k < times.size(); ++k) {
-    increment(k > 0 ? times[k - 1] : t0, times[k], 0);
-    double fnorm = 0;
-    check(KINGetFuncNorm(mem, &fnorm), "KINGetFuncNorm", s.t);
-    s.stats.frames.push_back({s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 0, fnorm});
-    const double* y = N_VGetArrayPointer(u);
-    on_frame(static_cast<int>(k), s.t, Eigen::Map<const VectorXd>(y, s.n), s.v0,
-             Eigen::Map<const VectorXd>(y + s.n, s.m), s.stats.frames.back());
+    release(s);
+    throw;
   }
   s.stats.wall_seconds = seconds_since(wall0);
+  release(s);
   return s.stats;
 }
 

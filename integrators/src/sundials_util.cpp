@@ -25,39 +25,47 @@ double weighted_squares(const double* x, const double* w, const double* id, suni
   }
   return (s[0] + s[1]) + (s[2] + s[3]);
 }
-realtype wrms_norm(N_Vector x, N_Vector w) {
+sunrealtype wrms_norm(N_Vector x, N_Vector w) {
   const sunindextype n = NV_LENGTH_S(x);
   return std::sqrt(weighted_squares(NV_DATA_S(x), NV_DATA_S(w), nullptr, n) / static_cast<double>(n));
 }
-realtype wrms_norm_mask(N_Vector x, N_Vector w, N_Vector id) {
+sunrealtype wrms_norm_mask(N_Vector x, N_Vector w, N_Vector id) {
   const sunindextype n = NV_LENGTH_S(x);
   return std::sqrt(weighted_squares(NV_DATA_S(x), NV_DATA_S(w), NV_DATA_S(id), n) / static_cast<double>(n));
 }
 }  // namespace
 
-N_Vector new_serial_vector(sunindextype n, SUNContext ctx) {
-  N_Vector v = check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial");
-  check(N_VEnableFusedOps_Serial(v, SUNFALSE), "N_VEnableFusedOps_Serial");  // (the default: see the header)
+sun::Vector new_serial_vector(sunindextype n, SUNContext ctx) {
+  sun::Vector v(check_ptr(N_VNew_Serial(n, ctx), "N_VNew_Serial"));
+  check(N_VEnableFusedOps_Serial(v.get(), SUNFALSE), "N_VEnableFusedOps_Serial");  // (the default: see the header)
   // Clones (IDA's work vectors) copy the operations table.
   v->ops->nvwrmsnorm = wrms_norm;
   v->ops->nvwrmsnormmask = wrms_norm_mask;
   return v;
 }
 
+sun::Context sun::make_context(double t) {
+  SUNContext ctx = nullptr;
+  check(create_context(&ctx), "SUNContext_Create", t);
+  sun::Context owned(ctx);
+  check(silence_errors(ctx), "SUNContext_ClearErrHandlers", t);
+  return owned;
+}
+
 namespace {
 SUNLinearSolver_Type custom_type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
 SUNLinearSolver_ID custom_id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
-int custom_initialize(SUNLinearSolver) { return SUNLS_SUCCESS; }
+int custom_initialize(SUNLinearSolver) { return sun::kSuccess; }
 sunindextype custom_lastflag(SUNLinearSolver) { return 0; }
 int custom_free(SUNLinearSolver S) {
   S->content = nullptr;  // owned by the caller
   SUNLinSolFreeEmpty(S);
-  return SUNLS_SUCCESS;
+  return sun::kSuccess;
 }
 }  // namespace
 
-SUNLinearSolver make_custom_linear_solver(SUNContext ctx, void* content, CustomSetup setup, CustomSolve solve) {
-  SUNLinearSolver S = check_ptr(SUNLinSolNewEmpty(ctx), "SUNLinSolNewEmpty");
+sun::LinearSolver make_custom_linear_solver(SUNContext ctx, void* content, CustomSetup setup, CustomSolve solve) {
+  sun::LinearSolver S(check_ptr(SUNLinSolNewEmpty(ctx), "SUNLinSolNewEmpty"));
   S->content = content;
   S->ops->gettype = custom_type;
   S->ops->getid = custom_id;

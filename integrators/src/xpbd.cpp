@@ -1,5 +1,5 @@
-#include "isochor/xpbd.hpp"
-#include "isochor/fixed_step.hpp"
+#include "isochor/integrators/xpbd.hpp"
+#include "isochor/integrators/fixed_step.hpp"
 
 #include <algorithm>
 #include <cmath>

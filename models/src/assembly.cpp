@@ -1,4 +1,4 @@
-#include "isochor/assembly.hpp"
+#include "isochor/models/assembly.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "isochor/error.hpp"
+#include "isochor/base/error.hpp"
 
 namespace isochor {
 

@@ -1,10 +1,10 @@
-#include "isochor/colliders.hpp"
+#include "isochor/models/colliders.hpp"
 
 #include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
 
-#include "isochor/skeleton.hpp"
+#include "isochor/models/skeleton.hpp"
 
 namespace isochor {
 

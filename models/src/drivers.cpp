@@ -1,10 +1,10 @@
-#include "isochor/drivers.hpp"
+#include "isochor/models/drivers.hpp"
 
 #include <algorithm>
 #include <Eigen/Geometry>
 #include <cmath>
 
-#include "isochor/error.hpp"
+#include "isochor/base/error.hpp"
 
 namespace isochor {
 

@@ -1,5 +1,6 @@
-#include "isochor/forces.hpp"
-#include "isochor/material.hpp"
+#include "isochor/models/forces.hpp"
+#include "isochor/models/material.hpp"
+#include "isochor/base/error.hpp"
 
 #include <Eigen/Geometry>
 
@@ -16,8 +17,8 @@ ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::ve
       area_(std::move(area)) {
   for (const Collider& c : colliders_) {
     if (c.law.per_area && area_.size() != mass_.size())
-      throw std::invalid_argument("ExternalPotential: a per-area contact law needs every node's surface area");
-    if (c.bone >= 0 && !skeleton_) throw std::invalid_argument("ExternalPotential: a collider on a bone needs the skeleton");
+      throw Error("ExternalPotential: a per-area contact law needs every node's surface area");
+    if (c.bone >= 0 && !skeleton_) throw Error("ExternalPotential: a collider on a bone needs the skeleton");
     damped_ = damped_ || c.law.damping > 0 || c.law.friction > 0;
     friction_ = friction_ || c.law.friction > 0;
   }

@@ -1,4 +1,4 @@
-#include "isochor/mesh_sdf.hpp"
+#include "isochor/models/mesh_sdf.hpp"
 
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
 #include <CGAL/AABB_traits.h>
@@ -14,7 +14,7 @@
 #include <array>
 #include <cmath>
 
-#include "isochor/error.hpp"
+#include "isochor/base/error.hpp"
 
 namespace isochor {
 

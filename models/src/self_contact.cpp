@@ -1,11 +1,11 @@
-#include "isochor/self_contact.hpp"
+#include "isochor/models/self_contact.hpp"
 
 #include <nanoflann.hpp>
 
 #include <cmath>
 
-#include "isochor/elements.hpp"
-#include "isochor/paint.hpp"
+#include "isochor/models/elements.hpp"
+#include "isochor/core/paint.hpp"
 
 namespace isochor {
 

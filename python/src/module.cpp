@@ -12,10 +12,10 @@
 #include <variant>
 #include <toml++/toml.h>
 
-#include "isochor/error.hpp"
-#include "isochor/scene.hpp"
-#include "run.hpp"
-#include "study.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/scene/scene.hpp"
+#include "isochor/app/run.hpp"
+#include "isochor/app/study.hpp"
 
 namespace py = pybind11;
 using namespace isochor;

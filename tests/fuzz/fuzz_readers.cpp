@@ -28,12 +28,12 @@
 #include <string>
 #include <vector>
 
-#include "isochor/bvh.hpp"
-#include "isochor/error.hpp"
-#include "isochor/memory.hpp"
-#include "isochor/meshing.hpp"
-#include "isochor/paint.hpp"
-#include "isochor/scene.hpp"
+#include "isochor/core/bvh.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/memory.hpp"
+#include "isochor/core/meshing.hpp"
+#include "isochor/core/paint.hpp"
+#include "isochor/scene/scene.hpp"
 
 using namespace isochor;
 namespace fs = std::filesystem;

@@ -2,8 +2,8 @@
 #include <limits>
 #include <algorithm>
 
-#include "isochor/constraints.hpp"
-#include "isochor/error.hpp"
+#include "isochor/models/constraints.hpp"
+#include "isochor/base/error.hpp"
 
 namespace isochor {
 

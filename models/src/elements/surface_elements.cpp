@@ -2,8 +2,8 @@
 #include <Eigen/Dense>
 #include <cmath>
 
-#include "isochor/elements.hpp"
-#include "isochor/material.hpp"
+#include "isochor/models/elements.hpp"
+#include "isochor/models/material.hpp"
 
 namespace isochor {
 

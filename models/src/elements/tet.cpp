@@ -1,5 +1,5 @@
 // The linear tetrahedron: maps any material to nodes through the constant matrix dF/dx.
-#include "isochor/elements.hpp"
+#include "isochor/models/elements.hpp"
 
 #include <Eigen/Dense>
 

@@ -4,7 +4,7 @@
 // constraints are separate (constraints/zone_volume).
 #include <cmath>
 
-#include "isochor/material.hpp"
+#include "isochor/models/material.hpp"
 
 namespace isochor {
 namespace {

@@ -1,7 +1,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 
-#include "isochor/material.hpp"
+#include "isochor/models/material.hpp"
 
 namespace isochor {
 

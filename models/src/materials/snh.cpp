@@ -4,7 +4,7 @@
 // a makes P vanish at F = I: mu'(1 - 1/4) + lambda'(1 - a) = 0. The constant W(I) is subtracted.
 #include <cmath>
 
-#include "isochor/material.hpp"
+#include "isochor/models/material.hpp"
 
 namespace isochor {
 namespace {

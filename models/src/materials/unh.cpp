@@ -3,7 +3,7 @@
 #include <cmath>
 #include <limits>
 
-#include "isochor/material.hpp"
+#include "isochor/models/material.hpp"
 
 namespace isochor {
 namespace {

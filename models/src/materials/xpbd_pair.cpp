@@ -2,7 +2,7 @@
 // deviatoric C_D = sqrt(I_C) with stiffness mu, hydrostatic C_H = J - gamma with stiffness lambda',
 //   W = mu/2 (I_C - 3) + lambda'/2 (J - gamma)^2,   lambda' = lambda + mu,  gamma = 1 + mu / lambda'.
 // The constant -3 mu/2 makes W vanish at rest; gamma makes P vanish there: mu + lambda'(1 - gamma) = 0.
-#include "isochor/material.hpp"
+#include "isochor/models/material.hpp"
 
 namespace isochor {
 namespace {

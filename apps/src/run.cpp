@@ -1,0 +1,282 @@
+#include "isochor/app/run.hpp"
+
+#include <dlfcn.h>
+#include <omp.h>
+
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+
+#include "isochor/scene/integrator_registry.hpp"
+#include "isochor/integrators/interrupt.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/memory.hpp"
+#include "isochor/core/output.hpp"
+#include "isochor/core/progress.hpp"
+#include "isochor/scene/scene_system.hpp"
+
+namespace isochor {
+
+namespace {
+// OpenBLAS's threads now; 0 where the BLAS is not OpenBLAS.
+int blas_threads() {
+  using GetThreads = int (*)();
+  auto get = reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  return get ? get() : 0;
+}
+
+void write_totals(OutputWriter& w, const RunStats& s) {
+  w.set_stat("steps", static_cast<double>(s.steps));
+  w.set_stat("residual_evaluations", static_cast<double>(s.residual_evals));
+  w.set_stat("jacobian_evaluations", static_cast<double>(s.jacobian_evals));
+  w.set_stat("linear_setups", static_cast<double>(s.linear_setups));
+  w.set_stat("newton_iterations", static_cast<double>(s.newton_iterations));
+  w.set_stat("rejected_steps_newton", static_cast<double>(s.newton_failures));
+  w.set_stat("rejected_steps_error_test", static_cast<double>(s.error_test_failures));
+  w.set_stat("fresh_factorisations", static_cast<double>(s.fresh_factorisations));
+  w.set_stat("reused_jacobians", static_cast<double>(s.reused_jacobians));
+  w.set_stat("linear_fallbacks", static_cast<double>(s.linear_fallbacks));
+  w.set_stat("retargets", static_cast<double>(s.retargets));
+  w.set_stat("wall_seconds", s.wall_seconds);
+  w.set_stat("assembly_seconds", s.assembly_seconds);
+  w.set_stat("factorisation_seconds", s.factor_seconds);
+  w.set_stat("solve_seconds", s.solve_seconds);
+  w.set_stat("factor_nnz", s.factor_nnz);
+  w.set_stat("symbolic_seconds", s.symbolic_seconds);
+  w.set_stat("projection_seconds", s.projection_seconds);
+  w.set_stat("linear_iterations", static_cast<double>(s.linear_iterations));
+  w.set_stat("line_search_cuts", static_cast<double>(s.line_search_cuts));
+  w.set_stat("regularisations", static_cast<double>(s.regularisations));
+  w.set_stat("step_halvings", static_cast<double>(s.step_halvings));
+  w.set_stat("solver_switches", static_cast<double>(s.solver_switches));
+  // The threads the run had: OpenMP's (assembly, CG) and OpenBLAS's (inside CHOLMOD; 0 where
+  // the BLAS is not OpenBLAS), for comparing timings.
+  w.set_stat("threads", static_cast<double>(omp_get_max_threads()));
+  w.set_stat("blas_threads", static_cast<double>(blas_threads()));
+  // Peak resident memory of the whole process (getrusage), for the linear-solver benchmarks.
+  w.set_stat("peak_memory_mb", peak_memory_mb());
+}
+
+// Each frame of the integrator, measured by the scene system and written with its statistics.
+// The per-frame series that count from the start of the run: a resumed run adds the values they
+// had at the frame it continues from.
+const char* const kCumulative[] = {"steps", "newton_iterations", "jacobian_evaluations", "rejected_steps_error_test",
+                                   "rejected_steps_newton", "wall_seconds"};
+
+// Each frame of the integrator, measured by the scene system and written with its statistics. A
+// resumed run's integrator starts at the file's last frame (first = its index), which is not
+// written again.
+FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, Progress& bar, RunSummary& summary,
+                           bool progress, int first, const std::map<std::string, double>& offsets,
+                           const std::function<bool(int, const Frame&)>& on_frame) {
+  const auto start = std::chrono::steady_clock::now();
+  const bool tets = sys.has_tets();
+  return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), contact = Points(), poses = std::vector<double>(), velocities = Points(),
+          multipliers = std::vector<double>()](
+             int j, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
+             const RunStats::FrameSample& s) mutable {
+    if (first >= 0 && j == 0) return;
+    const int k = std::max(first, 0) + j;
+    sys.set_state(t, q, v);
+    Frame f;
+    f.time = t;
+    f.positions = &sys.positions();
+    velocities = Eigen::Map<const Points>(sys.velocities().data(), 3, sys.positions().cols());
+    f.velocities = &velocities;
+    multipliers.assign(lambda.data(), lambda.data() + lambda.size());
+    f.multipliers = &multipliers;
+    f.volumes = sys.volumes();
+    f.energy = sys.energies();
+    // The frame callback gets the pressures whether or not they are written (the writer takes
+    // them only when output.pressure is on).
+    if (tets && (sc.output.pressure || on_frame)) {
+      sys.pressures(lambda, pressure);
+      f.pressure = &pressure;
+    }
+    if (sys.has_loads()) {
+      sys.loads(loads);
+      f.loads = &loads;
+    }
+    if (sys.has_contact()) {
+      sys.contact(contact);
+      f.contact = &contact;
+      sys.collider_poses(poses);
+      f.collider_poses = &poses;
+    }
+    if (tets) f.stats.push_back({"inverted_tets", static_cast<double>(sys.inverted_tets())});
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    f.stats.insert(f.stats.end(),
+                   {{"steps", static_cast<double>(s.steps)},
+                    {"newton_iterations", static_cast<double>(s.newton_iterations)},
+                    {"jacobian_evaluations", static_cast<double>(s.jacobian_evals)},
+                    {"rejected_steps_error_test", static_cast<double>(s.error_test_failures)},
+                    {"rejected_steps_newton", static_cast<double>(s.newton_failures)},
+                    {"order", static_cast<double>(s.order)},
+                    {sc.integrator.kind == IntegratorKind::statics ? "residual_norm" : "step_size", s.step_size},
+                    {"wall_seconds", wall},
+                    {"resident_mb", resident_memory_mb()}});
+    for (auto& [name, value] : f.stats)
+      if (auto it = offsets.find(name); it != offsets.end()) value += it->second;
+    w.write_frame(f);
+    summary.frames = k + 1;
+    if (progress) bar.update(k, t);
+    if (on_frame && !on_frame(k, f)) throw Interrupted(t, 0);
+  };
+}
+
+// A resumed run's totals: the cumulative counts from the file at the frame it continues from.
+void add_offsets(RunStats& s, const std::map<std::string, double>& off) {
+  auto at = [&](const char* name) {
+    auto it = off.find(name);
+    return it == off.end() ? 0.0 : it->second;
+  };
+  s.steps += static_cast<long>(at("steps"));
+  s.newton_iterations += static_cast<long>(at("newton_iterations"));
+  s.jacobian_evals += static_cast<long>(at("jacobian_evaluations"));
+  s.error_test_failures += static_cast<long>(at("rejected_steps_error_test"));
+  s.newton_failures += static_cast<long>(at("rejected_steps_newton"));
+  s.wall_seconds += at("wall_seconds");
+}
+
+// The frame times from the one a resumed run continues at (index `first`, time `t`).
+std::vector<double> times_from(const std::vector<double>& times, int first, double t, const std::string& path) {
+  if (first < 0) return times;
+  if (first >= static_cast<int>(times.size()) || std::abs(times[static_cast<std::size_t>(first)] - t) > 1e-9 * (1 + std::abs(t)))
+    throw Error(path + ": its frame " + std::to_string(first) + " at t = " + std::to_string(t) +
+                " s is not a frame of the scene (cannot be resumed)");
+  return {times.begin() + first, times.end()};
+}
+
+}  // namespace
+
+namespace {
+// While it lives, OpenBLAS (inside CHOLMOD) runs on one thread unless OPENBLAS_NUM_THREADS says
+// otherwise: its threads wait for work by spinning, against OpenMP's in the assembly and in CG.
+// On 2 idle cores the stiff cube on CHOLMOD took 6.7 s with them and 4.3 s without; the 13^3
+// pinned cube on PCG 1.7 s either way (README, "Threads"). The count before is restored after:
+// a Python process may share OpenBLAS with numpy. Looked up at run time, so a build against
+// another BLAS is untouched.
+class BlasOnOneThread {
+ public:
+  BlasOnOneThread() {
+    if (std::getenv("OPENBLAS_NUM_THREADS")) return;
+    set_ = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+    before_ = blas_threads();
+    if (set_ && before_ > 0) set_(1);
+  }
+  ~BlasOnOneThread() {
+    if (set_ && before_ > 0) set_(before_);
+  }
+  BlasOnOneThread(const BlasOnOneThread&) = delete;
+  BlasOnOneThread& operator=(const BlasOnOneThread&) = delete;
+
+ private:
+  using SetThreads = void (*)(int);
+  SetThreads set_ = nullptr;
+  int before_ = 0;
+};
+}  // namespace
+
+RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
+  const BlasOnOneThread blas_on_one_thread;
+  RunSummary summary;
+  summary.output = opt.output.empty() ? sc.output.path : opt.output;
+  const bool resume = opt.mode == OutputWriter::Mode::resume;
+  // The systems are built before the file is touched, so that a scene they refuse leaves no
+  // output behind; a resumed run's start is handed to them once the file has said where it is.
+  const std::unique_ptr<SceneSystem> sys = make_scene_system(sc);
+  const std::unique_ptr<Integrator> integrator = make_integrator(sc, *sys);
+  // Limits before work: the whole run's frames must fit where they are written (positions and
+  // velocities, 48 bytes per node, and per-tet pressures; the scalars and links of a frame and its
+  // XDMF entry about 2 KB).
+  {
+    const double frames = static_cast<double>(sc.frames.num_frames());
+    const double per_frame = 48.0 * sc.mesh.num_nodes() + (sys->has_loads() ? 24.0 * sc.mesh.num_nodes() : 0.0) +
+                             (sys->has_contact() ? 24.0 * sc.mesh.num_nodes() : 0.0) +
+                             (sc.output.pressure ? 8.0 * sc.mesh.num_tets() : 0.0) + 2048;
+    const double need = frames * per_frame, room = output_room_bytes(summary.output);
+    if (!resume && need > room) {
+      char buf[400];
+      std::snprintf(buf, sizeof buf,
+                    "%s: the run would write about %.3g GB (%.0f frames of %.3g KB), more than the %.3g GB free there "
+                    "(expected fewer frames, frames.rate or frames.duration, or another output.path)",
+                    summary.output.c_str(), need / 1e9, frames, per_frame / 1024, room / 1e9);
+      throw Error(buf);
+    }
+  }
+  // (The mass-spring model has no zones: its scene is refused with any.)
+  OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run"},
+                 sc.output.pressure && sys->has_tets(), opt.mode);
+  const ResumePoint& rp = w.resume_point();
+  std::map<std::string, double> offsets;
+  StartState start;
+  if (resume) {
+    summary.frames = rp.frame + 1;
+    summary.resumed_from = rp.frame;
+    summary.resumed_time = rp.time;
+    if (rp.status == "finished") {
+      summary.already_finished = true;
+      return summary;
+    }
+    start = StartState{rp.positions, rp.velocities,
+                       Eigen::Map<const VectorXd>(rp.multipliers.data(), static_cast<Eigen::Index>(rp.multipliers.size()))};
+    sys->set_start(&start);
+    for (const char* name : kCumulative)
+      if (auto it = rp.stats.find(name); it != rp.stats.end() && std::isfinite(it->second)) offsets[name] = it->second;
+    w.set_status("running");
+  }
+  const std::vector<double> all_times = sc.frames.times();
+  const std::vector<double> times = times_from(all_times, resume ? rp.frame : -1, rp.time, summary.output);
+  Progress bar(sc.file.name(), static_cast<int>(all_times.size()) - 1, times.front(), times.back(),
+               opt.progress ? stderr : nullptr, last_step_time);
+  auto finish_failed = [&](const std::string& status, const std::vector<std::pair<std::string, double>>& numbers,
+                           const std::string& failure) {
+    // Best effort: the file may be what failed (a full disk).
+    try {
+      for (const auto& [name, value] : numbers) w.set_stat(name, value);
+      if (!failure.empty()) w.set_stat("failure", failure);
+      w.set_status(status);
+      w.close();
+    } catch (...) {
+    }
+  };
+  try {
+    summary.stats = integrator->run(times, frame_writer(sc, *sys, w, bar, summary, opt.progress, resume ? rp.frame : -1, offsets, opt.on_frame));
+  } catch (const Interrupted& e) {
+    add_offsets(summary.stats, offsets);
+    finish_failed("interrupted", {{"interrupted_at", e.time}, {"signal", static_cast<double>(e.signal)}}, "");
+    bar.finish();
+    const std::string how = e.signal == 0         ? "stopped by the frame callback"
+                            : e.signal == SIGINT  ? "interrupted by SIGINT"
+                            : e.signal == SIGTERM ? "interrupted by SIGTERM"
+                                                  : "interrupted by signal " + std::to_string(e.signal);
+    throw RunInterrupted(sc.file.name() + ": " + how + " at t = " + std::to_string(e.time) + " s; " +
+                             std::to_string(summary.frames) + " frames kept in " + summary.output,
+                         e.signal, summary);
+  } catch (const IntegrationError& e) {
+    finish_failed("failed", {{"failed_at_time", e.time}}, e.what());
+    throw Error(sc.file.name() + ": " + e.what() + "; " + std::to_string(summary.frames) + " frames saved in " +
+                summary.output);
+  } catch (const Error& e) {  // the output could not be written (a full disk, a size limit)
+    finish_failed("failed", {}, e.what());
+    throw;
+  }
+  add_offsets(summary.stats, offsets);
+  write_totals(w, summary.stats);
+  if (sc.skeleton) {
+    summary.simbody_seconds = sc.skeleton->simbody_seconds();
+    w.set_stat("simbody_seconds", summary.simbody_seconds);
+    w.set_stat("simbody_realizations", static_cast<double>(sc.skeleton->realizations()));
+  }
+  if (resume) w.set_stat("resumed_at", rp.time);
+  w.set_status("finished");
+  w.close();
+  bar.finish();
+  return summary;
+}
+
+
+}  // namespace isochor

@@ -1,0 +1,374 @@
+#include "isochor/app/study.hpp"
+
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <functional>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "isochor/base/error.hpp"
+#include "isochor/core/mesh.hpp"
+#include "isochor/core/output_reader.hpp"
+#include "isochor/core/scene_file.hpp"
+
+extern char** environ;
+
+namespace isochor {
+
+namespace {
+std::string number_text(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+std::string label_of(const std::string& method, const std::vector<std::pair<std::string, double>>& sweep) {
+  std::string l = method;
+  for (const auto& [key, value] : sweep) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%g", value);
+    l += "__" + key.substr(key.rfind('.') + 1) + "_" + b;
+  }
+  return l;
+}
+}  // namespace
+
+Study load_study(const std::string& path, const std::vector<std::string>& overrides) {
+  SceneFile f = SceneFile::load(path, overrides);
+  const Section root = f.root();
+  Study s;
+  s.file = path;
+  const Section st = root.table("study");
+  const std::string scene = st.string("scene", "");
+  if (scene.empty()) st.fail("scene", "missing, expected the base scene file (relative to the study)");
+  s.scene = std::filesystem::path(path).parent_path() / scene;
+  if (!std::filesystem::exists(s.scene)) st.fail("scene", "no such file: " + s.scene.string());
+  const std::string stem = std::filesystem::path(path).stem().string();
+  s.output = st.string("output", "out/studies/" + stem);
+  s.jobs = static_cast<int>(st.integer("jobs", 2, 1, 64));
+  s.kind = st.string("kind", "work_precision", {"work_precision", "stability"});
+  const std::vector<std::string> base = st.strings("set");
+  const Section ref = root.table("reference");
+  StudyCase r{"reference", "reference", base, {}, {}};
+  const std::vector<std::string> ref_set =
+      ref.exists() ? ref.strings("set")
+                   : std::vector<std::string>{"integrator.kind=ida", "integrator.rtol=1e-10", "integrator.atol=1e-12"};
+  r.overrides.insert(r.overrides.end(), ref_set.begin(), ref_set.end());
+  s.cases.push_back(r);
+  for (const Section& m : root.tables("method")) {
+    const std::string name = m.string("name", "");
+    if (name.empty()) m.fail("name", "missing, expected the method's name");
+    if (name == "reference" || name.find_first_of("/ ,") != std::string::npos)
+      m.fail("name", "expected a name without '/', ' ' or ',' other than \"reference\"");
+    std::vector<std::string> set = base;
+    for (const std::string& o : m.strings("set")) set.push_back(o);
+    std::filesystem::path own_scene;
+    if (m.has("scene")) {
+      own_scene = std::filesystem::path(path).parent_path() / m.string("scene", "");
+      if (!std::filesystem::exists(own_scene)) m.fail("scene", "no such file: " + own_scene.string());
+    }
+    // Sweeps: { key = [values] }, the cartesian product of all keys.
+    const Section sw = m.table("sweep");
+    std::vector<std::pair<std::string, std::vector<double>>> axes;
+    for (const std::string& key : sw.keys()) {
+      const auto values = sw.numbers(key);
+      if (values.empty()) sw.fail(key, "expected a non-empty list of values");
+      axes.emplace_back(key, values);
+    }
+    std::vector<std::vector<std::pair<std::string, double>>> points{{}};
+    for (const auto& [key, values] : axes) {
+      std::vector<std::vector<std::pair<std::string, double>>> next;
+      for (const auto& p : points)
+        for (double v : values) {
+          auto q = p;
+          q.emplace_back(key, v);
+          next.push_back(q);
+        }
+      points.swap(next);
+    }
+    for (const auto& p : points) {
+      StudyCase c{name, label_of(name, p), set, p, own_scene};
+      for (const auto& [key, value] : p) c.overrides.push_back(key + "=" + number_text(value));
+      s.cases.push_back(c);
+    }
+  }
+  if (s.cases.size() < 2) root.fail("method", "missing, expected at least one [[method]]");
+  f.check_unknown_keys();
+  return s;
+}
+
+namespace {
+
+struct Outcome {
+  int status = 0;
+  double cpu = 0;
+};
+
+// Runs one case in its own process: one OpenMP and BLAS thread (cases run side by side), output
+// and messages into the study's cases/ directory. Returns the exit status and CPU seconds.
+Outcome run_case(const Study& s, const StudyCase& c, const std::string& exe) {
+  const auto dir = s.output / "cases";
+  // The study owns its directory: a case run again replaces its file.
+  std::vector<std::string> args{exe, "run", (c.scene.empty() ? s.scene : c.scene).string(), "-q", "--overwrite", "-o", (dir / (c.label + ".h5")).string()};
+  for (const std::string& o : c.overrides) {
+    args.push_back("--set");
+    args.push_back(o);
+  }
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::vector<std::string> env_s;
+  // A case is its own program, not part of an MPI job that `isochor study --mpi` runs in: it
+  // gets none of mpirun's variables (one that initialises MPI itself, for linear_solver = "amg",
+  // would otherwise try to join the job).
+  for (char** e = environ; *e; ++e) {
+    const std::string v = *e;
+    const bool mpi = v.rfind("OMPI_", 0) == 0 || v.rfind("PMIX_", 0) == 0 || v.rfind("PMI_", 0) == 0;
+    if (!mpi && v.rfind("OMP_NUM_THREADS=", 0) && v.rfind("OPENBLAS_NUM_THREADS=", 0)) env_s.push_back(v);
+  }
+  env_s.push_back("OMP_NUM_THREADS=1");
+  env_s.push_back("OPENBLAS_NUM_THREADS=1");
+  std::vector<char*> envp;
+  for (auto& e : env_s) envp.push_back(e.data());
+  envp.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  const std::string log = (dir / (c.label + ".log")).string();
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid;
+  Outcome out;
+  if (posix_spawn(&pid, exe.c_str(), &fa, nullptr, argv.data(), envp.data()) != 0) {
+    posix_spawn_file_actions_destroy(&fa);
+    out.status = 127;
+    return out;
+  }
+  posix_spawn_file_actions_destroy(&fa);
+  int status = 0;
+  rusage ru{};
+  wait4(pid, &status, 0, &ru);
+  out.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  out.cpu = ru.ru_utime.tv_sec + ru.ru_utime.tv_usec * 1e-6 + ru.ru_stime.tv_sec + ru.ru_stime.tv_usec * 1e-6;
+  std::ofstream(dir / (c.label + ".cpu")) << number_text(out.cpu) << "\n" << out.status << "\n";
+  return out;
+}
+
+std::string last_line(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
+}
+
+std::string csv_field(std::string s) {
+  for (char& ch : s)
+    if (ch == '"') ch = '\'';
+  return "\"" + s + "\"";
+}
+
+// Runs the cases `which` (indices into s.cases), `jobs` at a time; with `resume`, a case that
+// finished before (its .cpu file is there) is not run again. Returns how many of them failed.
+int run_cases(const Study& s, const std::vector<std::size_t>& which, const std::string& exe, bool resume,
+              bool progress, int jobs) {
+  std::filesystem::create_directories(s.output / "cases");
+  std::atomic<std::size_t> next{0};
+  std::atomic<int> done{0}, failed{0};
+  std::mutex print;
+  auto worker = [&]() {
+    for (std::size_t i = next++; i < which.size(); i = next++) {
+      const StudyCase& c = s.cases[which[i]];
+      const auto cpu = s.output / "cases" / (c.label + ".cpu");
+      Outcome o;
+      const bool skip = resume && std::filesystem::exists(cpu);
+      if (skip) {
+        std::ifstream in(cpu);
+        in >> o.cpu >> o.status;
+      } else {
+        o = run_case(s, c, exe);
+      }
+      const int d = ++done;
+      failed += o.status != 0;
+      if (progress) {
+        std::lock_guard<std::mutex> lock(print);
+        std::fprintf(stderr, "[%d/%zu] %-40s %s (%.1f s CPU)%s\n", d, which.size(), c.label.c_str(),
+                     o.status == 0 ? "ok" : "FAILED", o.cpu, skip ? ", done before" : "");
+      }
+    }
+  };
+  // The reference is started first, but not alone: errors are computed once every case is done,
+  // so the other core need not wait for it (the reference is usually the longest case).
+  std::vector<std::thread> pool;
+  for (int j = 0; j < jobs; ++j) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  return failed;
+}
+
+}  // namespace
+
+int run_study(const Study& s, const std::string& exe, bool resume, bool progress) {
+  std::vector<std::size_t> all(s.cases.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  save_case_list(s);
+  const int failed = run_cases(s, all, exe, resume, progress, s.jobs);
+  write_study_results(s);
+  return failed;
+}
+
+int run_study_case(const Study& s, const std::string& label, const std::string& exe, bool progress) {
+  for (std::size_t i = 0; i < s.cases.size(); ++i)
+    if (s.cases[i].label == label) {
+      save_case_list(s);
+      return run_cases(s, {i}, exe, false, progress, 1) == 0 ? 0 : 1;
+    }
+  throw Error(s.file + ": no case " + label + " (`isochor study " + s.file + " --list` lists them)");
+}
+
+int run_study_queue(const Study& s, const std::string& exe, const std::function<int()>& next_case, bool progress) {
+  std::filesystem::create_directories(s.output / "cases");
+  save_case_list(s);
+  int failed = 0;
+  for (int i = next_case(); i >= 0; i = next_case()) {
+    if (i >= static_cast<int>(s.cases.size())) throw Error(s.file + ": case " + std::to_string(i) + " does not exist");
+    failed += run_cases(s, {static_cast<std::size_t>(i)}, exe, true, progress, 1);
+  }
+  return failed;
+}
+
+void save_case_list(const Study& s) {
+  std::filesystem::create_directories(s.output);
+  const auto path = s.output / "cases.csv", tmp = s.output / ("cases.csv." + std::to_string(::getpid()));
+  {
+    std::ofstream out(tmp);
+    out << "method,label,sweep\n";
+    for (const StudyCase& c : s.cases) {
+      std::string sweep;
+      for (const auto& [key, value] : c.sweep) sweep += (sweep.empty() ? "" : ";") + key + "=" + number_text(value);
+      out << c.method << "," << c.label << "," << sweep << "\n";
+    }
+    if (!out) throw Error(tmp.string() + ": cannot be written");
+  }
+  std::filesystem::rename(tmp, path);  // whole or not at all, whichever process writes it last
+}
+
+Study load_case_list(const std::filesystem::path& dir) {
+  const auto path = dir / "cases.csv";
+  std::ifstream in(path);
+  if (!in) throw Error(dir.string() + ": no cases.csv (expected the output directory of `isochor study`)");
+  Study s;
+  s.file = path.string();
+  s.output = dir;
+  std::string line;
+  std::getline(in, line);  // the header
+  int row = 1;
+  while (std::getline(in, line)) {
+    ++row;
+    if (line.empty()) continue;
+    std::stringstream fields(line);
+    StudyCase c;
+    std::string sweep;
+    if (!std::getline(fields, c.method, ',') || !std::getline(fields, c.label, ','))
+      throw Error(path.string() + ":" + std::to_string(row) + ": expected method,label,sweep");
+    std::getline(fields, sweep);
+    std::stringstream items(sweep);
+    for (std::string item; std::getline(items, item, ';');) {
+      const auto eq = item.find('=');
+      if (eq == std::string::npos) throw Error(path.string() + ":" + std::to_string(row) + ": sweep " + item + ": expected key=value");
+      c.sweep.emplace_back(item.substr(0, eq), std::strtod(item.c_str() + eq + 1, nullptr));
+    }
+    s.cases.push_back(c);
+  }
+  if (s.cases.empty()) throw Error(path.string() + ": lists no cases");
+  return s;
+}
+
+
+void write_study_results(const Study& s) {
+  const auto dir = s.output / "cases";
+  const auto ref_path = dir / "reference.h5";
+  std::unique_ptr<RunFile> ref;
+  std::vector<Points> ref_x;
+  std::vector<Eigen::Vector3d> ref_c;  // centroid of the nodes per frame
+  double ref_den = 0, ref_cden = 0;
+  try {
+    ref = std::make_unique<RunFile>(ref_path.string());
+    const Points X = ref->rest_positions();
+    for (int k = 0; k < ref->num_frames(); ++k) {
+      ref_x.push_back(ref->positions(k));
+      ref_den += (ref_x.back() - X).squaredNorm();
+      ref_c.push_back(ref_x.back().rowwise().mean());
+      ref_cden += (ref_c.back() - ref_c.front()).squaredNorm();
+    }
+  } catch (const Error& e) {
+    // No usable reference (failed, or not run): every case's error is left blank, and said so.
+    std::fprintf(stderr, "isochor study: no reference to measure errors against (%s)\n", e.what());
+    ref.reset();
+    ref_x.clear();
+  }
+  std::ofstream csv(s.output / "results.csv");
+  csv << "method,label,sweep,status,reason,frames,frames_expected,cpu_seconds,wall_seconds,steps,error_l2,"
+         "volume_error,error_centroid,shape_error,inverted_tets\n";
+  for (const StudyCase& c : s.cases) {
+    double cpu = NAN;
+    int status = -1;
+    const bool ran = std::filesystem::exists(dir / (c.label + ".cpu"));
+    if (ran) {
+      std::ifstream in(dir / (c.label + ".cpu"));
+      in >> cpu >> status;
+    }
+    std::string sweep;
+    for (const auto& [key, value] : c.sweep) sweep += (sweep.empty() ? "" : ";") + key + "=" + number_text(value);
+    std::string reason = !ran ? "not run yet" : status == 0 ? "" : last_line(dir / (c.label + ".log"));
+    int frames = 0;
+    double wall = NAN, steps = NAN, err = NAN, vol = NAN, cerr = NAN, shape = NAN, inverted = NAN;
+    try {
+      RunFile f((dir / (c.label + ".h5")).string());
+      frames = f.num_frames();
+      const auto totals = f.stat_totals();
+      if (totals.count("wall_seconds")) wall = totals.at("wall_seconds");
+      if (totals.count("steps")) steps = totals.at("steps");
+      if (frames > 0) shape = rest_shape_error(f.rest_positions(), f.positions(frames - 1));
+      const auto series = f.stat_series();
+      if (auto it = series.find("inverted_tets"); it != series.end() && !it->second.empty()) inverted = it->second.back();
+      const auto v = f.volumes();
+      vol = 0;
+      const double rest = surface_volume(f.rest_positions(), f.surface());
+      if (!v.empty() && std::abs(v[0][0] / rest - 1) > 1e-6) {
+        // A start away from the rest volume (initial.flatten: volume 0) has no first frame to
+        // measure against: its last frame's total volume against the rest volume.
+        vol = std::abs(v.back()[0] / rest - 1);
+      } else {
+        for (const auto& row : v)
+          for (std::size_t z = 0; z < row.size(); ++z) vol = std::max(vol, std::abs(row[z] / v[0][z] - 1));
+      }
+      if (ref && ref_den > 0 && frames > 0 && f.num_nodes() == ref->num_nodes()) {  // not another mesh
+        double num = 0;
+        const int n = std::min(frames, static_cast<int>(ref_x.size()));
+        double cnum = 0;
+        for (int k = 0; k < n; ++k) {
+          const Points x = f.positions(k);
+          num += (x - ref_x[k]).squaredNorm();
+          cnum += (Eigen::Vector3d(x.rowwise().mean()) - ref_c[k]).squaredNorm();
+        }
+        err = std::sqrt(num / ref_den);
+        if (ref_cden > 0) cerr = std::sqrt(cnum / ref_cden);
+      }
+    } catch (const Error& e) {
+      if (reason.empty()) reason = e.what();
+    }
+    csv << c.method << "," << c.label << "," << csv_field(sweep) << "," << (!ran ? "missing" : status == 0 ? "ok" : "failed") << ","
+        << csv_field(reason) << "," << frames << "," << (ref ? ref->num_frames() : 0) << "," << number_text(cpu) << ","
+        << number_text(wall) << "," << number_text(steps) << "," << number_text(err) << "," << number_text(vol) << ","
+        << number_text(cerr) << "," << number_text(shape) << "," << number_text(inverted) << "\n";
+  }
+}
+
+}  // namespace isochor

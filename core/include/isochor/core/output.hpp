@@ -1,0 +1,94 @@
+// One HDF5 file per run (schema in docs/output.md) and an XDMF sidecar that ParaView opens as a
+// time series. Frames are flushed as they are written: a killed run keeps every finished frame.
+#pragma once
+#include <array>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "isochor/core/mesh.hpp"
+
+namespace isochor {
+
+struct RunInfo {
+  std::string scene_text;  // the scene as run
+  std::string scene_file;  // where it came from
+  std::string command;     // e.g. "run", "mesh"
+};
+
+struct Frame {
+  double time = 0.0;
+  const Points* positions = nullptr;     // all nodes
+  const Points* velocities = nullptr;    // all nodes (m/s): with the positions, what a resume needs
+  const std::vector<double>* multipliers = nullptr;  // the constraints' multipliers (a resume's start)
+  std::vector<double> volumes;           // total, then each zone (in the order given at open)
+  std::array<double, 3> energy{0, 0, 0};  // kinetic, elastic, external potential
+  const std::vector<double>* pressure = nullptr;  // per tet, when pressure output is on
+  const Points* loads = nullptr;  // the applied load on every node (N), when the scene has loads
+  const Points* contact = nullptr;  // the colliders' force on every node (N), when the scene has colliders
+  // Where each collider is: 12 numbers per collider, its local-to-world rotation A (row-major)
+  // and translation b (x = A l + b), in the scene's order (the ground and planes first).
+  const std::vector<double>* collider_poses = nullptr;
+  std::vector<std::pair<std::string, double>> stats;  // per-frame series under /stats
+};
+
+// Where a resumed run continues: its last complete frame, read back from the file.
+struct ResumePoint {
+  int frame = -1;  // index of the last complete frame (frames after it were dropped)
+  double time = 0;
+  Points positions, velocities;                   // every node
+  std::vector<double> multipliers;                // the constraints' (empty if none were written)
+  std::map<std::string, double> stats;            // the per-frame /stats series at that frame
+  std::string status;                             // what the file said before: running, failed, ...
+};
+
+class OutputWriter {
+ public:
+  enum class Mode {
+    create,     // a new file; an existing one (or its sidecar) is an error
+    overwrite,  // a new file, replacing what is there
+    resume,     // continue the file: it must have been written from the same scene
+  };
+  // `zones` are written under /zones and name the columns of /frames/volume. The file is locked
+  // for the writer's life (a second writer on the same path fails at start).
+  OutputWriter(const std::string& path, const Mesh& mesh,
+               const std::vector<std::pair<std::string, std::vector<int>>>& zones, const RunInfo& info,
+               bool pressure, Mode mode = Mode::create);
+  ~OutputWriter();
+  OutputWriter(const OutputWriter&) = delete;
+  OutputWriter& operator=(const OutputWriter&) = delete;
+
+  void write_frame(const Frame& f);
+  // Attributes on /stats (run totals).
+  void set_stat(const std::string& name, double value);
+  void set_stat(const std::string& name, const std::string& value);
+  // The root attribute `status`: "running" while written, then "finished", "interrupted" or
+  // "failed" (docs/output.md).
+  void set_status(const std::string& status);
+  // Mode::resume: the frame the run continues from.
+  const ResumePoint& resume_point() const;
+  // Closes the file (also done by the destructor).
+  void close();
+
+  int frames_written() const;
+  const std::string& path() const;
+  std::string xdmf_path() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Bytes free for an output at `path` (on the file system of its nearest existing directory), and
+// within the file size limit (ulimit -f); infinity where unknown.
+double output_room_bytes(const std::string& path);
+
+// Whether a process holds the writer's lock on this file (a run still writing it).
+bool output_is_being_written(const std::string& path);
+
+// The version and git revision compiled into this build.
+const char* isochor_version();
+const char* isochor_git_revision();
+
+}  // namespace isochor

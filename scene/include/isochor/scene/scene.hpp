@@ -1,0 +1,131 @@
+// A scene as the user wrote it, parsed and checked: the mesh, material parameters, zones,
+// integrator settings, frames and output. Every key is documented in docs/scenes.md.
+#pragma once
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "isochor/models/drivers.hpp"
+#include "isochor/models/forces.hpp"
+#include "isochor/integrators/backward_euler.hpp"
+#include "isochor/integrators/hong_step.hpp"
+#include "isochor/integrators/ida_integrator.hpp"
+#include "isochor/integrators/integrator.hpp"
+#include "isochor/integrators/statics.hpp"
+#include "isochor/integrators/xpbd.hpp"
+#include "isochor/core/mesh.hpp"
+#include "isochor/core/scene_file.hpp"
+#include "isochor/models/skeleton.hpp"
+
+namespace isochor {
+
+enum class MaterialModel { cnh, unh, snh, snh_simple, mass_spring };
+const char* to_string(MaterialModel m);
+
+struct MaterialSpec {
+  MaterialModel model = MaterialModel::cnh;
+  double density = 1000.0;    // kg/m^3
+  double mu = 0.0, lambda = 0.0;  // Pa (Lamé parameters, from mu/lambda or E/nu)
+  double beta = 1.0;          // CNH penalty shape
+  double epsilon = 0.1;       // CNH: J below which alpha~ is extended
+  double epidermis_lambda = 0.0;  // Pa m (surface penalty weight); 0: no epidermis
+  double epidermis_gamma = 1.0;
+  double spring_stiffness = 1000.0;  // mass_spring: N/m, every spring
+  double spring_damping = 0.0;       // mass_spring: N s/m, dashpot along every spring
+  bool volume_constraint = true;     // mass_spring: keep the enclosed volume
+};
+
+enum class IntegratorKind { ida, statics, backward_euler, semi_implicit, xpbd, mass_spring };
+const char* to_string(IntegratorKind k);
+
+// The [integrator] table (every key in docs/scenes.md): the kind, and each integrator's options
+// as its own parser read them (models/src/integrators/, integrator_registry.hpp); the chosen
+// kind's are used.
+struct IntegratorSpec {
+  IntegratorKind kind = IntegratorKind::ida;
+  IdaOptions ida;
+  // IDA's linear_solver = "auto": chosen when the system is built (make_ida: krylov for meshes of
+  // 3-dof nodes with at most 256 constraint rows, else klu: automatic_ida_solver).
+  bool ida_linear_solver_auto = false;
+  StaticOptions statics;
+  BackwardEulerOptions backward_euler;  // also the semi-implicit step
+  XpbdOptions xpbd;
+  HongOptions hong;
+  Eigen::Vector3d weights_center = Eigen::Vector3d::Zero();  // mass_spring: Hong's weight zone
+  double weights_radius = 0.0;                               // 0: uniform weights
+};
+
+struct FramesSpec {
+  double rate = 100.0;     // frames per second
+  double duration = 1.0;   // s
+  int count = 0;           // statics: number of frames (load increments)
+  // Frame times 0, 1/rate, ..., duration; statics: pseudo-times 0, 1/(count-1), ..., 1.
+  std::vector<double> times() const;
+  // How many: times().size() without making them.
+  long num_frames() const;
+};
+
+struct OutputSpec {
+  std::string path;
+  bool pressure = false;
+};
+
+// Where a resumed run (isochor run --resume) starts instead of the rest state: every node's
+// position and velocity at a frame of its file (the driven ones are prescribed anyway).
+struct StartState {
+  Points positions, velocities;
+  Eigen::VectorXd multipliers;  // the constraints' at that frame (empty: computed afresh)
+};
+
+struct Scene {
+  SceneFile file;
+  Mesh mesh;
+  MaterialSpec material;
+  std::vector<Driver> boundary;  // Dirichlet drivers, in file order
+  Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.81);
+  double gravity_ramp = 0.0;  // s (pseudo-time in statics): gravity grows linearly to full at this time; 0: full at once
+  // The ground (contact.ground), the [[contact.plane]]s and the [[collider]]s, in that order.
+  std::vector<Collider> colliders;
+  // [contact.self]: contact between parts of the body (self_contact.hpp); off without the table.
+  struct SelfContactSpec {
+    bool enabled = false;
+    ContactLaw law;
+    double exclude = 0;    // m
+    double smoothing = 0;  // m: tau of the smoothed minimum distance
+  } self_contact;
+  std::vector<NodeLoad> loads;     // [[load]]: point loads and tractions (dead loads)
+  std::vector<PressureLoad> pressure_loads;  // [[load]] kind = "pressure" (follower loads)
+  RayleighDamping damping;
+  Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();
+  Points initial_positions;  // every node's start (initial.flatten); empty: the rest positions
+  std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tet indices
+  double zone_restore_time = 0.0;  // zones.restore_time (s): zone targets go from the start's volumes to the rest volumes
+  bool keep_zones = true;  // zones.keep: false measures the zones' volumes without constraining them
+  IntegratorSpec integrator;
+  FramesSpec frames;
+  OutputSpec output;
+  std::shared_ptr<Skeleton> skeleton;  // [skeleton]: bones that drive their bound nodes; null without
+
+  // Every node driven by [[boundary]] or bound to a bone, and their positions and velocities at t.
+  std::vector<int> driven_nodes() const;
+  void drive(double t, Points& x, Eigen::VectorXd* xdot) const;
+  // The factor on gravity at time t (forces.gravity_ramp).
+  double gravity_scale(double t) const;
+  // Sorted distinct times where what the scene prescribes is not smooth in time: drivers', bones'
+  // and moving colliders' breakpoints (drivers.hpp), the end of the gravity ramp.
+  std::vector<double> breakpoints() const;
+};
+
+// Parses a scene file with overrides; every key is checked and unknown keys are errors.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+Scene parse_scene(SceneFile file);
+
+// Keyframes of a driver or joint: `times`, `per_time` numbers of `key` per time (scaled by `scale`,
+// into x, y, z of the values) and `interpolation`; `what` names the numbers in errors.
+Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what);
+
+// Lamé parameters from Young's modulus and Poisson's ratio.
+std::pair<double, double> lame_from_young(double E, double nu);
+
+}  // namespace isochor

@@ -1,0 +1,43 @@
+// integrator.kind = "backward_euler" or "semi_implicit": fixed steps, Newton on the KKT system.
+#include "entries.hpp"
+
+#include "isochor/integrators/backward_euler.hpp"
+
+namespace isochor {
+
+void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
+  BackwardEulerOptions& o = spec.backward_euler;
+  o.dt = parse_dt(in);
+  o.newton_tol = in.number("newton_tol", 1e-6, Range::positive());
+  o.newton_atol = in.number("newton_atol", 1e-12, Range::positive());
+  o.semi_implicit = kind == IntegratorKind::semi_implicit;
+  o.max_steps = parse_max_steps(in);
+  o.rescale_volume = in.boolean("rescale_volume", false);
+  if (o.rescale_volume && kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
+    in.fail("rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
+  o.linear_solver = parse_linear_solver(in, LinearSolverKind::reduced);
+  o.automatic_linear_solver = kind == IntegratorKind::backward_euler && linear_solver_is_auto(in);
+  o.linear_tol = in.number("linear_tol", 0.0, {0.0, 1e-2, false, true});
+  const std::string hessian = in.string("hessian", "exact", {"exact", "projected", "hybrid"});
+  o.project_hessian = hessian != "exact";
+  o.exact_near_solution = hessian == "hybrid";
+  if (o.exact_near_solution && kind != IntegratorKind::backward_euler)
+    in.fail("hessian", "\"hybrid\" switches within backward Euler's Newton iteration (the semi-implicit step takes one update)");
+  if (in.has("hessian") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
+    in.fail("hessian", "is an option of the backward_euler and semi_implicit integrators");
+  // Options of backward Euler's Newton iteration alone (semi-implicit takes one update).
+  o.max_newton = static_cast<int>(in.integer("max_newton", 30, 1, 100000));
+  o.line_search = in.boolean("line_search", true);
+  o.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 0, 0, 30));
+  if (in.has("line_search") && kind != IntegratorKind::backward_euler) in.fail("line_search", "is an option of the backward_euler integrator");
+  if (in.has("substeps_on_failure") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::statics)
+    in.fail("substeps_on_failure", "is an option of the backward_euler and static integrators");
+  if (in.has("max_newton") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::ida)
+    in.fail("max_newton", "is an option of the backward_euler and ida integrators");
+}
+
+std::unique_ptr<Integrator> make_backward_euler(const Scene& scene, SceneSystem& system) {
+  return std::make_unique<BackwardEuler>(system, scene.integrator.backward_euler);
+}
+
+}  // namespace isochor

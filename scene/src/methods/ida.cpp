@@ -1,0 +1,53 @@
+// integrator.kind = "ida": the GGL DAE on SUNDIALS IDA (keys in docs/scenes.md).
+#include "entries.hpp"
+
+#include "isochor/integrators/ida_integrator.hpp"
+
+namespace isochor {
+
+void parse_ida(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
+  IdaOptions& o = spec.ida;
+  o.rtol = in.number("rtol", 1e-6, Range::positive());
+  o.atol_q = in.number("atol", 1e-8, Range::positive());
+  o.atol_v = in.number("atol_v", 0.0, Range::non_negative());
+  o.atol_lambda = in.number("atol_lambda", 0.0, Range::non_negative());
+  o.max_order = static_cast<int>(in.integer("max_order", 5, 1, 5));
+  o.max_step = in.number("max_step", 0.0, Range::non_negative());
+  // Unset: 0, the integrator's default (IdaOptions::kDefaultNewtonCoef, every linear solver).
+  o.newton_coef = in.has("newton_coef") ? in.number("newton_coef", IdaOptions::kDefaultNewtonCoef, {0.0, 1.0, true, true}) : 0.0;
+  // Read here for IDA only (backward Euler's parser reads the key with its own default and range).
+  if (kind == IntegratorKind::ida) o.max_newton = static_cast<int>(in.integer("max_newton", 4, 1, 100));
+  o.max_steps = parse_max_steps(in);
+  const std::string ordering = in.string("ordering", "metis", {"metis", "colamd", "amd"});
+  o.ordering = ordering == "colamd" ? KluOrdering::colamd : ordering == "amd" ? KluOrdering::amd : KluOrdering::metis;
+  o.linear_solver = parse_linear_solver(in, LinearSolverKind::klu);
+  spec.ida_linear_solver_auto = linear_solver_is_auto(in);
+  o.jacobian_age = in.integer("jacobian_age", 0, 0, 1000000000L);
+  o.linear_tol = in.number("linear_tol", 0.0, {0.0, 1e-2, false, true});
+  o.stop_at_frames = in.boolean("stop_at_frames", false);
+}
+
+// linear_solver = "auto" for IDA. Measured (bench/linear_solvers.sh, the ball through its impact,
+// docs/results/linear_solvers.md): krylov is faster than klu at every size tried, 2.5 times at
+// 320 tets, 5 at 966, 13 at 2K and 48 at 4.5K, and faster than reduced from 966 tets up
+// (docs/results/scaling.md). The reduced solvers carry each constraint row as dense columns
+// (7 n x m matrices) and solve with S 2m times per setup, so their cost grows with the rows:
+// with one patch zone per 1-ring (zones.patches = 1, a free box, 20 ms) krylov still took 1.0 s
+// against klu's 2.5 s at 65 zones (1.7K tets) and 6.2 s against 29.4 s at 125 zones (6K tets), a
+// cost of ~0.05 s per zone there. Above 256 rows (1-ring zones: one per node) KLU on the whole
+// matrix, whose cost does not grow with them.
+constexpr int kAutoKrylovMaxConstraints = 256;
+
+LinearSolverKind automatic_ida_solver(const ConstrainedSystem& system) {
+  return system.dofs_per_group() == 3 && system.num_constraints() <= kAutoKrylovMaxConstraints
+             ? LinearSolverKind::krylov
+             : LinearSolverKind::klu;
+}
+
+std::unique_ptr<Integrator> make_ida(const Scene& scene, SceneSystem& system) {
+  IdaOptions o = scene.integrator.ida;
+  if (scene.integrator.ida_linear_solver_auto) o.linear_solver = automatic_ida_solver(system);
+  return std::make_unique<IdaIntegrator>(system, o);
+}
+
+}  // namespace isochor

@@ -1,0 +1,58 @@
+#include "isochor/integrators/sparse_factor.hpp"
+#include "entries.hpp"
+
+#include "isochor/base/error.hpp"
+
+namespace isochor {
+
+const std::vector<IntegratorEntry>& integrator_registry() {
+  static const std::vector<IntegratorEntry> r = {
+      {IntegratorKind::ida, "ida", parse_ida, make_ida},
+      {IntegratorKind::statics, "static", parse_statics, make_statics},
+      {IntegratorKind::backward_euler, "backward_euler", parse_backward_euler, make_backward_euler},
+      {IntegratorKind::semi_implicit, "semi_implicit", parse_backward_euler, make_backward_euler},
+      {IntegratorKind::xpbd, "xpbd", parse_xpbd, make_xpbd},
+      {IntegratorKind::mass_spring, "mass_spring", parse_hong, make_hong},
+  };
+  return r;
+}
+
+const IntegratorEntry& integrator_entry(IntegratorKind kind) {
+  for (const IntegratorEntry& e : integrator_registry())
+    if (e.kind == kind) return e;
+  throw Error(std::string("no integrator of kind ") + to_string(kind));
+}
+
+const char* to_string(IntegratorKind k) {
+  for (const IntegratorEntry& e : integrator_registry())
+    if (e.kind == k) return e.name;
+  return "?";
+}
+
+std::unique_ptr<Integrator> make_integrator(const Scene& scene, SceneSystem& system) {
+  return integrator_entry(scene.integrator.kind).make(scene, system);
+}
+
+long parse_max_steps(const Section& in) { return in.integer("max_steps", 10000000, 1, 1000000000000L); }
+
+double parse_dt(const Section& in) { return in.number("dt", 1e-3, Range::positive()); }
+
+static std::string linear_solver_name(const Section& in) {
+  return in.string("linear_solver", "auto", {"auto", "klu", "reduced", "krylov", "amg"});
+}
+
+bool linear_solver_is_auto(const Section& in) { return linear_solver_name(in) == "auto"; }
+
+LinearSolverKind parse_linear_solver(const Section& in, LinearSolverKind automatic) {
+  const std::string s = linear_solver_name(in);
+  if (s == "amg" && !amg_available())
+    in.fail("linear_solver", "\"amg\" needs isochor built with hypre and MPI (Debian: apt-get install libhypre-dev "
+                             "libopenmpi-dev, then rebuild)");
+  return s == "klu" ? LinearSolverKind::klu
+         : s == "reduced" ? LinearSolverKind::reduced
+         : s == "krylov"  ? LinearSolverKind::krylov
+         : s == "amg"     ? LinearSolverKind::amg
+                          : automatic;
+}
+
+}  // namespace isochor

@@ -1,0 +1,18 @@
+// integrator.kind = "static": KINSOL on the KKT system, one solve per load increment.
+#include "entries.hpp"
+
+#include "isochor/integrators/statics.hpp"
+
+namespace isochor {
+
+void parse_statics(const Section& in, IntegratorKind, IntegratorSpec& spec) {
+  spec.statics.linear_solver = parse_linear_solver(in, LinearSolverKind::klu);
+  // Load increments are pseudo-time: halving a failed one changes no accuracy, so it is on.
+  spec.statics.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 5, 0, 30));
+}
+
+std::unique_ptr<Integrator> make_statics(const Scene& scene, SceneSystem& system) {
+  return std::make_unique<StaticSolver>(system, scene.integrator.statics);
+}
+
+}  // namespace isochor

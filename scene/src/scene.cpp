@@ -1,0 +1,752 @@
+#include "isochor/scene/scene.hpp"
+#include "isochor/scene/skeleton_setup.hpp"
+#include "isochor/core/paint.hpp"
+#include "isochor/scene/integrator_registry.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <random>
+#include <set>
+
+#include "isochor/models/constraints.hpp"
+#include "isochor/base/error.hpp"
+#include "isochor/core/meshing.hpp"
+#include "isochor/core/selection.hpp"
+
+namespace isochor {
+
+std::pair<double, double> lame_from_young(double E, double nu) {
+  return {E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))};
+}
+
+long FramesSpec::num_frames() const {
+  if (count > 0) return count;
+  return std::lround(std::floor(duration * rate + 1e-9)) + 1;
+}
+
+std::vector<double> FramesSpec::times() const {
+  std::vector<double> t;
+  if (count > 0) {  // statics: pseudo-time 0 .. 1 over the load increments
+    if (count == 1) return {1.0};
+    for (int k = 0; k < count; ++k) t.push_back(static_cast<double>(k) / (count - 1));
+    return t;
+  }
+  const long n = std::lround(std::floor(duration * rate + 1e-9));
+  for (long k = 0; k <= n; ++k) t.push_back(static_cast<double>(k) / rate);
+  return t;
+}
+
+double Scene::gravity_scale(double t) const {
+  return gravity_ramp > 0 ? std::clamp(t / gravity_ramp, 0.0, 1.0) : 1.0;
+}
+
+std::vector<int> Scene::driven_nodes() const {
+  std::vector<int> driven;
+  for (const Driver& d : boundary)
+    if (d.held.empty()) driven.insert(driven.end(), d.nodes.begin(), d.nodes.end());
+  if (skeleton) {
+    const std::vector<int> bound = skeleton->bound_nodes();
+    driven.insert(driven.end(), bound.begin(), bound.end());
+  }
+  return driven;
+}
+
+void Scene::drive(double t, Points& x, Eigen::VectorXd* xdot) const {
+  for (const Driver& d : boundary)
+    if (d.held.empty()) d.apply(mesh.rest_positions(), t, x, xdot);
+  if (skeleton) skeleton->apply(mesh.rest_positions(), t, x, xdot);
+}
+
+std::vector<double> Scene::breakpoints() const {
+  std::vector<double> t;
+  for (const Driver& d : boundary) d.breakpoints(t);
+  if (skeleton)
+    for (const BoneSpec& b : skeleton->bones()) b.motion.breakpoints(t);
+  for (const Collider& c : colliders) {
+    c.motion.breakpoints(t);
+    c.resize.breakpoints(t);
+  }
+  if (gravity_ramp > 0) t.push_back(gravity_ramp);
+  if (zone_restore_time > 0 && keep_zones && !zones.empty()) t.push_back(frames.times().front() + zone_restore_time);
+  for (const NodeLoad& l : loads) l.history.breakpoints(t);
+  for (const PressureLoad& l : pressure_loads) l.history.breakpoints(t);
+  std::sort(t.begin(), t.end());
+  t.erase(std::unique(t.begin(), t.end()), t.end());
+  return t;
+}
+
+Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what) {
+  Driver d;
+  const std::string interp = b.string("interpolation", "linear", {"linear", "cubic"});
+  d.kind = interp == "linear" ? Driver::Kind::keyframes_linear : Driver::Kind::keyframes_cubic;
+  d.times = b.numbers("times");
+  const std::vector<double> flat = b.numbers(key);
+  if (d.times.size() < 2) b.fail("times", "expected at least 2 keyframe times (s)");
+  for (std::size_t i = 1; i < d.times.size(); ++i)
+    if (d.times[i] <= d.times[i - 1]) b.fail("times", "expected increasing times");
+  const std::size_t n = static_cast<std::size_t>(per_time) * d.times.size();
+  if (flat.size() != n)
+    b.fail(key, "expected " + what + " per keyframe time, " + std::to_string(n) + " numbers in all, got " + std::to_string(flat.size()));
+  for (std::size_t i = 0; i < d.times.size(); ++i) {
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    for (int k = 0; k < per_time; ++k) v[k] = scale * flat[per_time * i + k];
+    d.values.push_back(v);
+  }
+  return d;
+}
+
+namespace {
+
+// A string key with a fixed set of choices, as an enum.
+template <class E>
+E parse_choice(const Section& s, std::string_view key, E fallback, const std::vector<std::pair<std::string, E>>& table) {
+  std::vector<std::string> names;
+  std::string name;
+  for (const auto& [n, e] : table) {
+    names.push_back(n);
+    if (e == fallback && name.empty()) name = n;
+  }
+  name = s.string(key, name, names);
+  for (const auto& [n, e] : table)
+    if (n == name) return e;
+  return fallback;
+}
+
+const std::vector<std::pair<std::string, MaterialModel>> kModels = {
+    {"cnh", MaterialModel::cnh}, {"unh", MaterialModel::unh}, {"snh", MaterialModel::snh},
+    {"snh_simple", MaterialModel::snh_simple}, {"mass_spring", MaterialModel::mass_spring}};
+
+template <class E>
+const char* name_of(const std::vector<std::pair<std::string, E>>& table, E e) {
+  for (const auto& [n, v] : table)
+    if (v == e) return n.c_str();
+  return "?";
+}
+
+MaterialSpec parse_material(const Section& s) {
+  MaterialSpec m;
+  m.model = parse_choice(s, "model", m.model, kModels);
+  m.density = s.number("density", m.density, Range::positive());
+  const bool lame = s.has("mu") || s.has("lambda"), young = s.has("E") || s.has("nu");
+  if (lame && young) s.fail(s.has("E") ? "E" : "nu", "give either mu and lambda or E and nu, not both");
+  if (young) {
+    const double E = s.number("E", 1e5, Range::positive());
+    const double nu = s.number("nu", 0.45, {-1.0, 0.5, true, false});
+    std::tie(m.mu, m.lambda) = lame_from_young(E, nu);
+    if (nu == 0.5) m.lambda = std::numeric_limits<double>::infinity();  // incompressible: XPBD only
+  } else {
+    m.mu = s.number("mu", 1e4, Range::positive());
+    m.lambda = s.number("lambda", 9e4, Range::non_negative());
+  }
+  m.beta = s.number("beta", m.beta, Range::non_negative());
+  m.epsilon = s.number("epsilon", m.epsilon, {0.0, 1.0, true, false});
+  m.epidermis_lambda = s.number("epidermis_lambda", 0.0, Range::non_negative());
+  m.epidermis_gamma = s.number("epidermis_gamma", 1.0, Range::non_negative());
+  // The mass-spring keys are read for every model, so one scene can switch models by --set.
+  m.spring_stiffness = s.number("spring_stiffness", m.spring_stiffness, Range::positive());
+  m.spring_damping = s.number("spring_damping", m.spring_damping, Range::non_negative());
+  m.volume_constraint = s.boolean("volume_constraint", true);
+  return m;
+}
+
+// A motion in time: `kind` ("fixed", "ramp", "keyframes", "sinusoid", "rotation") and its keys.
+Driver parse_motion(const Section& b) {
+  Driver d;
+  const std::string kind = b.string("kind", "fixed", {"fixed", "ramp", "keyframes", "sinusoid", "rotation"});
+  if (kind == "ramp") {
+    d.kind = Driver::Kind::ramp;
+    if (!b.has("displacement")) b.fail("displacement", "missing, a ramp needs its end displacement [x, y, z] (m)");
+    d.vector = b.vec3("displacement", {});
+    d.t0 = b.number("t0", 0.0, Range::non_negative());
+    d.t1 = b.number("t1", 1.0, Range::positive());
+    if (d.t1 <= d.t0) b.fail("t1", "expected t1 > t0");
+  } else if (kind == "sinusoid") {
+    d.kind = Driver::Kind::sinusoid;
+    if (!b.has("amplitude")) b.fail("amplitude", "missing, a sinusoid needs its amplitude [x, y, z] (m)");
+    d.vector = b.vec3("amplitude", {});
+    d.frequency = b.number("frequency", 1.0, Range::positive());
+    d.phase = b.number("phase", 0.0);
+  } else if (kind == "rotation") {
+    d = parse_keyframes(b, "angles", 1, M_PI / 180.0, "one angle (degrees)");
+    d.rotation = true;
+    d.center = b.vec3("center", Eigen::Vector3d::Zero());
+    d.axis = b.vec3("axis", Eigen::Vector3d::UnitZ());
+    if (d.axis.norm() == 0) b.fail("axis", "expected a non-zero vector");
+    d.axis.normalize();
+  } else if (kind == "keyframes") {
+    d = parse_keyframes(b, "values", 3, 1.0, "3 numbers (a displacement)");
+  }
+  return d;
+}
+
+Driver parse_boundary(const Section& b, const Mesh& mesh) {
+  const Section sel = b.table("select");
+  if (!sel.exists()) b.fail("select", "missing, expected the nodes to drive, e.g. { kind = \"set\", name = \"zmin\" }");
+  const std::vector<int> nodes = select_nodes(mesh, Selection::parse(sel));
+  Driver d = parse_motion(b);
+  d.nodes = nodes;
+  // Which components the driver holds: all (default), some axes, or the normal of a plane.
+  if (b.has("components") && b.has("normal")) b.fail("normal", "give either components or normal, not both");
+  if (b.has("components")) {
+    const std::vector<std::string> c = b.strings("components");
+    if (c.empty()) b.fail("components", "expected at least one of \"x\", \"y\", \"z\"");
+    std::set<std::string> seen;
+    for (const std::string& name : c) {
+      if (name != "x" && name != "y" && name != "z") b.fail("components", "unknown component \"" + name + "\" (expected \"x\", \"y\" or \"z\")");
+      if (!seen.insert(name).second) b.fail("components", "component \"" + name + "\" given twice");
+    }
+    if (seen.size() < 3)
+      for (const std::string& name : c) d.held.push_back(Eigen::Vector3d::Unit(name[0] - 'x'));
+  } else if (b.has("normal")) {
+    const Eigen::Vector3d n = b.vec3("normal", {});
+    if (n.norm() == 0) b.fail("normal", "expected a non-zero vector");
+    d.held.push_back(n.normalized());
+  }
+  if (!d.held.empty() && d.rotation) b.fail(b.has("normal") ? "normal" : "components", "a rotation drives all three components (expected no components or normal with kind = \"rotation\")");
+  return d;
+}
+
+// initial.flatten: the XPBD paper's scrambled start. Every node is moved into the plane through the
+// mesh's centre normal to the axis, at a uniformly random point of the mesh's bounding box in the
+// other two axes (std::mt19937_64 seeded by initial.seed: the same start on every run).
+void parse_flatten(const Section& in, Scene& sc) {
+  const std::string axis = in.string("flatten", "none", {"none", "x", "y", "z"});
+  const auto seed = in.integer("seed", 1, 0, 2147483647L);
+  if (axis == "none") return;  // a seed is kept for a --set initial.flatten variant
+  const int a = axis[0] - 'x';
+  const Points& X = sc.mesh.rest_positions();
+  const Eigen::Vector3d lo = X.rowwise().minCoeff(), hi = X.rowwise().maxCoeff();
+  std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  sc.initial_positions.resize(3, X.cols());
+  for (Eigen::Index n = 0; n < X.cols(); ++n)
+    for (int d = 0; d < 3; ++d) {
+      const double u = d == a ? 0.5 : unit(rng);
+      sc.initial_positions(d, n) = lo[d] + u * (hi[d] - lo[d]);
+    }
+}
+
+// [[load]]: a point load on a node set (the force split among the nodes, or on each), a
+// traction on the surface triangles whose corners are all selected (rest area, a third to each
+// corner: the consistent load of linear triangles), or a pressure on those triangles (a follower
+// load, forces.hpp).
+void parse_load(const Section& l, const Mesh& mesh, Scene& sc) {
+  const Section sel = l.table("select");
+  if (!sel.exists()) l.fail("select", "missing, expected the nodes to load, e.g. { kind = \"set\", name = \"xmax\" }");
+  const std::vector<int> nodes = select_nodes(mesh, Selection::parse(sel));
+  const std::string kind = l.string("kind", "point", {"point", "traction", "pressure"});
+  LoadHistory history;
+  history.ramp = l.number("ramp", 0.0, Range::non_negative());
+  if (l.has("times") || l.has("factors")) {
+    if (l.has("ramp")) l.fail("ramp", "give either ramp or times and factors, not both");
+    history.times = l.numbers("times");
+    history.factors = l.numbers("factors");
+    if (history.times.size() < 2) l.fail("times", "expected at least 2 increasing times (s)");
+    if (history.factors.size() != history.times.size())
+      l.fail("factors", "expected one factor per time (" + std::to_string(history.times.size()) + "), got " +
+                            std::to_string(history.factors.size()));
+    for (std::size_t i = 1; i < history.times.size(); ++i)
+      if (!(history.times[i] > history.times[i - 1])) l.fail("times", "expected increasing times");
+  }
+  if (kind == "point") {
+    if (!l.has("force")) l.fail("force", "missing, a point load needs its force [x, y, z] (N)");
+    const Vec3 f = l.vec3("force", {});
+    const bool split = l.boolean("split", true);
+    sc.loads.push_back({nodes, std::vector<Vec3>(nodes.size(), split ? Vec3(f / static_cast<double>(nodes.size())) : f), history});
+    return;
+  }
+  std::vector<char> in(mesh.num_nodes(), 0);
+  for (int v : nodes) in[v] = 1;
+  std::vector<Tri> faces;
+  for (const Tri& t : mesh.surface())
+    if (in[t[0]] && in[t[1]] && in[t[2]]) faces.push_back(t);
+  if (faces.empty()) l.fail("select", "selects no surface triangle (expected the corners of at least one boundary face)");
+  if (kind == "pressure") {
+    if (!l.has("pressure")) l.fail("pressure", "missing, a pressure load needs its pressure (Pa)");
+    sc.pressure_loads.push_back({faces, l.number("pressure", 0.0), history});
+    return;
+  }
+  if (!l.has("traction")) l.fail("traction", "missing, a traction needs its force per area [x, y, z] (N/m^2)");
+  const Vec3 tr = l.vec3("traction", {});
+  std::map<int, Vec3> per_node;
+  const Points& X = mesh.rest_positions();
+  for (const Tri& t : faces) {
+    const double area = 0.5 * (X.col(t[1]) - X.col(t[0])).cross(X.col(t[2]) - X.col(t[0])).norm();
+    for (int v : t) per_node.try_emplace(v, Vec3::Zero()).first->second += tr * area / 3.0;
+  }
+  NodeLoad load;
+  load.history = history;
+  for (const auto& [v, f] : per_node) {
+    load.nodes.push_back(v);
+    load.force.push_back(f);
+  }
+  sc.loads.push_back(std::move(load));
+}
+
+// Checks a new zone's name: non-empty, no '/', '.' or ',', not defined before.
+void check_zone_name(const Section& z, std::string_view key, const std::string& name,
+                     const std::vector<std::pair<std::string, std::vector<int>>>& zones) {
+  if (name.empty()) z.fail(key, "missing, expected a zone name");
+  if (name.find_first_of("/.,") != std::string::npos) z.fail(key, "expected a name without '/', '.' or ','");
+  for (const auto& other : zones)
+    if (other.first == name) z.fail(key, "zone \"" + name + "\" is defined twice");
+}
+
+// Zones painted by the mesh file's own surface groups (Gmsh 2-D physical groups, node sets of
+// the mesh): `groups = [names]`, each a zone of that name, its paint 1 on the group's nodes.
+void parse_group_paint(const Section& p, const Mesh& mesh, std::vector<std::pair<std::string, std::vector<int>>>& zones) {
+  for (const char* key : {"file", "labels", "colors", "weights", "property"})
+    if (p.has(key)) p.fail(key, "not with groups (the mesh's surface groups are the paint)");
+  const std::vector<std::string> groups = p.strings("groups");
+  if (groups.empty()) p.fail("groups", "expected a list of the mesh's surface groups, e.g. [\"belly\", \"back\"]");
+  const std::vector<int>& nodes = mesh.surface_nodes();
+  PaintedPoints painted;
+  painted.path = "the mesh's groups";
+  painted.x.resize(3, static_cast<Eigen::Index>(nodes.size()));
+  for (std::size_t i = 0; i < nodes.size(); ++i) painted.x.col(i) = mesh.rest_positions().col(nodes[i]);
+  std::vector<std::vector<double>> membership;
+  for (const std::string& g : groups) {
+    check_zone_name(p, "groups", g, zones);
+    const auto it = mesh.node_sets.find(g);
+    if (it == mesh.node_sets.end()) {
+      std::string known;
+      for (const auto& [name, set] : mesh.node_sets) known += (known.empty() ? "" : ", ") + name;
+      p.fail("groups", "the mesh has no group \"" + g + "\" (its groups: " + (known.empty() ? "none" : known) + ")");
+    }
+    std::vector<double> m(nodes.size(), 0.0);
+    for (std::size_t i = 0; i < nodes.size(); ++i) m[i] = std::binary_search(it->second.begin(), it->second.end(), nodes[i]);
+    membership.push_back(std::move(m));
+  }
+  std::vector<std::vector<int>> tets = painted_zones(mesh, painted, membership, std::numeric_limits<double>::infinity());
+  for (std::size_t z = 0; z < groups.size(); ++z) {
+    if (tets[z].empty()) p.fail("groups", "no tet is painted by group \"" + groups[z] + "\" (expected a group of surface triangles)");
+    zones.emplace_back(groups[z], std::move(tets[z]));
+  }
+}
+
+// [[zones.paint]]: zones painted on the surface (paint.hpp), one per entry of labels, colors or
+// weights, or one per surface group of the mesh.
+void parse_paint(const Section& p, const Mesh& mesh, const SceneFile& file,
+                 std::vector<std::pair<std::string, std::vector<int>>>& zones) {
+  if (p.has("groups")) return parse_group_paint(p, mesh, zones);
+  if (!p.has("file")) p.fail("file", "missing, expected a paint file (.ply, .obj or .csv) or the mesh's surface groups (groups)");
+  const std::string path = file.resolve_path(p.string("file", ""));
+  PaintRule rule;
+  const int given = p.has("labels") + p.has("colors") + p.has("weights");
+  if (given != 1) p.fail(given ? "colors" : "labels", "expected exactly one of labels, colors or weights (a table from zone names)");
+  const char* key = p.has("labels") ? "labels" : p.has("colors") ? "colors" : "weights";
+  rule.by = p.has("labels") ? PaintRule::By::labels : p.has("colors") ? PaintRule::By::colors : PaintRule::By::weights;
+  const Section t = p.table(key);
+  if (!t.exists() || t.keys().empty()) p.fail(key, "expected a table from zone names, e.g. { belly = 1, back = 2 }");
+  for (const std::string& name : t.keys()) {
+    check_zone_name(t, name, name, zones);
+    rule.zones.push_back(name);
+    if (rule.by == PaintRule::By::labels) {
+      rule.labels.push_back(t.integer(name, 0, -2147483647L, 2147483647L));
+    } else if (rule.by == PaintRule::By::colors) {
+      const std::vector<double> c = t.numbers(name, Range::non_negative());
+      if (c.size() != 3) t.fail(name, "expected a colour [r, g, b] (0..1, or 0..255)");
+      Eigen::Vector3d v(c[0], c[1], c[2]);
+      if (v.maxCoeff() > 1) v /= 255.0;
+      rule.colors.push_back(v);
+    } else {
+      rule.weights.push_back(t.string(name, ""));
+    }
+  }
+  rule.property = p.string("property", "label");
+  rule.color_tolerance = p.number("color_tolerance", 0.1, Range::positive());
+  const Points& X = mesh.rest_positions();
+  const double diagonal = (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
+  const double tolerance = p.number("tolerance", 0.02 * diagonal, Range::positive());
+  const std::string disconnected = p.string("disconnected", "error", {"error", "keep", "split"});
+  std::vector<std::vector<int>> tets;
+  try {
+    const PaintedPoints painted = read_paint(path, &X);
+    tets = painted_zones(mesh, painted, paint_membership(painted, rule), tolerance);
+  } catch (const Error& e) {
+    p.fail("file", e.what());
+  }
+  for (std::size_t z = 0; z < rule.zones.size(); ++z) {
+    if (tets[z].empty())
+      t.fail(rule.zones[z], "no tet is painted " + rule.zones[z] + " (expected some painted vertex with this paint)");
+    auto pieces = connected_pieces(mesh, tets[z]);
+    if (pieces.size() > 1 && disconnected == "error")
+      t.fail(rule.zones[z], "zone \"" + rule.zones[z] + "\" is painted in " + std::to_string(pieces.size()) +
+                                " disconnected pieces (of " + std::to_string(pieces[0].size()) + ", " +
+                                std::to_string(pieces[1].size()) + (pieces.size() > 2 ? ", ..." : "") +
+                                " tets): paint each piece as its own zone, or set disconnected = \"keep\" or \"split\"");
+    if (pieces.size() > 1 && disconnected == "split") {
+      for (std::size_t k = 0; k < pieces.size(); ++k) {
+        std::sort(pieces[k].begin(), pieces[k].end());
+        zones.emplace_back(rule.zones[z] + "_" + std::to_string(k + 1), std::move(pieces[k]));
+      }
+    } else {
+      zones.emplace_back(rule.zones[z], std::move(tets[z]));
+    }
+  }
+}
+
+std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section& s, const Mesh& mesh, const SceneFile& file,
+                                                                  bool global) {
+  std::vector<std::pair<std::string, std::vector<int>>> zones;
+  if (s.boolean("global", global)) {
+    std::vector<int> all(mesh.num_tets());
+    for (int e = 0; e < mesh.num_tets(); ++e) all[e] = e;
+    zones.emplace_back("global", std::move(all));
+  }
+  if (const long k = s.integer("rings", 0, 0, 100); k > 0) {
+    // One zone per node: the tets of its k-ring (Irving et al. 2007 for k = 1).
+    const DofMap all = DofMap::make(mesh.num_nodes(), {});
+    // Nodes whose rings hold the same tets (large k on a small mesh) give one zone, not
+    // several identical constraints (which would make the KKT matrix singular).
+    const auto rings = ring_zones(mesh, static_cast<int>(k), all);
+    std::set<std::vector<int>> seen;
+    for (std::size_t v = 0; v < rings.size(); ++v)
+      if (seen.insert(rings[v]).second) zones.emplace_back("ring" + std::to_string(k) + "_" + std::to_string(v), rings[v]);
+  }
+  if (const long k = s.integer("patches", 0, 0, 100); k > 0) {
+    const auto patches = patch_zones(mesh, static_cast<int>(k));
+    for (std::size_t p = 0; p < patches.size(); ++p) zones.emplace_back("patch" + std::to_string(k) + "_" + std::to_string(p), patches[p]);
+  }
+  if (s.boolean("from_mesh", false))
+    for (const auto& [name, tets] : mesh.zones) zones.emplace_back(name, tets);
+  for (const Section& p : s.tables("paint")) parse_paint(p, mesh, file, zones);
+  for (const Section& z : s.tables("zone")) {
+    const std::string name = z.string("name", "");
+    check_zone_name(z, "name", name, zones);
+    Section sel = z.table("select");
+    if (!sel.exists()) z.fail("select", "missing, expected a selection such as { kind = \"box\", min = [..], max = [..] }");
+    zones.emplace_back(name, select_tets(mesh, Selection::parse(sel)));
+  }
+  return zones;
+}
+
+}  // namespace
+
+namespace {
+
+// A contact law: `defaults` ([contact]'s, or built-in ones) for keys the table does not give.
+ContactLaw parse_contact_law(const Section& c, const ContactLaw& defaults) {
+  ContactLaw L;
+  L.stiffness = c.number("stiffness", defaults.stiffness, Range::positive());
+  L.thickness = c.number("thickness", defaults.thickness, Range::positive());
+  L.per_area = c.string("law", defaults.per_area ? "area" : "node", {"node", "area"}) == "area";
+  L.damping = c.number("damping", defaults.damping, Range::non_negative());
+  L.friction = c.number("friction", defaults.friction, Range::non_negative());
+  L.slip_speed = c.number("slip_speed", defaults.slip_speed, Range::positive());
+  return L;
+}
+
+Eigen::Vector3d nonzero_vec3(const Section& s, std::string_view key, const Eigen::Vector3d& fallback) {
+  const Eigen::Vector3d v = s.vec3(key, fallback);
+  if (v.norm() == 0) s.fail(key, "expected a non-zero vector");
+  return v.normalized();
+}
+
+double required_positive(const Section& s, std::string_view key, const std::string& what) {
+  if (!s.has(key)) s.fail(key, "missing, " + what);
+  return s.number(key, 0.0, Range::positive());
+}
+
+// A [[collider]] with shape = "mesh": its closed surface (`file`, scaled by `scale`) and the smoothed
+// signed distance sampled on cells of `cell` (default: a 64th of the surface's longest side).
+std::shared_ptr<const MeshSdf> parse_mesh_shape(const Section& c, const SceneFile& file, double thickness) {
+  if (!c.has("file")) c.fail("file", "missing, a mesh collider needs a closed triangle surface (.obj or .stl)");
+  const std::string path = file.resolve_path(c.string("file", ""));
+  const double scale = c.number("scale", 1.0, Range::positive());
+  Points x;
+  std::vector<Tri> tris;
+  try {
+    read_surface(path, x, tris);
+  } catch (const Error& e) {
+    c.fail("file", e.what());
+  }
+  x *= scale;
+  const double longest = x.cols() ? (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).maxCoeff() : 0.0;
+  const double cell = c.number("cell", longest / 64, Range::positive());
+  try {
+    // The samples reach past the contact thickness by four cells (the spline's support and more).
+    return std::make_shared<const MeshSdf>(x, tris, cell, thickness + 4 * cell, path);
+  } catch (const Error& e) {
+    c.fail(c.has("cell") ? "cell" : "file", e.what());
+  }
+  return nullptr;
+}
+
+// One [[collider]]: its shape, pose, law and motion (docs/scenes.md).
+Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& defaults) {
+  Collider C;
+  C.name = c.path();
+  using K = ColliderShape::Kind;
+  if (!c.has("shape")) c.fail("shape", "missing, expected one of \"plane\", \"sphere\", \"capsule\", \"box\", \"cylinder\", \"mesh\"");
+  C.shape.kind = parse_choice<K>(c, "shape", K::plane,
+                                 {{"plane", K::plane}, {"sphere", K::sphere}, {"capsule", K::capsule}, {"box", K::box}, {"cylinder", K::cylinder}, {"mesh", K::mesh}});
+  ColliderShape& S = C.shape;
+  C.law = parse_contact_law(c, defaults);
+  C.center = c.vec3("center", Eigen::Vector3d::Zero());
+  const Eigen::Vector3d axis = nonzero_vec3(c, "axis", Eigen::Vector3d::UnitZ());
+  const double angle = c.number("angle", 0.0) * M_PI / 180.0;
+  // A mesh keeps its file's frame, turned by `angle` about `axis`; the other shapes' axis is `axis`.
+  C.rotation = S.kind == K::mesh ? Mat3(Eigen::AngleAxisd(angle, axis)) : frame_with_axis(axis, angle);
+  double smallest = 0;  // the smallest half dimension (bounds the rounding)
+  switch (S.kind) {
+    case K::plane: break;
+    case K::sphere: S.radius = required_positive(c, "radius", "a sphere needs its radius (m)"); break;
+    case K::capsule:
+      S.radius = required_positive(c, "radius", "a capsule needs its radius (m)");
+      S.half_length = 0.5 * required_positive(c, "length", "a capsule needs the length of its axis segment (m)");
+      break;
+    case K::box: {
+      if (!c.has("size")) c.fail("size", "missing, a box needs its edge lengths [x, y, z] (m)");
+      const Eigen::Vector3d size = c.vec3("size", {});
+      if (size.minCoeff() <= 0) c.fail("size", "expected three positive edge lengths (m)");
+      S.half_extents = 0.5 * size;
+      smallest = S.half_extents.minCoeff();
+      break;
+    }
+    case K::cylinder:
+      S.radius = required_positive(c, "radius", "a cylinder needs its radius (m; hollow: the hole's)");
+      S.half_length = 0.5 * required_positive(c, "length", "a cylinder needs its height (m)");
+      S.wall = c.number("wall", 0.0, Range::non_negative());
+      smallest = std::min(S.half_length, S.wall > 0 ? 0.5 * S.wall : S.radius);
+      break;
+    case K::mesh: S.mesh = parse_mesh_shape(c, sc.file, C.law.thickness); break;
+  }
+  if (S.kind == K::box || S.kind == K::cylinder) {
+    S.rounding = c.number("rounding", 0.1 * smallest, Range::non_negative());
+    if (S.rounding > smallest)
+      c.fail("rounding", "expected at most " + std::to_string(smallest) + " m (half the shape's smallest dimension)");
+  }
+  const Section motion = c.table("motion");
+  if (c.has("bone")) {
+    if (motion.exists()) c.fail("motion", "a collider follows a bone or a motion, not both");
+    const std::string bone = c.string("bone", "");
+    if (!sc.skeleton) c.fail("bone", "the scene has no [skeleton] (expected a bone name from [[skeleton.bone]])");
+    const auto& bones = sc.skeleton->bones();
+    for (std::size_t b = 0; b < bones.size(); ++b)
+      if (bones[b].name == bone) C.bone = static_cast<int>(b);
+    if (C.bone < 0) c.fail("bone", "no bone named \"" + bone + "\" in [skeleton]");
+  } else if (motion.exists()) {
+    C.motion = parse_motion(motion);
+  }
+  const Section resize = c.table("resize");
+  if (resize.exists()) {
+    if (S.kind != K::sphere && S.kind != K::capsule && S.kind != K::cylinder)
+      c.fail("resize", "only a sphere's, capsule's or cylinder's radius can change");
+    if (C.law.damping > 0 || C.law.friction > 0)
+      c.fail("resize", "a collider whose radius changes has no damping or friction (expected damping = 0 and friction = 0)");
+    C.resize = parse_keyframes(resize, "factors", 1, 1.0, "one factor on the radius");
+    for (const Eigen::Vector3d& f : C.resize.values)
+      if (!(f.x() > 0)) resize.fail("factors", "expected positive factors on the radius");
+    double smallest_factor = 1.0;
+    for (const Eigen::Vector3d& f : C.resize.values) smallest_factor = std::min(smallest_factor, f.x());
+    if (S.kind == K::cylinder && S.wall == 0 && S.rounding > S.radius * smallest_factor)
+      resize.fail("factors", "the radius would shrink below the rounding (" + std::to_string(S.rounding) + " m)");
+  }
+  return C;
+}
+
+// contact.ground, [[contact.plane]] and [[collider]] into sc.colliders.
+void parse_colliders(const Section& root, Scene& sc) {
+  const Section contact = root.table("contact");
+  const ContactLaw defaults = parse_contact_law(contact, ContactLaw{});
+  if (contact.boolean("ground", false)) {
+    sc.colliders.push_back(Collider::plane(contact.vec3("point", Eigen::Vector3d::Zero()),
+                                           nonzero_vec3(contact, "normal", Eigen::Vector3d::UnitZ()), defaults));
+    sc.colliders.back().name = "contact.ground";
+  } else {
+    contact.vec3("point", Eigen::Vector3d::Zero());  // read (and checked) for a --set contact.ground variant
+    nonzero_vec3(contact, "normal", Eigen::Vector3d::UnitZ());
+  }
+  for (const Section& p : contact.tables("plane")) {
+    if (!p.has("point") || !p.has("normal")) p.fail(p.has("point") ? "normal" : "point", "missing, a contact plane needs a point and a normal");
+    Collider C = Collider::plane(p.vec3("point", {}), nonzero_vec3(p, "normal", {}), parse_contact_law(p, defaults));
+    C.name = p.path();
+    const Eigen::Vector3d u = p.vec3("displacement", Eigen::Vector3d::Zero());
+    const double t0 = p.number("t0", 0.0, Range::non_negative()), t1 = p.number("t1", 1.0, Range::positive());
+    if (t1 <= t0) p.fail("t1", "expected t1 > t0");
+    if (u.squaredNorm() > 0) {
+      C.motion.kind = Driver::Kind::ramp;
+      C.motion.vector = u;
+      C.motion.t0 = t0;
+      C.motion.t1 = t1;
+    }
+    sc.colliders.push_back(C);
+  }
+  for (const Section& c : root.tables("collider")) sc.colliders.push_back(parse_collider(c, sc, defaults));
+  const Section self = contact.table("self");
+  if (self.exists()) {
+    sc.self_contact.enabled = self.boolean("enabled", true);
+    ContactLaw plain = defaults;  // the ground's damping and friction are not inherited
+    plain.damping = plain.friction = 0;
+    sc.self_contact.law = parse_contact_law(self, plain);
+    if (sc.self_contact.law.friction > 0) self.fail("friction", "contact between body parts has no friction (expected 0)");
+    // The default neighbourhood: three mean surface edges.
+    const Points& X = sc.mesh.rest_positions();
+    double edges = 0;
+    for (const Tri& t : sc.mesh.surface())
+      for (int e = 0; e < 3; ++e) edges += (X.col(t[e]) - X.col(t[(e + 1) % 3])).norm();
+    const double mean = sc.mesh.surface().empty() ? 0.0 : edges / (3.0 * static_cast<double>(sc.mesh.surface().size()));
+    sc.self_contact.exclude = self.number("exclude", 3 * mean, Range::positive());
+    sc.self_contact.smoothing = self.number("smoothing", 0.1 * sc.self_contact.law.thickness, Range::positive());
+    if (sc.self_contact.exclude <= sc.self_contact.law.thickness)
+      self.fail("exclude", "expected more than the contact thickness (" + std::to_string(sc.self_contact.law.thickness) + " m)");
+  }
+}
+
+// A body that starts inside a collider meets a force of its whole penetration at once, and the
+// integrators crawl (IDA at 1e-9 s steps) or fail: an error naming the collider and the nodes.
+// Within the contact thickness the law is as smooth as anywhere (a body may start resting there).
+void check_initial_contact(const Section& root, const Scene& sc) {
+  const Section contact = root.table("contact");
+  const Points& x = sc.initial_positions.size() ? sc.initial_positions : sc.mesh.rest_positions();
+  for (std::size_t k = 0; k < sc.colliders.size(); ++k) {
+    const Collider& C = sc.colliders[k];
+    const ColliderPose P = C.pose(0.0, sc.skeleton.get());
+    int inside = 0;
+    double deepest = 0;
+    for (int n = 0; n < x.cols(); ++n) {
+      const double d = C.distance(P, x.col(n), nullptr, nullptr);
+      if (d < -C.law.thickness) {
+        ++inside;
+        deepest = std::min(deepest, d);
+      }
+    }
+    if (inside == 0) continue;
+    char where[160];
+    if (C.shape.kind == ColliderShape::Kind::plane)
+      std::snprintf(where, sizeof where, "below the plane through [%g, %g, %g] with normal [%g, %g, %g]", P.b.x(), P.b.y(),
+                    P.b.z(), P.A(0, 2), P.A(1, 2), P.A(2, 2));
+    else
+      std::snprintf(where, sizeof where, "inside this %s at t = 0", C.shape.name());
+    char buf[400];
+    std::snprintf(buf, sizeof buf,
+                  "%d of %d nodes start more than the contact thickness (%g m) %s (the deepest %.3g m; expected the "
+                  "body outside it: move mesh.center or the collider)",
+                  inside, static_cast<int>(x.cols()), C.law.thickness, where, -deepest);
+    if (C.name == "contact.ground") contact.fail("ground", buf);
+    if (C.name.rfind("contact.plane", 0) == 0) contact.tables("plane").at(k - (sc.colliders[0].name == "contact.ground")).fail("point", buf);
+    root.tables("collider").at(k - (sc.colliders.size() - root.tables("collider").size())).fail(C.shape.kind == ColliderShape::Kind::plane ? "center" : "shape", buf);
+  }
+}
+
+}  // namespace
+
+Scene parse_scene(SceneFile file) {
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, 0.0, true, {}, {}, {}, {}};
+  const Section root = sc.file.root();
+  Section mesh = root.table("mesh");
+  if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
+  sc.mesh = mesh_from_scene(mesh, sc.file);
+  sc.material = parse_material(root.table("material"));
+  sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.file, sc.material.model == MaterialModel::cnh);
+  sc.keep_zones = root.table("zones").boolean("keep", true);
+  sc.zone_restore_time = root.table("zones").number("restore_time", 0.0, Range::non_negative());
+  std::vector<int> driven_by(sc.mesh.num_nodes(), -1);
+  for (const Section& b : root.tables("boundary")) {
+    sc.boundary.push_back(parse_boundary(b, sc.mesh));
+    const int k = static_cast<int>(sc.boundary.size()) - 1;
+    for (int v : sc.boundary.back().nodes) {
+      // Supports that hold some components may share a node (a corner on two symmetry planes);
+      // a driver of all three components owns its nodes.
+      if (driven_by[v] >= 0 && (sc.boundary.back().held.empty() || sc.boundary[driven_by[v]].held.empty()))
+        b.fail("select", "node " + std::to_string(v) + " is already driven by boundary[" + std::to_string(driven_by[v]) +
+                             "] (expected each node in at most one [[boundary]], unless both hold only some components)");
+      driven_by[v] = k;
+    }
+  }
+  sc.skeleton = parse_skeleton(root.table("skeleton"), sc.file, sc.mesh, driven_by);
+
+  const Section forces = root.table("forces");
+  sc.gravity = forces.vec3("gravity", sc.gravity);
+  sc.gravity_ramp = forces.number("gravity_ramp", 0.0, Range::non_negative());
+  parse_colliders(root, sc);
+  for (const Section& l : root.tables("load")) parse_load(l, sc.mesh, sc);
+  const Section damping = root.table("damping");
+  sc.damping.alpha = damping.number("alpha", 0.0, Range::non_negative());
+  sc.damping.beta = damping.number("beta", 0.0, Range::non_negative());
+  const Section initial = root.table("initial");
+  sc.initial_velocity = initial.vec3("velocity", Eigen::Vector3d::Zero());
+  parse_flatten(initial, sc);
+
+  const Section in = root.table("integrator");
+  IntegratorSpec& ig = sc.integrator;
+  {
+    std::vector<std::pair<std::string, IntegratorKind>> kinds;
+    for (const IntegratorEntry& e : integrator_registry()) kinds.emplace_back(e.name, e.kind);
+    ig.kind = parse_choice(in, "kind", ig.kind, kinds);
+    for (const IntegratorEntry& e : integrator_registry()) e.parse(in, ig.kind, ig);
+  }
+  const bool mass_spring = sc.material.model == MaterialModel::mass_spring;
+  if (ig.kind == IntegratorKind::xpbd && mass_spring)
+    in.fail("kind", "\"xpbd\" needs a tet material (expected material.model other than \"mass_spring\")");
+  if (ig.kind == IntegratorKind::mass_spring && !mass_spring)
+    in.fail("kind", "\"mass_spring\" is Hong et al.'s step for material.model = \"mass_spring\"");
+  if (std::isinf(sc.material.lambda) && ig.kind != IntegratorKind::xpbd)
+    root.table("material").fail("nu", "nu = 0.5 (incompressible) needs integrator.kind = \"xpbd\" (expected nu < 0.5)");
+
+  const Section fr = root.table("frames");
+  if (fr.has("count") && (fr.has("rate") || fr.has("duration")))
+    fr.fail("count", "give either count (statics) or rate and duration, not both");
+  sc.frames.rate = fr.number("rate", sc.frames.rate, Range::positive());
+  sc.frames.duration = fr.number("duration", sc.frames.duration, Range::non_negative());
+  sc.frames.count = static_cast<int>(fr.integer("count", 0, 1, 1000000));
+  if ((ig.kind == IntegratorKind::statics) != (sc.frames.count > 0))
+    fr.fail(ig.kind == IntegratorKind::statics ? "count" : "rate",
+            ig.kind == IntegratorKind::statics ? "a static run needs frames.count (load increments)"
+                                               : "frames.count is for statics; a dynamic run needs frames.rate and frames.duration");
+
+  // Limits before work: a frame count that the frame times alone would not fit, and fixed steps
+  // that could not reach the end within integrator.max_steps.
+  if (ig.kind != IntegratorKind::statics) {
+    const double frames = std::floor(sc.frames.duration * sc.frames.rate + 1e-9) + 1;
+    if (frames > 1e8) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "%g s at frames.rate = %g makes %.3g frames (expected at most 1e8)", sc.frames.duration,
+                    sc.frames.rate, frames);
+      fr.fail(fr.has("duration") ? "duration" : "rate", buf);
+    }
+    double dt = 0;
+    long max_steps = 0;
+    if (ig.kind == IntegratorKind::backward_euler || ig.kind == IntegratorKind::semi_implicit) {
+      dt = ig.backward_euler.dt;
+      max_steps = ig.backward_euler.max_steps;
+    } else if (ig.kind == IntegratorKind::xpbd) {
+      dt = ig.xpbd.dt;
+      max_steps = ig.xpbd.max_steps;
+    } else if (ig.kind == IntegratorKind::mass_spring) {
+      dt = ig.hong.dt;
+      max_steps = ig.hong.max_steps;
+    }
+    if (dt > 0 && sc.frames.duration / dt > static_cast<double>(max_steps)) {
+      char buf[240];
+      std::snprintf(buf, sizeof buf,
+                    "%g s makes %.3g steps over frames.duration = %g s, more than integrator.max_steps = %ld (expected a "
+                    "larger dt or a shorter run)",
+                    dt, sc.frames.duration / dt, sc.frames.duration, max_steps);
+      in.fail("dt", buf);
+    }
+  }
+  check_initial_contact(root, sc);
+
+  const Section out = root.table("output");
+  const std::string stem = std::filesystem::path(sc.file.name()).stem().string();
+  sc.output.path = out.string("path", "out/" + (stem.empty() ? std::string("scene") : stem) + ".h5");
+  sc.output.pressure = out.boolean("pressure", false);
+
+  sc.file.check_unknown_keys();
+  return sc;
+}
+
+const char* to_string(MaterialModel m) { return name_of(kModels, m); }
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+  return parse_scene(SceneFile::load(path, overrides));
+}
+
+}  // namespace isochor

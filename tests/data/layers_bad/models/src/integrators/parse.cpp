@@ -1,0 +1,1 @@
+// A folder named like the integrators library.
