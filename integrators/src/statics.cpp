@@ -146,7 +146,7 @@ using Impl = StaticSolver::Impl;
 // Newton (a fresh Jacobian every iteration), KLU in METIS's order or the bordered solver.
 void setup_kinsol(Impl& s, double t0) {
   const Index N = s.n + s.m;
-  s.context = sun::make_context(t0);
+  s.context = sun::make_context(t0, /*quiet=*/true);  // failures are reported by the caller
   s.ctx = s.context.get();
   s.u = new_serial_vector(N, s.ctx);
   s.uscale = new_serial_vector(N, s.ctx);

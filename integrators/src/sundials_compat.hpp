@@ -20,8 +20,13 @@ constexpr int kSuccess = SUN_SUCCESS;
 constexpr int kLinearFailUnrecoverable = SUN_ERR_EXT_FAIL;
 constexpr int kNonlinearMemNull = SUN_ERR_ARG_CORRUPT;
 constexpr int kNonlinearIllInput = SUN_ERR_ARG_INCOMPATIBLE;
-// Messages of every solver on this context are dropped: failures are reported by the caller.
-inline int silence_errors(SUNContext ctx) { return SUNContext_ClearErrHandlers(ctx); }
+// Messages of every solver on this context are dropped: failures are reported by the caller. The
+// handler stack must not be left empty, so a handler that does nothing replaces the default one.
+inline void ignore_error(int, const char*, const char*, const char*, SUNErrCode, void*, SUNContext) {}
+inline int silence_errors(SUNContext ctx) {
+  const int flag = SUNContext_ClearErrHandlers(ctx);
+  return flag != SUN_SUCCESS ? flag : SUNContext_PushErrHandler(ctx, ignore_error, nullptr);
+}
 #else
 inline int create_context(SUNContext* ctx) { return SUNContext_Create(nullptr, ctx); }
 constexpr int kSuccess = SUNLS_SUCCESS;
@@ -32,6 +37,5 @@ constexpr int kNonlinearIllInput = SUN_NLS_ILL_INPUT;
 // SUNDIALS 6 silences per solver memory (KINSetErrHandlerFn, IDASetErrHandlerFn): nothing here.
 inline int silence_errors(SUNContext) { return 0; }
 #endif
-constexpr bool kPerSolverErrorHandlers = SUNDIALS_VERSION_MAJOR < 7;
 
 }  // namespace isochor::sun

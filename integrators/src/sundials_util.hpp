@@ -48,8 +48,9 @@ using Matrix = std::unique_ptr<std::remove_pointer_t<SUNMatrix>, Release<SUNMatr
 using LinearSolver = std::unique_ptr<std::remove_pointer_t<SUNLinearSolver>, Release<SUNLinearSolver, free_linear_solver>>;
 using NonlinearSolver =
     std::unique_ptr<std::remove_pointer_t<SUNNonlinearSolver>, Release<SUNNonlinearSolver, free_nonlinear_solver>>;
-// A new context (IntegrationError if SUNDIALS cannot make one).
-Context make_context(double t);
+// A new context (IntegrationError if SUNDIALS cannot make one). quiet: SUNDIALS 7 prints no error
+// messages for solvers on it (SUNDIALS 6 silences per solver: KINSetErrHandlerFn).
+Context make_context(double t, bool quiet = false);
 }  // namespace sun
 
 // A serial vector of length n. Made here, where it also calls a function that only SUNDIALS 6's
