@@ -178,6 +178,24 @@ class BlasOnOneThread {
   SetThreads set_ = nullptr;
   int before_ = 0;
 };
+// Limits before work: the whole run's frames must fit where they are written (positions and
+// velocities, 48 bytes per node, and per-tet pressures; the scalars and links of a frame and its
+// XDMF entry about 2 KB). A resumed run has written some already and is not refused.
+void check_output_room(const Scene& sc, const SceneSystem& sys, const std::string& output) {
+  const double frames = static_cast<double>(sc.frames.num_frames());
+  const double per_frame = 48.0 * sc.mesh.num_nodes() + (sys.has_loads() ? 24.0 * sc.mesh.num_nodes() : 0.0) +
+                           (sys.has_contact() ? 24.0 * sc.mesh.num_nodes() : 0.0) +
+                           (sc.output.pressure ? 8.0 * sc.mesh.num_tets() : 0.0) + 2048;
+  const double need = frames * per_frame, room = output_room_bytes(output);
+  if (need <= room) return;
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                "%s: the run would write about %.3g GB (%.0f frames of %.3g KB), more than the %.3g GB free there "
+                "(expected fewer frames, frames.rate or frames.duration, or another output.path)",
+                output.c_str(), need / 1e9, frames, per_frame / 1024, room / 1e9);
+  throw Error(buf);
+}
+
 }  // namespace
 
 RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
@@ -189,24 +207,7 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   // output behind; a resumed run's start is handed to them once the file has said where it is.
   const std::unique_ptr<SceneSystem> sys = make_scene_system(sc);
   const std::unique_ptr<Integrator> integrator = make_integrator(sc, *sys);
-  // Limits before work: the whole run's frames must fit where they are written (positions and
-  // velocities, 48 bytes per node, and per-tet pressures; the scalars and links of a frame and its
-  // XDMF entry about 2 KB).
-  {
-    const double frames = static_cast<double>(sc.frames.num_frames());
-    const double per_frame = 48.0 * sc.mesh.num_nodes() + (sys->has_loads() ? 24.0 * sc.mesh.num_nodes() : 0.0) +
-                             (sys->has_contact() ? 24.0 * sc.mesh.num_nodes() : 0.0) +
-                             (sc.output.pressure ? 8.0 * sc.mesh.num_tets() : 0.0) + 2048;
-    const double need = frames * per_frame, room = output_room_bytes(summary.output);
-    if (!resume && need > room) {
-      char buf[400];
-      std::snprintf(buf, sizeof buf,
-                    "%s: the run would write about %.3g GB (%.0f frames of %.3g KB), more than the %.3g GB free there "
-                    "(expected fewer frames, frames.rate or frames.duration, or another output.path)",
-                    summary.output.c_str(), need / 1e9, frames, per_frame / 1024, room / 1e9);
-      throw Error(buf);
-    }
-  }
+  if (!resume) check_output_room(sc, *sys, summary.output);
   // (The mass-spring model has no zones: its scene is refused with any.)
   OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run"},
                  sc.output.pressure && sys->has_tets(), opt.mode);
