@@ -257,7 +257,7 @@ TEST(Outputs, AnExistingOutputIsKeptUnlessOverwriteIsAsked) {
   const std::string path = (dir / "mine.h5").string();
   { std::ofstream(path) << "a user's own file\n"; }
   const Mesh m = small_mesh();
-  const std::string msg = test::error_of([&] { OutputWriter w(path, m, {}, {"", "", "run"}, false); });
+  const std::string msg = test::error_of([&] { OutputWriter w(path, m, {}, {"", "", "run", {}}, false); });
   EXPECT_NE(msg.find(path + ": exists (pass --overwrite to replace it, or --resume"), std::string::npos) << msg;
   std::ifstream in(path);
   std::string line;
@@ -266,16 +266,16 @@ TEST(Outputs, AnExistingOutputIsKeptUnlessOverwriteIsAsked) {
   // Its sidecar counts as the output too.
   const std::string other = (dir / "other.h5").string();
   { std::ofstream((dir / "other.xdmf").string()) << "x"; }
-  EXPECT_NE(test::error_of([&] { OutputWriter w(other, m, {}, {"", "", "run"}, false); }).find("other.xdmf: exists"),
+  EXPECT_NE(test::error_of([&] { OutputWriter w(other, m, {}, {"", "", "run", {}}, false); }).find("other.xdmf: exists"),
             std::string::npos);
-  OutputWriter w(path, m, {}, {"", "", "run"}, false, OutputWriter::Mode::overwrite);
+  OutputWriter w(path, m, {}, {"", "", "run", {}}, false, OutputWriter::Mode::overwrite);
   EXPECT_EQ(w.frames_written(), 0);
 }
 
 TEST(Outputs, AnXdmfPathIsRefused) {
   const auto dir = test::temp_dir();
   const std::string path = (dir / "run.xdmf").string();
-  const std::string msg = test::error_of([&] { OutputWriter w(path, small_mesh(), {}, {"", "", "run"}, false); });
+  const std::string msg = test::error_of([&] { OutputWriter w(path, small_mesh(), {}, {"", "", "run", {}}, false); });
   EXPECT_NE(msg.find("the XDMF sidecar would overwrite the output itself"), std::string::npos) << msg;
   EXPECT_FALSE(std::filesystem::exists(path));
 }
@@ -284,10 +284,10 @@ TEST(Outputs, ASecondWriterFailsAtStartAndLeavesTheFirstIntact) {
   const auto dir = test::temp_dir();
   const std::string path = (dir / "shared.h5").string();
   const Mesh m = small_mesh();
-  OutputWriter first(path, m, {}, {"", "", "run"}, false);
+  OutputWriter first(path, m, {}, {"", "", "run", {}}, false);
   EXPECT_TRUE(output_is_being_written(path));
   const std::string msg = test::error_of(
-      [&] { OutputWriter second(path, m, {}, {"", "", "run"}, false, OutputWriter::Mode::overwrite); });
+      [&] { OutputWriter second(path, m, {}, {"", "", "run", {}}, false, OutputWriter::Mode::overwrite); });
   EXPECT_NE(msg.find(path + ": another process is writing it"), std::string::npos) << msg;
   Frame f;
   f.positions = &m.rest_positions();
@@ -311,7 +311,7 @@ TEST(Outputs, AFullFileSystemStopsTheRunWithEveryFrameBeforeItIntact) {
   int written = 0;
   std::vector<Points> frames;
   {
-    OutputWriter w(path, m, {}, {"", "", "run"}, false);
+    OutputWriter w(path, m, {}, {"", "", "run", {}}, false);
     rlimit lim = old;
     lim.rlim_cur = 2 << 20;  // 2 MB: a frame is 8.7 KB of positions and as much of velocities
     ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &lim), 0);
@@ -348,7 +348,7 @@ TEST(Outputs, AFullFileSystemStopsTheRunWithEveryFrameBeforeItIntact) {
 TEST(Outputs, AWriteErrorNamesTheFileAndTheReason) {
   if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
   const std::string msg =
-      test::error_of([&] { OutputWriter w("/dev/full", small_mesh(), {}, {"", "", "run"}, false, OutputWriter::Mode::overwrite); });
+      test::error_of([&] { OutputWriter w("/dev/full", small_mesh(), {}, {"", "", "run", {}}, false, OutputWriter::Mode::overwrite); });
   EXPECT_NE(msg.find("/dev/full: "), std::string::npos) << msg;
   EXPECT_NE(msg.find("No space left on device"), std::string::npos) << msg;
 }

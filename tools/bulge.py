@@ -12,8 +12,9 @@ region bulges when the squeezed crease of the elbow keeps its volume).
 """
 import argparse
 
-import h5py
 import numpy as np
+
+from run_file import open_run
 
 
 def main():
@@ -29,19 +30,14 @@ def main():
         ap.error("--axis: expected 6 numbers, a point and a non-zero direction")
     p0, d = ax[:3], ax[3:] / np.linalg.norm(ax[3:])
     for path in a.runs:
-        with h5py.File(path, "r") as f:
-            if a.zone not in f["/zones"]:
-                raise SystemExit(f"{path}: no zone \"{a.zone}\" (zones: {', '.join(f['/zones'].keys())})")
-            X = f["/mesh/rest_positions"][()]
-            T = f["/mesh/tets"][()]
-            S = f["/mesh/surface"][()]
-            times = f["/frames/time"][()]
+        with open_run(path, "bulge.py") as run:
+            if a.zone not in run.zones:
+                raise SystemExit(f"{path}: no zone \"{a.zone}\" (zones: {', '.join(run.zones)})")
+            X, T, S, times = run.rest_positions, run.tets, run.surface, run.times
             k = int(np.argmin(np.abs(times - a.time)))
-            x = f["/frames/positions"][k]
-            V = f["/frames/volume"][()]
-            names = f["/frames/volume"].attrs["columns"]
-            names = names.decode() if isinstance(names, bytes) else str(names)
-        nodes = np.intersect1d(np.unique(T[h5py.File(path, "r")["/zones"][a.zone][()]]), np.unique(S))
+            x = run.frame_positions(k)
+            V, names = run.volumes, run.volume_columns
+            nodes = np.intersect1d(np.unique(T[run.zones[a.zone]]), np.unique(S))
 
         def radial(P):
             r = P - p0
@@ -53,7 +49,7 @@ def main():
         print(f"{path}: frame {k} (t = {times[k]:g} s), zone {a.zone}: {len(nodes)} surface nodes, "
               f"largest outward displacement {out.max():.5f} m (at {along[np.argmax(out)]:.3f} m along the axis), "
               f"mean {out.mean():.5f} m")
-        print("  volume drift (max |V - V0| / V0): " + ", ".join(f"{n} {v:.2e}" for n, v in zip(names.split(","), drift)))
+        print("  volume drift (max |V - V0| / V0): " + ", ".join(f"{n} {v:.2e}" for n, v in zip(names, drift)))
         if a.bins > 0:
             for lo in np.arange(along.min(), along.max() + 1e-12, a.bins):
                 m = (along >= lo) & (along < lo + a.bins)

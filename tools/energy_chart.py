@@ -15,26 +15,23 @@ import argparse
 import csv
 import sys
 
-import h5py
 import numpy as np
+
+from run_file import Error, Run
 
 
 def read(path):
-    with h5py.File(path, "r") as f:
-        t = f["/frames/time"][()]
-        e = f["/frames/energy"][()]
-        n = min(len(t), len(e))
-        vol = f["/frames/volume"][()][:n, 0]
-        stats = f["/stats"]
-        inverted = stats["inverted_tets"][()][:n] if "inverted_tets" in stats else np.zeros(n)
+    with Run(path) as run:
+        n = run.num_frames
+        e, vol = run.energy, run.volumes[:, 0]
         return {
-            "t": t[:n],
-            "potential": e[:n, 1] + e[:n, 2],
+            "t": run.times,
+            "potential": e[:, 1] + e[:, 2],
             "volume_error": np.abs(vol / vol[0] - 1.0) if n else np.array([]),
-            "inverted": inverted,
-            "status": f.attrs.get("status", "unknown"),
-            "wall": stats.attrs.get("wall_seconds", float("nan")),
-            "reason": stats.attrs.get("failure", ""),
+            "inverted": run.stats.get("inverted_tets", np.zeros(n)),
+            "status": run.status or "unknown",
+            "wall": run.totals.get("wall_seconds", float("nan")),
+            "reason": run.totals.get("failure", ""),
         }
 
 
@@ -58,7 +55,7 @@ def main(argv=None):
         name, path = spec.split("=", 1)
         try:
             data.append((name, read(path)))
-        except (OSError, KeyError) as e:
+        except (Error, OSError, KeyError) as e:
             sys.exit(f"energy_chart.py: {path}: not a readable isochor run ({e})")
     end = max(d["t"][-1] for _, d in data if len(d["t"]))
     lo = end - a.zoom_last

@@ -16,24 +16,24 @@ import os
 import struct
 import sys
 
-import h5py
 import numpy as np
+
+from run_file import Error, Run
 
 CHUNK = 500  # frames per read
 
 
-def surface_nodes(f):
+def surface_nodes(run):
     """The surface's nodes in increasing index: the vertex order of the caches."""
-    return np.unique(f["/mesh/surface"][()])
+    return np.unique(run.surface)
 
 
 def write_cache(h5_path, out, fmt="pc2", all_nodes=False, frames=0):
     """Writes the cache (the first `frames` frames, 0: all); returns (points, frames)."""
-    with h5py.File(h5_path, "r") as f:
-        P = f["/frames/positions"]
-        times = f["/frames/time"][()]
-        frames = min(P.shape[0], len(times), frames or P.shape[0])
-        nodes = np.arange(P.shape[1]) if all_nodes else surface_nodes(f)
+    with Run(h5_path) as run:
+        times = run.times
+        frames = min(run.num_frames, frames or run.num_frames)
+        nodes = np.arange(len(run.rest_positions)) if all_nodes else surface_nodes(run)
         tmp = out + ".tmp"
         with open(tmp, "wb") as o:
             if fmt == "pc2":
@@ -44,7 +44,7 @@ def write_cache(h5_path, out, fmt="pc2", all_nodes=False, frames=0):
                 o.write(times[:frames].astype(">f4").tobytes())
                 dtype = ">f4"
             for k0 in range(0, frames, CHUNK):
-                block = P[k0:min(k0 + CHUNK, frames)]
+                block = run.frame_range("positions", k0, min(k0 + CHUNK, frames))
                 o.write(np.ascontiguousarray(block[:, nodes, :]).astype(dtype).tobytes())
         os.replace(tmp, out)  # a complete cache or none
     return len(nodes), frames
@@ -62,6 +62,8 @@ def main():
     out = a.out or os.path.splitext(a.run)[0] + "." + a.format
     try:
         n, frames = write_cache(a.run, out, a.format, a.all_nodes)
+    except Error as e:
+        sys.exit(str(e))
     except (OSError, KeyError) as e:
         sys.exit(f"{a.run}: cannot be exported ({e}; expected a run's .h5 file)")
     print(f"wrote {out}: {frames} frames of {n} {'nodes' if a.all_nodes else 'surface nodes'} ({a.format})")

@@ -11,8 +11,9 @@ measures the deformed mesh of frame K instead (its flipped tets are counted too)
 import argparse
 import sys
 
-import h5py
 import numpy as np
+
+from run_file import Error, Run
 
 ANGLE_BINS = [0, 0.1, 0.5, 1, 2, 5, 10, 20, 30, 45, 60]
 RATIO_BINS = [1, 1.5, 2, 3, 5, 10, 20, 50, 100, 1000, np.inf]
@@ -51,15 +52,16 @@ def main():
     ap.add_argument("--frame", type=int, help="measure this frame's deformed mesh instead of the rest mesh")
     a = ap.parse_args()
     try:
-        with h5py.File(a.run, "r") as f:
-            tets = f["/mesh/tets"][()]
+        with Run(a.run) as run:
+            tets = run.tets
             if a.frame is None:
-                x = f["/mesh/rest_positions"][()]
+                x = run.rest_positions
             else:
-                frames = f["/frames/positions"]
-                if not 0 <= a.frame < frames.shape[0]:
-                    sys.exit(f"{a.run}: --frame {a.frame}: expected 0..{frames.shape[0] - 1}")
-                x = frames[a.frame]
+                if not 0 <= a.frame < run.num_frames:
+                    sys.exit(f"{a.run}: --frame {a.frame}: expected 0..{run.num_frames - 1}")
+                x = run.frame_positions(a.frame)
+    except Error as e:
+        sys.exit(str(e))
     except (OSError, KeyError) as e:
         sys.exit(f"{a.run}: not an isochor output with a mesh ({e})")
     angle, ratio, volume = measure(x, tets)

@@ -15,10 +15,11 @@ import argparse
 import os
 import sys
 
-import h5py
+import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import render  # noqa: E402  (up_of, scene_of, planes_of)
+import render  # noqa: E402  (up_of, plane_at, Camera)
+from run_file import open_run  # noqa: E402
 
 TEMPLATE = r'''# ParaView script for {run} (written by `isochor paraview`; regenerate it rather than edit).
 #   paraview --script={script}
@@ -147,33 +148,24 @@ def main():
     xdmf = os.path.splitext(run)[0] + ".xdmf"
     if not os.path.exists(xdmf):
         sys.exit(f"{a.run}: no XDMF sidecar {xdmf} beside it (expected the output of isochor run)")
-    try:
-        f = h5py.File(run, "r", locking=False)
-    except OSError as e:
-        sys.exit(f"{a.run}: cannot be read as HDF5 ({e})")
-    scene = render.scene_of(f)
-    up, up_from = render.up_of(scene, a.up)
-    zones = []
-    if "/mesh/zone" in f:
-        names = f["/mesh/zone"].attrs.get("zones", b"")
-        zones = (names.decode() if isinstance(names, bytes) else str(names)).split(",")
-    pressure = "/frames/pressure" in f
+    f = open_run(run, "paraview.py")
+    up, up_from = render.up_of(f, a.up)
+    zones = f.volume_columns[1:]  # /mesh/zone's indices name these
+    pressure = f.has("pressure")
     p_lo = p_hi = 0.0
-    if pressure and f["/frames/pressure"].shape[0] > 0:
-        import numpy as np
-        p = f["/frames/pressure"][()]
+    if pressure and f.num_frames > 0:
+        p = f.pressure
         p_lo, p_hi = float(np.percentile(p, 2)), float(np.percentile(p, 98))
     ground = None
-    for p in render.planes_of(scene):
-        if p["ground"]:
-            ground = (p["point"].tolist(), p["normal"].tolist())
+    for c in f.colliders:
+        if c.is_ground:
+            point, normal = render.plane_at(f, c, 0) if f.num_frames else (c.rest_pose[9:], c.rest_pose[:9].reshape(3, 3)[:, 2])
+            ground = (np.asarray(point).tolist(), np.asarray(normal).tolist())
     cam = render.Camera(up, 18, -60)
     # What the run visits: a sample of at most 200 frames (and its shadow on the ground).
-    P = f["/frames/positions"]
-    n = P.shape[0]
-    import numpy as np
-    pts = np.concatenate([P[k] for k in sorted(set(np.linspace(0, max(n - 1, 0), min(n, 200)).astype(int)))]) \
-        if n else f["/mesh/rest_positions"][()]
+    n = f.num_frames
+    pts = np.concatenate([f.frame_positions(k) for k in sorted(set(np.linspace(0, max(n - 1, 0), min(n, 200)).astype(int)))]) \
+        if n else f.rest_positions
     if ground is not None:
         gp, gn = np.array(ground[0]), np.array(ground[1])
         pts = np.concatenate([pts, pts - np.outer((pts - gp) @ gn, gn)])
@@ -182,7 +174,7 @@ def main():
     out = a.out or os.path.splitext(run)[0] + "_paraview.py"
     text = TEMPLATE.format(run=os.path.basename(run), script=os.path.basename(out), xdmf=xdmf, up=up.tolist(),
                            up_from=up_from, zones=zones, pressure=pressure, ground=ground,
-                           frames=f["/frames/time"].shape[0], name=os.path.basename(xdmf), ux=up[0], uy=up[1],
+                           frames=n, name=os.path.basename(xdmf), ux=up[0], uy=up[1],
                            uz=up[2], p_lo=p_lo, p_hi=p_hi, toward=cam.toward.tolist(),
                            center=center, span=span)
     with open(out, "w") as o:

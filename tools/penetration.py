@@ -15,8 +15,9 @@ side of the limb, as inside.)
 """
 import argparse
 
-import h5py
 import numpy as np
+
+from run_file import open_run
 
 
 def point_triangle_distance(p, a, b, c):
@@ -73,18 +74,16 @@ def main():
     ap.add_argument("--region", default="")
     ap.add_argument("--into", default="")
     a = ap.parse_args()
-    f = h5py.File(a.run, "r", locking=False)
-    X = f["/mesh/rest_positions"][()]
-    T = f["/mesh/tets"][()]
-    S = f["/mesh/surface"][()]
+    run = open_run(a.run, "penetration.py")
+    X, T, S = run.rest_positions, run.tets, run.surface
     nodes = np.unique(S)
     if a.region:
         lo, hi = (float(v) for v in a.region.split(","))
         nodes = nodes[(X[nodes, 0] >= lo) & (X[nodes, 0] <= hi)]
     into = [float(v) for v in a.into.split(",")] if a.into else None
-    times = f["/frames/time"][()]
+    times = run.times
     for k in (int(v) for v in a.frames.split(",")):
-        w, p, inside = deepest(X, f["/frames/positions"][k], T, S, a.exclude, nodes, into)
+        w, p, inside = deepest(X, run.frame_positions(k), T, S, a.exclude, nodes, into)
         print(f"frame {k % len(times)} t = {times[k]:.3f} s: deepest penetration {1000 * w:.2f} mm (node {p}), {inside} nodes inside")
 
 

@@ -14,11 +14,11 @@ vertex:
   pressure      the pressure of the tets around the vertex (Pa; runs with output.pressure = true)
   zone          the zone of the tet under each triangle (smaller zones drawn over larger ones)
 
-Up is the ground's normal when the scene has a ground, else against gravity, else z; --up
-overrides it (a mesh modelled y-up: --up y). --elev and --azim place the camera relative to up.
-The ground and every [[contact.plane]] (moved to the frame's time) are drawn in their own
-planes; the body casts a shadow on the ground. [[collider]] shapes are drawn translucent where
-the run wrote their poses (/frames/collider_pose). --loads draws the applied loads (/frames/load) as
+Up is what the run recorded (the ground's normal when the scene has a ground, else against
+gravity, else z); --up overrides it (a mesh modelled y-up: --up y). --elev and --azim place the
+camera relative to up. The ground and every plane (where it is at the frame) are drawn in their
+own planes; the body casts a shadow on the ground. Solid colliders (/colliders, posed by
+/frames/collider_pose) are drawn translucent. --loads draws the applied loads (/frames/load) as
 arrows, the largest a fifth of the body's size; --contact the colliders' force on each node
 (/frames/contact) the same way. --out FILE.png with one frame writes that file.
 """
@@ -28,9 +28,7 @@ import shutil
 import subprocess
 import sys
 import time as clock
-import tomllib
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
@@ -38,9 +36,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.artist import Artist  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
+from run_file import open_run  # noqa: E402  (the one reader of run files)
 
 
-# ---- The scene: up, planes ------------------------------------------------------------------
+# ---- The scene: up, planes, colliders (as the run file records them) -------------------------
 
 AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1)}
 
@@ -60,12 +59,11 @@ def parse_up(text):
     return v / np.linalg.norm(v)
 
 
-def scene_of(f):
-    try:
-        text = f.attrs["scene"]
-        return tomllib.loads(text if isinstance(text, str) else text.decode())
-    except Exception:  # noqa: BLE001 - a run without its scene text is drawn without planes
-        return {}
+def up_of(run, override):
+    """Up and why: --up, else what the run recorded (the ground's normal, against gravity, z)."""
+    if override:
+        return parse_up(override), "--up"
+    return run.up, run.up_source
 
 
 def unit(v):
@@ -74,46 +72,10 @@ def unit(v):
     return v / n if n > 0 else v
 
 
-def planes_of(scene):
-    """The ground (when on) and [[contact.plane]]s: dicts of point, normal, displacement, t0, t1."""
-    contact = scene.get("contact", {})
-    planes = []
-    if contact.get("ground", False):
-        planes.append({"point": np.array(contact.get("point", [0, 0, 0]), float),
-                       "normal": unit(contact.get("normal", [0, 0, 1])), "ground": True})
-    for p in contact.get("plane", []):
-        planes.append({"point": np.array(p.get("point", [0, 0, 0]), float), "normal": unit(p.get("normal", [0, 0, 1])),
-                       "displacement": np.array(p.get("displacement", [0, 0, 0]), float),
-                       "t0": float(p.get("t0", 0.0)), "t1": float(p.get("t1", 1.0)), "ground": False})
-    return planes
-
-
-def plane_point(p, t):
-    """A plane's point at time t (moving linearly from t0 to t1, as the scene says)."""
-    if "displacement" not in p:
-        return p["point"]
-    s = np.clip((t - p["t0"]) / max(p["t1"] - p["t0"], 1e-300), 0.0, 1.0)
-    return p["point"] + s * p["displacement"]
-
-
-def up_of(scene, override):
-    if override:
-        return parse_up(override), "--up"
-    contact = scene.get("contact", {})
-    if contact.get("ground", False):
-        return unit(contact.get("normal", [0, 0, 1])), "the ground's normal"
-    g = np.array(scene.get("forces", {}).get("gravity", [0, 0, -9.81]), float)
-    if np.linalg.norm(g) > 0:
-        return -unit(g), "against gravity"
-    return np.array([0.0, 0.0, 1.0]), "z (no ground, no gravity)"
-
-
-def colliders_of(scene):
-    """The [[collider]] tables in scene order, after the ground and the planes: (index in
-    /frames/collider_pose, table)."""
-    contact = scene.get("contact", {})
-    first = (1 if contact.get("ground", False) else 0) + len(contact.get("plane", []))
-    return [(first + i, c) for i, c in enumerate(scene.get("collider", []))]
+def plane_at(run, c, k):
+    """A plane collider at frame k: its point and normal (the pose's origin and third axis)."""
+    A, b = run.collider_pose(k, c.index)
+    return b, unit(A[:, 2])
 
 
 def ring(radius, z, m=32):
@@ -128,52 +90,46 @@ def band(r0, r1, m=32):
     return np.concatenate([np.stack([r0[i], r0[j], r1[j]], 1), np.stack([r0[i], r1[j], r1[i]], 1)])
 
 
-def mesh_triangles(c, scene_file):
-    """A mesh collider's triangles (T, 3, 3) in its frame (its file's coordinates times `scale`);
-    none, with a warning, when the file cannot be read here."""
-    path = str(c.get("file", ""))
-    if not os.path.isabs(path):
-        path = os.path.join(os.path.dirname(scene_file), path)
-    try:
-        import meshio  # noqa: PLC0415 - only runs with mesh colliders need it
-        m = meshio.read(path)
-        tris = [b.data for b in m.cells if b.type == "triangle"]
-        tris += [b.data[:, k] for b in m.cells if b.type == "quad" for k in ([0, 1, 2], [0, 2, 3])]
-        return float(c.get("scale", 1.0)) * m.points[np.concatenate(tris)]
-    except Exception as e:  # noqa: BLE001 - the run is still drawn, without this collider
-        print(f"{path}: mesh collider not drawn ({e})", file=sys.stderr)
-        return np.zeros((0, 3, 3))
+def round_triangles(kind, r, half):
+    """A sphere's or capsule's surface (axis z) as triangles."""
+    polar = np.linspace(0, np.pi, 13)
+    rings = [ring(r * np.sin(p), r * np.cos(p) + (half if p <= np.pi / 2 else -half)) for p in polar]
+    if kind == "capsule":  # the cylinder between the two caps
+        rings = rings[:7] + [ring(r, -half)] + rings[7:]
+    return np.concatenate([band(a, b) for a, b in zip(rings[:-1], rings[1:])])
 
 
-def shape_triangles(c, scene_file=""):
-    """A collider's surface as triangles (T, 3, 3) in its own frame (axis z; a mesh's: its file's),
-    for drawing; None for a plane. Rounded edges are drawn sharp."""
-    kind = c.get("shape")
-    if kind == "mesh":
-        return mesh_triangles(c, scene_file)
-    if kind in ("sphere", "capsule"):
-        r, half = float(c["radius"]), (0.5 * float(c["length"]) if kind == "capsule" else 0.0)
-        polar = np.linspace(0, np.pi, 13)
-        rings = [ring(r * np.sin(p), r * np.cos(p) + (half if p <= np.pi / 2 else -half)) for p in polar]
-        if kind == "capsule":  # the cylinder between the two caps
-            rings = rings[:7] + [ring(r, -half)] + rings[7:]
-        return np.concatenate([band(a, b) for a, b in zip(rings[:-1], rings[1:])])
-    if kind == "box":
-        h = 0.5 * np.array(c["size"], float)
-        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * h
-        faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
-        return np.array([corners[[q[0], q[1], q[2]]] for q in faces] + [corners[[q[0], q[2], q[3]]] for q in faces])
-    if kind == "cylinder":
-        r, half, wall = float(c["radius"]), 0.5 * float(c["length"]), float(c.get("wall", 0.0))
-        outer = r + wall if wall > 0 else r
-        top, bottom = ring(outer, half), ring(outer, -half)
-        tris = [band(bottom, top)]
-        if wall > 0:  # the hole's wall and two annuli
-            itop, ibot = ring(r, half), ring(r, -half)
-            tris += [band(itop, ibot), band(top, itop), band(ibot, bottom)]
-        else:
-            tris += [band(top, 0 * top + [0, 0, half]), band(0 * bottom + [0, 0, -half], bottom)]
-        return np.concatenate(tris)
+def box_triangles(size):
+    h = 0.5 * np.asarray(size, float)
+    corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * h
+    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    return np.array([corners[[q[0], q[1], q[2]]] for q in faces] + [corners[[q[0], q[2], q[3]]] for q in faces])
+
+
+def cylinder_triangles(r, half, wall):
+    outer = r + wall if wall > 0 else r
+    top, bottom = ring(outer, half), ring(outer, -half)
+    tris = [band(bottom, top)]
+    if wall > 0:  # the hole's wall and two annuli
+        itop, ibot = ring(r, half), ring(r, -half)
+        tris += [band(itop, ibot), band(top, itop), band(ibot, bottom)]
+    else:
+        tris += [band(top, 0 * top + [0, 0, half]), band(0 * bottom + [0, 0, -half], bottom)]
+    return np.concatenate(tris)
+
+
+def shape_triangles(c):
+    """A collider's surface as triangles (T, 3, 3) in its own frame (axis z; a mesh's: its file's,
+    scaled), for drawing; None for a plane. Rounded edges are drawn sharp."""
+    d = c.dimensions
+    if c.shape == "mesh":
+        return c.vertices[c.triangles] if c.vertices is not None and c.triangles is not None else np.zeros((0, 3, 3))
+    if c.shape in ("sphere", "capsule"):
+        return round_triangles(c.shape, d["radius"], 0.5 * d.get("length", 0.0))
+    if c.shape == "box":
+        return box_triangles([d["size_x"], d["size_y"], d["size_z"]])
+    if c.shape == "cylinder":
+        return cylinder_triangles(d["radius"], 0.5 * d["length"], d.get("wall", 0.0))
     return None
 
 
@@ -285,7 +241,7 @@ def plane_quad(point, normal, centre, half):
 
 # ---- Main -----------------------------------------------------------------------------------
 
-def main():
+def arguments():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("run")
     ap.add_argument("--frames", default="")
@@ -300,237 +256,263 @@ def main():
     ap.add_argument("--loads", action="store_true")
     ap.add_argument("--contact", action="store_true", help="draw the colliders' force on each node (/frames/contact)")
     ap.add_argument("--no-shadow", action="store_true")
-    a = ap.parse_args()
-    if not os.path.exists(a.run):
-        sys.exit(f"{a.run}: no such file")
-    f = h5py.File(a.run, "r", locking=False)
-    X = f["/mesh/rest_positions"][()]
-    S = f["/mesh/surface"][()]
-    T = f["/mesh/tets"][()]
-    P = f["/frames/positions"]
-    times = f["/frames/time"][()]
-    n = min(len(times), P.shape[0])
-    if n == 0:
-        sys.exit(f"{a.run}: no frames")
-    scene = scene_of(f)
-    up, up_from = up_of(scene, a.up)
+    return ap.parse_args()
+
+
+def choose_frames(a, run, up):
+    """The frames to draw: --frames (indices, or the flattest along up), --every N, or all."""
+    n = run.num_frames
     if a.frames == "flattest":  # the frame where the body is flattest along up
         ratio = []
         for k in range(n):
-            h = P[k] @ up
-            w = np.linalg.norm(P[k] - np.outer(h, up), axis=1)
+            x = run.frame_positions(k)
+            h = x @ up
+            w = np.linalg.norm(x - np.outer(h, up), axis=1)
             ratio.append(np.ptp(h) / max(2 * w.max(), 1e-300))
-        frames = [int(np.argmin(ratio))]
-    elif a.frames:
+        return [int(np.argmin(ratio))]
+    if a.frames:
         try:
-            frames = sorted({int(k) % n for k in a.frames.split(",")})
+            return sorted({int(k) % n for k in a.frames.split(",")})
         except ValueError:
             sys.exit(f"--frames {a.frames}: expected frame indices like 0,10,-1, or flattest")
-    elif a.every:
-        frames = list(range(0, n, a.every))
+    return list(range(0, n, a.every)) if a.every else list(range(n))
+
+
+def check_series(a, run):
+    """What the options draw must be in the file."""
+    if a.loads and not run.has("load"):
+        sys.exit(f"{a.run}: no /frames/load (the scene has no [[load]])")
+    if a.contact and not run.has("contact"):
+        sys.exit(f"{a.run}: no /frames/contact (the scene has no collider, or its integrator projects contact)")
+    if a.color == "pressure" and not run.has("pressure"):
+        sys.exit(f"{a.run}: no /frames/pressure (run the scene with output.pressure = true)")
+
+
+class Colouring:
+    """Per-vertex colour values of a frame, one range over every frame drawn, and the colour map."""
+
+    def __init__(self, a, run, frames, surf_nodes):
+        self.kind, self.run = a.color, run
+        X, T = run.rest_positions, run.tets
+        self.weights = node_weights(X, T, run.rest_volumes)
+        self.zone_names, self.zone_of = [], np.zeros(len(T), dtype=int)
+        if self.kind == "zone":
+            for z, name in enumerate(sorted(run.zones, key=lambda nm: -len(run.zones[nm]))):
+                self.zone_of[run.zones[name]] = z + 1  # smaller zones last: drawn over the larger
+                self.zone_names.append(name)
+            tab = plt.get_cmap("tab10")
+            self.cmap = matplotlib.colors.ListedColormap([(0.6, 0.6, 0.6)] + [tab(i) for i in range(9)])
+            self.vmin, self.vmax = 0, 9
+            return
+        allv = np.concatenate([self.values(k, run.frame_positions(k))[surf_nodes] for k in frames])
+        if self.kind == "pressure":
+            self.vmin, self.vmax = np.percentile(allv, 2), np.percentile(allv, 98)
+        else:  # a range of at least 1e-4 of the body's size: rounding is not drawn as deformation
+            self.vmin, self.vmax = 0.0, max(float(allv.max()), 1e-4 * float(np.ptp(X, axis=0).max()))
+        self.cmap = plt.get_cmap("viridis")
+
+    def values(self, k, x):
+        X, T = self.run.rest_positions, self.run.tets
+        if self.kind == "deformation":
+            R, Xc, xc = rigid_fit(X, x, self.weights)
+            return np.linalg.norm(x - ((X - Xc) @ R.T + xc), axis=1)
+        if self.kind == "displacement":
+            return np.linalg.norm(x - X, axis=1)
+        p = self.run.frame("pressure", k)
+        acc, cnt = np.zeros(len(X)), np.zeros(len(X))
+        np.add.at(acc, T.ravel(), np.repeat(p, 4))
+        np.add.at(cnt, T.ravel(), 1)
+        return acc / np.maximum(cnt, 1)
+
+    def legend(self, fig, ax):
+        if self.kind == "zone":
+            from matplotlib.patches import Patch
+            handles = [Patch(color=self.cmap((z + 1) / 9), label=nm) for z, nm in enumerate(self.zone_names[:9])]
+            ax.legend(handles=handles, loc="upper right", title="zone", fontsize=8)
+            return
+        sm = plt.cm.ScalarMappable(cmap=self.cmap, norm=plt.Normalize(self.vmin, self.vmax))
+        cax = fig.add_axes([0.86, 0.25, 0.025, 0.5])
+        label = {"deformation": "deformation (m, from the best rigid motion)",
+                 "displacement": "displacement (m)", "pressure": "pressure (Pa)"}[self.kind]
+        fig.colorbar(sm, cax=cax, label=label)
+        cax.yaxis.label.set_size(8)
+        cax.tick_params(labelsize=7)
+
+
+class Scene:
+    """What is drawn besides the body: the planes (the ground first) and the solid colliders."""
+
+    def __init__(self, run, frames, surf_nodes):
+        self.run = run
+        self.planes = [c for c in run.colliders if c.shape == "plane"]
+        self.solids = [(c, tri) for c in run.colliders if c.shape != "plane"
+                       for tri in [shape_triangles(c)] if tri is not None and len(tri)]
+        # The view: every frame drawn, and the body's shadow on the ground.
+        all_x = np.concatenate([run.frame_positions(k)[surf_nodes] for k in frames])
+        for c in self.planes:
+            if c.is_ground:
+                point, normal = plane_at(run, c, frames[0])
+                all_x = np.concatenate([all_x, all_x - np.outer((all_x - point) @ normal, normal)])
+        lo, hi = all_x.min(0), all_x.max(0)
+        self.mid, self.span = (lo + hi) / 2, float(np.linalg.norm(hi - lo))
+
+    def planes_at(self, k, cam):
+        """The planes' quads at frame k, split into those behind the body and those in front."""
+        behind, in_front = [], []
+        for c in self.planes:
+            point, normal = plane_at(self.run, c, k)
+            quad, _, _ = plane_quad(point, normal, self.mid, 0.75 * self.span)
+            q2, qd = cam.project(quad)
+            colour = (0.86, 0.85, 0.82, 1.0) if c.is_ground else (0.55, 0.7, 0.85, 0.35)
+            if normal @ cam.toward <= 0:
+                colour = (0.55, 0.55, 0.55, 0.25)
+            on_top = not c.is_ground and qd.mean() >= (self.mid @ cam.toward)
+            (in_front if on_top else behind).append((q2, colour, c, quad, point, normal))
+        return behind, in_front
+
+
+def draw_ground(ax, cam, quad, point, normal, x, S, fn, span, shadow):
+    """Grid lines (a tenth of the square) in the ground's plane, and the body's shadow on it."""
+    for s in np.linspace(0, 1, 11)[1:-1]:
+        for e0, e1 in ((quad[0] + s * (quad[1] - quad[0]), quad[3] + s * (quad[2] - quad[3])),
+                       (quad[0] + s * (quad[3] - quad[0]), quad[1] + s * (quad[2] - quad[1]))):
+            seg, _ = cam.project(np.array([e0, e1]))
+            ax.plot(seg[:, 0], seg[:, 1], color=(0.7, 0.7, 0.68), lw=0.5, zorder=0.5)
+    if shadow:  # the body's shadow straight down onto the ground
+        sx = x - np.outer((x - point) @ normal, normal) + 1e-4 * span * normal
+        s2, _ = cam.project(sx)
+        ax.add_collection(PolyCollection(s2[S[fn @ normal > 0]], facecolors=(0.3, 0.3, 0.3, 0.08),
+                                         edgecolors="none", zorder=0.6))
+
+
+def draw_solids(ax, cam, scene, k, up, body_depth):
+    """The colliders translucent, flat-shaded, far to near; behind the body or in front."""
+    for c, tri in scene.solids:
+        A, b = scene.run.collider_pose(k, c.index)
+        w = tri @ A.T + b
+        fn_c = np.cross(w[:, 1] - w[:, 0], w[:, 2] - w[:, 0])
+        fn_c /= np.maximum(np.linalg.norm(fn_c, axis=1, keepdims=True), 1e-300)
+        light = 0.45 + 0.45 * np.abs(fn_c @ unit(cam.toward + 0.5 * up))
+        w2, wd = cam.project(w.reshape(-1, 3))
+        w2, wd = w2.reshape(-1, 3, 2), wd.reshape(-1, 3).mean(1)
+        order_c = np.argsort(wd)
+        rgba = np.column_stack([0.45 * light, 0.55 * light, 0.75 * light, np.full(len(light), 0.45)])
+        near = wd[order_c] > body_depth
+        for sel, z in ((~near, 0.8), (near, 2.5)):
+            ax.add_collection(PolyCollection(w2[order_c][sel], facecolors=rgba[order_c][sel], edgecolors="none", zorder=z))
+
+
+def draw_arrows(ax, cam, run, name, k, frames, x, span, colour):
+    """Per-node vectors of /frames/NAME as arrows, the largest over the frames a fifth of the view;
+    returns their sum's length."""
+    V = run.frame(name, k)
+    on = np.linalg.norm(V, axis=1) > 0
+    biggest = max(np.linalg.norm(run.frame(name, j), axis=1).max() for j in frames) or 1.0
+    if on.any():
+        s0, _ = cam.project(x[on])
+        s1, _ = cam.project(x[on] + 0.2 * span / biggest * V[on])
+        ax.quiver(s0[:, 0], s0[:, 1], s1[:, 0] - s0[:, 0], s1[:, 1] - s0[:, 1], angles="xy", scale_units="xy",
+                  scale=1, color=colour, width=0.003, zorder=3)
+    return float(np.linalg.norm(V.sum(0)))
+
+
+def draw_body(ax, cam, run, colouring, under, k, x):
+    """The surface, Gouraud-shaded, back faces hidden, far to near; returns the faces' normals."""
+    S = run.surface
+    vn, fn = vertex_normals(x, S)
+    front = fn @ cam.toward > 0  # back faces of the closed surface are hidden
+    tris = S[front]
+    xy, depth = cam.project(x)
+    order = np.argsort(depth[tris].mean(1))  # far to near
+    tris = tris[order]
+    diffuse, spec = shade(vn, cam)
+    cm = colouring.cmap
+    if colouring.kind == "zone":
+        base = cm(np.clip(colouring.zone_of[under[front][order]] / 9, 0, 1))[:, None, :3].repeat(3, axis=1)
     else:
-        frames = list(range(n))
+        v = colouring.values(k, x)
+        base = cm(np.clip((v - colouring.vmin) / ((colouring.vmax - colouring.vmin) or 1), 0, 1))[:, :3][tris]
+    rgb = np.clip(base * diffuse[tris][..., None] + spec[tris][..., None], 0, 1)
+    colors = np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,))], axis=2)
+    ax.add_artist(GouraudTriangles(xy[tris], colors, zorder=1))
+    return fn, depth
+
+
+def draw_frame(a, run, k, cam, up, up_from, scene, colouring, under, frames, path):
+    x = run.frame_positions(k)
+    t = float(run.times[k])
+    fig = plt.figure(figsize=(a.size / 100, a.size / 100), dpi=100)
+    ax = fig.add_axes([0, 0, 1, 1])
+    ax.set_axis_off()
+    ax.set_aspect("equal")
+    behind, in_front = scene.planes_at(k, cam)
+    fn, depth = draw_body(ax, cam, run, colouring, under, k, x)
+    for q2, colour, c, quad, point, normal in behind:
+        ax.add_collection(PolyCollection([q2], facecolors=[colour], edgecolors=(0.6, 0.6, 0.6, 0.6), zorder=0))
+        if c.is_ground:
+            draw_ground(ax, cam, quad, point, normal, x, run.surface, fn, scene.span, not a.no_shadow)
+    draw_solids(ax, cam, scene, k, up, float(np.median(depth[np.unique(run.surface)])))
+    for q2, colour, *_ in in_front:
+        ax.add_collection(PolyCollection([q2], facecolors=[colour], edgecolors=(0.3, 0.4, 0.6, 0.8), zorder=2))
+    title = ""
+    if a.loads:
+        title = f"  load {draw_arrows(ax, cam, run, 'load', k, frames, x, scene.span, 'crimson'):.3g} N"
+    if a.contact:
+        title += f"  contact {draw_arrows(ax, cam, run, 'contact', k, frames, x, scene.span, 'darkorange'):.3g} N"
+    c2, _ = cam.project(scene.mid)
+    ax.set_xlim(c2[0] - 0.55 * scene.span, c2[0] + 0.55 * scene.span)
+    ax.set_ylim(c2[1] - 0.55 * scene.span, c2[1] + 0.55 * scene.span)
+    colouring.legend(fig, ax)
+    ax.text(0.02, 0.97, f"{os.path.basename(a.run)}  t = {t:.4f} s{title}", transform=ax.transAxes, fontsize=9, va="top")
+    ax.text(0.02, 0.02, f"up: {(np.round(up, 3) + 0.0).tolist()} ({up_from})", transform=ax.transAxes, fontsize=7,
+            color=(0.4, 0.4, 0.4))
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def write_mp4(run, written, out):
+    if not shutil.which("ffmpeg"):
+        sys.exit("ffmpeg is not installed (apt-get install -y ffmpeg); the PNG files are written")
+    times = run.times
+    rate = max(1, round(1 / np.median(np.diff(times)))) if len(times) > 1 else 1
+    listing = os.path.join(out, "frames.txt")
+    with open(listing, "w") as lf:
+        for p in written:
+            lf.write(f"file '{os.path.abspath(p)}'\nduration {1 / rate}\n")
+    mp4 = os.path.splitext(run.path)[0] + ".mp4"
+    subprocess.run(["ffmpeg", "-y", "-loglevel", "error", "-f", "concat", "-safe", "0", "-i", listing,
+                    "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", mp4], check=True)
+    print(f"wrote {mp4}")
+
+
+def main():
+    a = arguments()
+    run = open_run(a.run)
+    if run.num_frames == 0:
+        sys.exit(f"{a.run}: no frames")
+    up, up_from = up_of(run, a.up)
+    frames = choose_frames(a, run, up)
     single = a.out.endswith(".png")
     if single and len(frames) != 1:
         sys.exit("--out FILE.png needs exactly one frame")
     out = (os.path.dirname(a.out) or ".") if single else (a.out or os.path.splitext(a.run)[0] + "_png")
     os.makedirs(out, exist_ok=True)
-    if a.loads and "/frames/load" not in f:
-        sys.exit(f"{a.run}: no /frames/load (the scene has no [[load]])")
-    if a.contact and "/frames/contact" not in f:
-        sys.exit(f"{a.run}: no /frames/contact (the scene has no collider, or its integrator projects contact)")
-    if a.color == "pressure" and "/frames/pressure" not in f:
-        sys.exit(f"{a.run}: no /frames/pressure (run the scene with output.pressure = true)")
-
+    check_series(a, run)
     cam = Camera(up, a.elev, a.azim)
-    planes = planes_of(scene)
-    colliders = []  # (pose index, triangles in the collider's frame); planes among them join `planes`
-    for i, c in colliders_of(scene):
-        if "/frames/collider_pose" not in f:
-            break
-        where = {k: f.attrs.get(k, "") for k in ("scene_directory", "scene_file")}
-        where = {k: v.decode() if isinstance(v, bytes) else str(v) for k, v in where.items()}
-        # the scene's own directory (runs since issue 17), else the scene file's as run
-        base = os.path.join(where["scene_directory"], "x") if where["scene_directory"] else where["scene_file"]
-        tri = shape_triangles(c, base)
-        if tri is not None:
-            if len(tri):
-                colliders.append((i, tri))
-        else:
-            pose = f["/frames/collider_pose"][0][i]
-            planes.append({"point": pose[9:], "normal": pose[:9].reshape(3, 3)[:, 2], "ground": False,
-                           "pose": i})
-    weights = node_weights(X, T, f["/mesh/rest_volumes"][()])
-    under = tri_tet(S, T)
-    surf_nodes = np.unique(S)
-
-    # Per-vertex colour values of a frame.
-    def values(k, x):
-        if a.color == "deformation":
-            R, Xc, xc = rigid_fit(X, x, weights)
-            return np.linalg.norm(x - ((X - Xc) @ R.T + xc), axis=1)
-        if a.color == "displacement":
-            return np.linalg.norm(x - X, axis=1)
-        if a.color == "pressure":
-            p = f["/frames/pressure"][k]
-            acc, cnt = np.zeros(len(X)), np.zeros(len(X))
-            np.add.at(acc, T.ravel(), np.repeat(p, 4))
-            np.add.at(cnt, T.ravel(), 1)
-            return acc / np.maximum(cnt, 1)
-        return None
-
-    zone_names, zone_of = [], np.zeros(len(T), dtype=int)
-    if a.color == "zone" and "/zones" in f:
-        for z, name in enumerate(sorted(f["/zones"].keys(), key=lambda nm: -f["/zones"][nm].shape[0])):
-            zone_of[f["/zones"][name][()]] = z + 1  # smaller zones last: drawn over the larger
-            zone_names.append(name)
-    # One colour range for all frames drawn.
-    if a.color in ("deformation", "displacement", "pressure"):
-        allv = np.concatenate([values(k, P[k])[surf_nodes] for k in frames])
-        if a.color == "pressure":
-            vmin, vmax = np.percentile(allv, 2), np.percentile(allv, 98)
-        else:  # a range of at least 1e-4 of the body's size: rounding is not drawn as deformation
-            vmin, vmax = 0.0, max(float(allv.max()), 1e-4 * float(np.ptp(X, axis=0).max()))
-        cmap = plt.get_cmap("viridis")
-    else:
-        vmin, vmax = 0, 9
-        tab = plt.get_cmap("tab10")
-        cmap = matplotlib.colors.ListedColormap([(0.6, 0.6, 0.6)] + [tab(i) for i in range(9)])
-
-    # The view: every frame drawn, and the planes under the body.
-    all_x = np.concatenate([P[k][surf_nodes] for k in frames])
-    for p in planes:  # the body's shadow on the ground is in the picture too
-        if p["ground"]:
-            all_x = np.concatenate([all_x, all_x - np.outer((all_x - p["point"]) @ p["normal"], p["normal"])])
-    lo, hi = all_x.min(0), all_x.max(0)
-    mid, span = (lo + hi) / 2, float(np.linalg.norm(hi - lo))
+    surf_nodes = np.unique(run.surface)
+    scene = Scene(run, frames, surf_nodes)
+    colouring = Colouring(a, run, frames, surf_nodes)
+    under = tri_tet(run.surface, run.tets)
     written = []
     started = clock.perf_counter()
     for k in frames:
-        x = P[k]
-        t = float(times[k])
-        vn, fn = vertex_normals(x, S)
-        front = fn @ cam.toward > 0  # back faces of the closed surface are hidden
-        tris = S[front]
-        xy, depth = cam.project(x)
-        order = np.argsort(depth[tris].mean(1))  # far to near
-        tris = tris[order]
-        diffuse, spec = shade(vn, cam)
-        if a.color == "zone":
-            base = cmap(np.clip(zone_of[under[front][order]] / 9, 0, 1))[:, None, :3].repeat(3, axis=1)
-        else:
-            v = values(k, x)
-            base = cmap(np.clip((v - vmin) / ((vmax - vmin) or 1), 0, 1))[:, :3][tris]
-        rgb = np.clip(base * diffuse[tris][..., None] + spec[tris][..., None], 0, 1)
-        colors = np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,))], axis=2)
-
-        fig = plt.figure(figsize=(a.size / 100, a.size / 100), dpi=100)
-        ax = fig.add_axes([0, 0, 1, 1])
-        ax.set_axis_off()
-        ax.set_aspect("equal")
-        behind, in_front = [], []
-        for p in planes:
-            if "pose" in p:  # a [[collider]] plane: where it is at this frame
-                pose = f["/frames/collider_pose"][k][p["pose"]]
-                p["point"], p["normal"] = pose[9:], pose[:9].reshape(3, 3)[:, 2]
-            quad, pa, pb = plane_quad(plane_point(p, t), p["normal"], mid, 0.75 * span)
-            q2, qd = cam.project(quad)
-            facing = p["normal"] @ cam.toward > 0
-            colour = (0.86, 0.85, 0.82, 1.0) if p["ground"] else (0.55, 0.7, 0.85, 0.35)
-            if not facing:
-                colour = (0.55, 0.55, 0.55, 0.25)
-            (behind if p["ground"] or qd.mean() < (mid @ cam.toward) else in_front).append((q2, colour, p, pa, pb))
-        for q2, colour, p, pa, pb in behind:
-            ax.add_collection(PolyCollection([q2], facecolors=[colour], edgecolors=(0.6, 0.6, 0.6, 0.6), zorder=0))
-            if p["ground"]:
-                # Grid lines (a tenth of the square) show the ground's plane.
-                quad, _, _ = plane_quad(plane_point(p, t), p["normal"], mid, 0.75 * span)
-                for s in np.linspace(0, 1, 11)[1:-1]:
-                    for e0, e1 in ((quad[0] + s * (quad[1] - quad[0]), quad[3] + s * (quad[2] - quad[3])),
-                                   (quad[0] + s * (quad[3] - quad[0]), quad[1] + s * (quad[2] - quad[1]))):
-                        seg, _ = cam.project(np.array([e0, e1]))
-                        ax.plot(seg[:, 0], seg[:, 1], color=(0.7, 0.7, 0.68), lw=0.5, zorder=0.5)
-                if not a.no_shadow:  # the body's shadow straight down onto the ground
-                    n_ = p["normal"]
-                    pp = plane_point(p, t)
-                    sx = x - np.outer((x - pp) @ n_, n_) + 1e-4 * span * n_
-                    s2, _ = cam.project(sx)
-                    ax.add_collection(PolyCollection(s2[S[fn @ n_ > 0]], facecolors=(0.3, 0.3, 0.3, 0.08),
-                                                     edgecolors="none", zorder=0.6))
-        ax.add_artist(GouraudTriangles(xy[tris], colors, zorder=1))
-        body_depth = float(np.median(depth[surf_nodes]))
-        for i, tri in colliders:  # translucent, flat-shaded, far to near; behind the body or in front
-            pose = f["/frames/collider_pose"][k][i]
-            w = tri @ pose[:9].reshape(3, 3).T + pose[9:]
-            fn_c = np.cross(w[:, 1] - w[:, 0], w[:, 2] - w[:, 0])
-            fn_c /= np.maximum(np.linalg.norm(fn_c, axis=1, keepdims=True), 1e-300)
-            light = 0.45 + 0.45 * np.abs(fn_c @ unit(cam.toward + 0.5 * up))
-            w2, wd = cam.project(w.reshape(-1, 3))
-            w2, wd = w2.reshape(-1, 3, 2), wd.reshape(-1, 3).mean(1)
-            order_c = np.argsort(wd)
-            rgba = np.column_stack([0.45 * light, 0.55 * light, 0.75 * light, np.full(len(light), 0.45)])
-            near = wd[order_c] > body_depth
-            for sel, z in ((~near, 0.8), (near, 2.5)):
-                ax.add_collection(PolyCollection(w2[order_c][sel], facecolors=rgba[order_c][sel], edgecolors="none", zorder=z))
-        for q2, colour, *_ in in_front:
-            ax.add_collection(PolyCollection([q2], facecolors=[colour], edgecolors=(0.3, 0.4, 0.6, 0.8), zorder=2))
-        title_load = ""
-        if a.loads:
-            L = f["/frames/load"][k]
-            on = np.linalg.norm(L, axis=1) > 0
-            biggest = max(np.linalg.norm(f["/frames/load"][j], axis=1).max() for j in frames) or 1.0
-            s0, _ = cam.project(x[on])
-            s1, _ = cam.project(x[on] + 0.2 * span / biggest * L[on])
-            ax.quiver(s0[:, 0], s0[:, 1], s1[:, 0] - s0[:, 0], s1[:, 1] - s0[:, 1], angles="xy", scale_units="xy",
-                      scale=1, color="crimson", width=0.003, zorder=3)
-            title_load = f"  load {np.linalg.norm(L.sum(0)):.3g} N"
-        if a.contact:
-            C = f["/frames/contact"][k]
-            on = np.linalg.norm(C, axis=1) > 0
-            biggest = max(np.linalg.norm(f["/frames/contact"][j], axis=1).max() for j in frames) or 1.0
-            if on.any():
-                s0, _ = cam.project(x[on])
-                s1, _ = cam.project(x[on] + 0.2 * span / biggest * C[on])
-                ax.quiver(s0[:, 0], s0[:, 1], s1[:, 0] - s0[:, 0], s1[:, 1] - s0[:, 1], angles="xy", scale_units="xy",
-                          scale=1, color="darkorange", width=0.003, zorder=3)
-            title_load += f"  contact {np.linalg.norm(C.sum(0)):.3g} N"
-        c2, _ = cam.project(mid)
-        ax.set_xlim(c2[0] - 0.55 * span, c2[0] + 0.55 * span)
-        ax.set_ylim(c2[1] - 0.55 * span, c2[1] + 0.55 * span)
-        if a.color == "zone":
-            from matplotlib.patches import Patch
-            handles = [Patch(color=cmap((z + 1) / 9), label=nm) for z, nm in enumerate(zone_names[:9])]
-            ax.legend(handles=handles, loc="upper right", title="zone", fontsize=8)
-        else:
-            sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(vmin, vmax))
-            cax = fig.add_axes([0.86, 0.25, 0.025, 0.5])
-            label = {"deformation": "deformation (m, from the best rigid motion)",
-                     "displacement": "displacement (m)", "pressure": "pressure (Pa)"}[a.color]
-            fig.colorbar(sm, cax=cax, label=label)
-            cax.yaxis.label.set_size(8)
-            cax.tick_params(labelsize=7)
-        ax.text(0.02, 0.97, f"{os.path.basename(a.run)}  t = {t:.4f} s{title_load}", transform=ax.transAxes,
-                fontsize=9, va="top")
-        ax.text(0.02, 0.02, f"up: {(np.round(up, 3) + 0.0).tolist()} ({up_from})", transform=ax.transAxes, fontsize=7,
-                color=(0.4, 0.4, 0.4))
         path = a.out if single else os.path.join(out, f"frame_{k:06d}.png")
-        fig.savefig(path, dpi=100)
-        plt.close(fig)
+        draw_frame(a, run, k, cam, up, up_from, scene, colouring, under, frames, path)
         written.append(path)
     per = (clock.perf_counter() - started) / max(len(written), 1)
-    print(f"wrote {len(written)} PNG files to {out} ({per:.2f} s per frame, {len(S)} surface triangles)")
+    print(f"wrote {len(written)} PNG files to {out} ({per:.2f} s per frame, {len(run.surface)} surface triangles)")
     if a.mp4:
-        if not shutil.which("ffmpeg"):
-            sys.exit("ffmpeg is not installed (apt-get install -y ffmpeg); the PNG files are written")
-        rate = max(1, round(1 / np.median(np.diff(times[:n])))) if n > 1 else 1
-        listing = os.path.join(out, "frames.txt")
-        with open(listing, "w") as lf:
-            for p in written:
-                lf.write(f"file '{os.path.abspath(p)}'\nduration {1 / rate}\n")
-        mp4 = os.path.splitext(a.run)[0] + ".mp4"
-        subprocess.run(["ffmpeg", "-y", "-loglevel", "error", "-f", "concat", "-safe", "0", "-i", listing,
-                        "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", mp4], check=True)
-        print(f"wrote {mp4}")
+        write_mp4(run, written, out)
 
 
 if __name__ == "__main__":

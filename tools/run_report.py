@@ -5,16 +5,16 @@ usage: run_report.py FILE.h5 [FILE.h5 ...]
 """
 import sys
 
-import h5py
 import numpy as np
+
+from run_file import open_run
 
 
 def report(path):
-    with h5py.File(path, "r") as f:
-        t = f["/frames/time"][()]
-        vol = f["/frames/volume"][()]
-        stats = f["/stats"]
-        attrs = {k: float(v) for k, v in stats.attrs.items() if np.isscalar(v) and not isinstance(v, (str, bytes))}
+    with open_run(path, "run_report.py") as run:
+        t = run.times
+        vol = run.volumes
+        attrs = {k: float(v) for k, v in run.totals.items() if np.isscalar(v) and not isinstance(v, str)}
         frames = len(t) - 1
         total = vol[:, 0]
         rel = (total - total[0]) / total[0]
@@ -33,8 +33,8 @@ def report(path):
         for j in range(1, vol.shape[1]):
             z = vol[:, j]
             print(f"  zone {j}: worst relative error {np.abs((z - z[0]) / z[0]).max():.3e}")
-        if "failure" in stats.attrs:
-            print(f"  FAILED: {stats.attrs['failure']}")
+        if "failure" in run.totals:
+            print(f"  FAILED: {run.totals['failure']}")
 
 
 for p in sys.argv[1:]:

@@ -16,12 +16,13 @@ import os
 import re
 import sys
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+from run_file import Error, Run  # noqa: E402
 
 
 def exponent(x, y):
@@ -75,15 +76,13 @@ def main():
     for path in sorted(glob.glob(os.path.join(d, "ball_*_*.h5"))):
         m = re.match(r"ball_(\d+)_(\w+)\.h5", os.path.basename(path))
         try:
-            with h5py.File(path, "r") as f:
-                st = dict(f["stats"].attrs)
-                tets = f["mesh/tets"].shape[0]
-                times = f["frames/time"][:]
-                series = {k: f["stats/" + k][:len(times)] for k in ("wall_seconds", "steps", "newton_iterations",
-                                                                    "resident_mb")}
-                status = f.attrs["status"]
-                status = status.decode() if isinstance(status, bytes) else str(status)
-        except (OSError, KeyError):
+            with Run(path) as run:
+                st = run.totals
+                tets = len(run.tets)
+                times = run.times
+                series = {k: run.stats[k] for k in ("wall_seconds", "steps", "newton_iterations", "resident_mb")}
+                status = run.status
+        except (Error, OSError, KeyError):
             continue
         if until is None:
             wall, steps, newton = float(st.get("wall_seconds", np.nan)), float(st.get("steps", np.nan)), \

@@ -25,6 +25,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from run_file import Error, Run  # noqa: E402
+
 
 def number(s):
     try:
@@ -138,11 +140,9 @@ def series(d, rows):
         if not os.path.exists(p):
             continue
         try:
-            with h5py.File(p, "r") as f:
-                t = f["/frames/time"][()]
-                V = f["/frames/volume"][()]
-                E = f["/frames/energy"][()]
-        except (OSError, KeyError):
+            with Run(p) as run:
+                t, V, E = run.times, run.volumes, run.energy
+        except (Error, OSError, KeyError):
             continue
         if len(t) == 0:  # failed before its first frame
             continue
@@ -247,11 +247,11 @@ def resolution(rows, d):
         p = os.path.join(d, "cases", r["label"] + ".h5")
         if not os.path.exists(p):
             continue
-        with h5py.File(p, "r") as f:
-            t = f["/frames/time"][()]
-            x = f["/frames/positions"]
-            c = np.array([x[k][:, 2].mean() for k in range(len(t))])
-            hw = np.array([np.ptp(x[k][:, 2]) / np.ptp(x[k][:, 0]) for k in range(len(t))])
+        with Run(p) as run:
+            t = run.times
+            x = [run.frame_positions(k) for k in range(len(t))]
+            c = np.array([xk[:, 2].mean() for xk in x])
+            hw = np.array([np.ptp(xk[:, 2]) / np.ptp(xk[:, 0]) for xk in x])
         tets = dict(r["sweep_pairs"])["mesh.target_tets"]
         a1.plot(t, c, label=f"{r['method']} {float(tets):.0f} tets")
         a2.plot(t, hw, label=f"{r['method']} {float(tets):.0f} tets")
@@ -265,6 +265,7 @@ def resolution(rows, d):
 
 
 def write_h5(rows, d):
+    """results.h5: the study's table as columns (its own file, not a run's)."""
     with h5py.File(os.path.join(d, "results.h5"), "w") as f:
         for k in ("method", "label", "sweep", "status", "reason"):
             f[k] = np.array([r[k] for r in rows], dtype=h5py.string_dtype())

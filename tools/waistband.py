@@ -14,8 +14,9 @@ rest dashed, last frame solid), the band at its last radius, and a zoom on the w
 import argparse
 import sys
 
-import h5py
 import numpy as np
+
+from run_file import open_run
 
 
 def slice_segments(x, tris, axis, level):
@@ -39,31 +40,20 @@ def circumference(x, tris, z):
     return float(np.linalg.norm(s[:, 1] - s[:, 0], axis=1).sum())
 
 
-def band_radius(f):
-    """The band's hole radius at the last frame (from its pose series' scale is not stored: from
-    the scene's resize factors at the last time)."""
-    import tomllib
-    scene = tomllib.loads(f.attrs["scene"] if isinstance(f.attrs["scene"], str) else f.attrs["scene"].decode())
-    c = scene["collider"][0]
-    r = float(c["radius"])
-    rs = c.get("resize")
-    if rs:
-        t = float(f["/frames/time"][-1])
-        times, factors = rs["times"], rs["factors"]
-        r *= float(np.interp(t, times, factors))  # the keys' values (cubic and linear agree at the keys)
-    return r, float(c["length"]), float(c.get("wall", 0.0)), np.array(c.get("center", [0, 0, 0]), float)
+def band_radius(run):
+    """The band (the first solid collider): its hole's radius at the last frame, its length, its
+    wall and its centre there."""
+    c = next(c for c in run.colliders if c.shape == "cylinder")
+    r = c.dimensions["radius"] * run.collider_scale(-1, c.index)
+    _, centre = run.collider_pose(-1, c.index)
+    return r, c.dimensions["length"], c.dimensions.get("wall", 0.0), centre
 
 
 def measure(path, band_z, band_h):
-    f = h5py.File(path, "r", locking=False)
-    X = f["/frames/positions"][0]
-    x = f["/frames/positions"][-1]
-    S = f["/mesh/surface"][()]
-    V = f["/frames/volume"][()]
-    cols = f["/frames/volume"].attrs["columns"]
-    cols = (cols if isinstance(cols, str) else cols.decode()).split(",")
-    out = {"time": float(f["/frames/time"][-1]), "frames": len(f["/frames/time"]),
-           "volume": {c: float(V[-1, k] / V[0, k] - 1) for k, c in enumerate(cols)}}
+    run = open_run(path, "waistband.py")
+    X, x, S, V = run.frame_positions(0), run.frame_positions(-1), run.surface, run.volumes
+    out = {"time": float(run.times[-1]), "frames": run.num_frames,
+           "volume": {c: float(V[-1, k] / V[0, k] - 1) for k, c in enumerate(run.volume_columns)}}
     for name, z in (("above", band_z + 0.5 * band_h + 0.01), ("at", band_z), ("below", band_z - 0.5 * band_h - 0.01)):
         out["circ_" + name] = (circumference(X, S, z), circumference(x, S, z))
     nodes = np.unique(S)
@@ -75,11 +65,9 @@ def measure(path, band_z, band_h):
     out["bulge_above"] = float(dr[above].max())
     out["bulge_below"] = float(dr[below].max())
     out["squeeze"] = float(-dr[under].min())
-    stats = f["/stats"].attrs
-    out["wall"] = float(stats.get("wall_seconds", np.nan))
-    out["status"] = f.attrs.get("status", "")
-    out["status"] = out["status"] if isinstance(out["status"], str) else out["status"].decode()
-    return out, f
+    out["wall"] = float(run.totals.get("wall_seconds", np.nan))
+    out["status"] = run.status
+    return out, run
 
 
 def main():
@@ -121,9 +109,7 @@ def main():
         fig, axes = plt.subplots(2, len(runs), figsize=(4.2 * len(runs), 9), gridspec_kw={"height_ratios": [3, 2]})
         axes = np.array(axes).reshape(2, len(runs))
         for j, (label, path, m, f) in enumerate(runs):
-            X = f["/frames/positions"][0]
-            x = f["/frames/positions"][-1]
-            S = f["/mesh/surface"][()]
+            X, x, S = f.frame_positions(0), f.frame_positions(-1), f.surface
             R, L, wall, c = band_radius(f)
             for row in range(2):
                 ax = axes[row, j]

@@ -74,7 +74,8 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
                            const std::function<bool(int, const Frame&)>& on_frame) {
   const auto start = std::chrono::steady_clock::now();
   const bool tets = sys.has_tets();
-  return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), contact = Points(), poses = std::vector<double>(), velocities = Points(),
+  return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), contact = Points(), poses = std::vector<double>(), scales = std::vector<double>(),
+          velocities = Points(),
           multipliers = std::vector<double>()](
              int j, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
              const RunStats::FrameSample& s) mutable {
@@ -105,6 +106,8 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
       f.contact = &contact;
       sys.collider_poses(poses);
       f.collider_poses = &poses;
+      sys.collider_scales(scales);
+      f.collider_scales = &scales;
     }
     if (tets) f.stats.push_back({"inverted_tets", static_cast<double>(sys.inverted_tets())});
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -209,7 +212,7 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   const std::unique_ptr<Integrator> integrator = make_integrator(sc, *sys);
   if (!resume) check_output_room(sc, *sys, summary.output);
   // (The mass-spring model has no zones: its scene is refused with any.)
-  OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run"},
+  OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run", scene_record(sc)},
                  sc.output.pressure && sys->has_tets(), opt.mode);
   const ResumePoint& rp = w.resume_point();
   std::map<std::string, double> offsets;

@@ -116,6 +116,14 @@ void number_attribute(hid_t loc, const std::string& name, double value) {
   check(H5Awrite(attr, H5T_NATIVE_DOUBLE, &value), "write attribute " + name);
 }
 
+void vector_attribute(hid_t loc, const std::string& name, const double* values, hsize_t n) {
+  if (H5Aexists(loc, name.c_str()) > 0) H5Adelete(loc, name.c_str());
+  H space(H5Screate_simple(1, &n, nullptr), H5Sclose);
+  H attr(checked(H5Acreate2(loc, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT), "attribute " + name),
+         H5Aclose);
+  check(H5Awrite(attr, H5T_NATIVE_DOUBLE, values), "write attribute " + name);
+}
+
 // A dataset growing along its first dimension, one frame (row) at a time.
 struct Series {
   H ds;
@@ -260,20 +268,27 @@ struct OutputWriter::Impl {
   int nodes = 0, tets = 0, frames = 0;
   bool pressure = false;
   bool zone_index = false;  // /mesh/zone exists (a cell attribute "zone" in the sidecar)
-  std::unique_ptr<Series> time, positions, velocities, multipliers, volume, energy, pressure_series, collider_pose;
+  std::unique_ptr<Series> time, positions, velocities, multipliers, volume, energy, pressure_series, collider_pose, collider_scale;
   // Per-node vectors of a frame, when the scene has them: "load" and "contact" (kNodeVectors).
   std::map<std::string, std::unique_ptr<Series>> node_series;
   std::map<std::string, std::unique_ptr<Series>> stats;
   H frames_group, xdmf_group, stats_group;
   int lock_fd = -1;
+  bool existed = false;  // the path existed before the writer (a failed create leaves it)
   double frame_bytes = 0;  // what a frame adds to the file: an estimate, then the largest measured
   off_t file_size = 0;     // after the last flush
   ResumePoint resume;
 
+  void lock_path(Mode mode, const RunInfo& info);
+  void write_header(const RunInfo& info);
+  void write_mesh(const Mesh& mesh, const Zones& zones);
+  void write_colliders(const std::vector<ColliderRecord>& colliders);
+  void create_series(const Zones& zones);
+
   // Every per-frame series of the file.
   std::vector<Series*> all_series() {
     std::vector<Series*> all{time.get(), positions.get(), velocities.get(), multipliers.get(), volume.get(), energy.get(),
-                             pressure_series.get(), collider_pose.get()};
+                             pressure_series.get(), collider_pose.get(), collider_scale.get()};
     for (auto& [name, series] : node_series) all.push_back(series.get());
     for (auto& [name, series] : stats) all.push_back(series.get());
     all.erase(std::remove(all.begin(), all.end(), nullptr), all.end());
@@ -471,6 +486,8 @@ struct OutputWriter::Impl {
       multipliers = std::make_unique<Series>(frames_group, "multipliers", H5T_NATIVE_DOUBLE);
     if (H5Lexists(frames_group, "collider_pose", H5P_DEFAULT) > 0)
       collider_pose = std::make_unique<Series>(frames_group, "collider_pose", H5T_NATIVE_DOUBLE);
+    if (H5Lexists(frames_group, "collider_scale", H5P_DEFAULT) > 0)
+      collider_scale = std::make_unique<Series>(frames_group, "collider_scale", H5T_NATIVE_DOUBLE);
     volume = std::make_unique<Series>(frames_group, "volume", H5T_NATIVE_DOUBLE);
     energy = std::make_unique<Series>(frames_group, "energy", H5T_NATIVE_DOUBLE);
     if (positions->row.at(0) != static_cast<hsize_t>(nodes) || volume->row.at(0) != 1 + zones)
@@ -512,22 +529,16 @@ struct OutputWriter::Impl {
   }
 };
 
-OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh,
-                           const std::vector<std::pair<std::string, std::vector<int>>>& zones, const RunInfo& info,
-                           bool pressure, Mode mode)
-    : impl_(std::make_unique<Impl>()) {
-  Impl& m = *impl_;
-  m.path = path;
-  m.h5_name = std::filesystem::path(path).filename().string();
-  m.nodes = mesh.num_nodes();
-  m.tets = mesh.num_tets();
-  m.pressure = pressure;
+// Before anything is written: the path is an output's (not a directory, not the sidecar's), an
+// existing file is allowed only as the mode says, its directory exists, and it is locked (a
+// second writer fails here and leaves the file alone).
+void OutputWriter::Impl::lock_path(Mode mode, const RunInfo& info) {
   std::error_code ec;
-  const std::string xp = m.xdmf_file();
+  const std::string xp = xdmf_file();
   if (xp == path)
     throw Error(path + ": the XDMF sidecar would overwrite the output itself (expected an output path ending in .h5)");
   if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory (expected an output file path)");
-  const bool existed = std::filesystem::exists(path, ec);
+  existed = std::filesystem::exists(path, ec);
   if (mode == Mode::create && (existed || std::filesystem::exists(xp, ec)))
     throw Error((existed ? path : xp) + ": exists (pass --overwrite to replace it" +
                 (existed && info.command == "run" ? ", or --resume to continue the run in it" : "") + ")");
@@ -536,34 +547,146 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh,
   if (!dir.empty()) std::filesystem::create_directories(dir, ec);
   if (ec) throw Error(path + ": cannot create the directory " + dir.string() + " (" + ec.message() + ")");
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported by Error, not printed
-  // Locked before anything is truncated: a second writer fails here and leaves the file alone.
-  m.lock_fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (m.lock_fd < 0) throw Error(path + ": cannot be created (" + std::strerror(errno) + ")");
-  if (!try_lock(m.lock_fd)) {
-    ::close(m.lock_fd);
-    m.lock_fd = -1;
+  lock_fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock_fd < 0) throw Error(path + ": cannot be created (" + std::strerror(errno) + ")");
+  if (!try_lock(lock_fd)) {
+    ::close(lock_fd);
+    lock_fd = -1;
     throw Error(path + ": another process is writing it (one writer per output: wait for it, or choose another path)");
   }
-  // Default format bounds: the superblock then has no "open for writing" flag, so a file whose
-  // writer was killed opens without h5clear.
-  // A metadata cache of 1 MB, fixed: HDF5's default grows to 32 MB as a long run adds objects,
-  // and the flush after every frame walks every cached entry (100,000 frames of a small mesh:
-  // resident memory 72 -> 82 MB and the last frames written at a third of the first ones' rate;
-  // with 1 MB, 47 MB throughout and the rate within noise, bench/bench_output.cpp).
+}
+
+// Default format bounds: the superblock then has no "open for writing" flag, so a file whose
+// writer was killed opens without h5clear.
+// A metadata cache of 1 MB, fixed: HDF5's default grows to 32 MB as a long run adds objects,
+// and the flush after every frame walks every cached entry (100,000 frames of a small mesh:
+// resident memory 72 -> 82 MB and the last frames written at a third of the first ones' rate;
+// with 1 MB, 47 MB throughout and the rate within noise, bench/bench_output.cpp).
+// HDF5's own file locking (flock) is off: the writer's lock keeps writers apart, and a reader
+// that holds HDF5's shared lock (isochor info, h5py, ParaView on a running file) would otherwise
+// make the writer's open or create fail.
+static H file_access() {
   H fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
-  // HDF5's own file locking (flock) is off: the writer's lock above keeps writers apart, and a
-  // reader that holds HDF5's shared lock (isochor info, h5py, ParaView on a running file) would
-  // otherwise make the writer's open or create fail.
   check(H5Pset_file_locking(fapl, false, true), "file locking");
-  {
-    H5AC_cache_config_t c;
-    c.version = H5AC__CURR_CACHE_CONFIG_VERSION;
-    check(H5Pget_mdc_config(fapl, &c), "metadata cache configuration");
-    c.set_initial_size = true;
-    c.initial_size = c.max_size = 1024 * 1024;
-    c.min_size = c.max_size / 4;
-    check(H5Pset_mdc_config(fapl, &c), "metadata cache configuration");
+  H5AC_cache_config_t c;
+  c.version = H5AC__CURR_CACHE_CONFIG_VERSION;
+  check(H5Pget_mdc_config(fapl, &c), "metadata cache configuration");
+  c.set_initial_size = true;
+  c.initial_size = c.max_size = 1024 * 1024;
+  c.min_size = c.max_size / 4;
+  check(H5Pset_mdc_config(fapl, &c), "metadata cache configuration");
+  return fapl;
+}
+
+// The root attributes: status, the scene and where it came from, the command, the version, and
+// the up direction a viewer turns upward.
+void OutputWriter::Impl::write_header(const RunInfo& info) {
+  string_attribute(file, "status", "running");
+  string_attribute(file, "scene", info.scene_text);
+  string_attribute(file, "scene_file", info.scene_file);
+  // Where the scene's relative file names (meshes, paint) resolve, for tools that read the run
+  // from another directory.
+  if (!info.scene_file.empty()) {
+    std::error_code ec;
+    const std::filesystem::path dir = std::filesystem::absolute(info.scene_file, ec).parent_path();
+    string_attribute(file, "scene_directory", ec ? std::string() : dir.string());
   }
+  string_attribute(file, "command", info.command);
+  string_attribute(file, "isochor_version", isochor_version());
+  string_attribute(file, "git_revision", isochor_git_revision());
+  if (!info.scene.up_source.empty()) {
+    vector_attribute(file, "up", info.scene.up.data(), 3);
+    string_attribute(file, "up_source", info.scene.up_source);
+  }
+}
+
+// /mesh: rest positions, tets, surface, rest volumes, node sets, and each tet's zone for viewers.
+void OutputWriter::Impl::write_mesh(const Mesh& mesh, const Zones& zones) {
+  H g = group(file, "mesh");
+  write_array(g, "rest_positions", H5T_NATIVE_DOUBLE, {static_cast<hsize_t>(nodes), 3}, mesh.rest_positions().data());
+  write_array(g, "tets", H5T_NATIVE_INT, {static_cast<hsize_t>(tets), 4}, mesh.tets().data());
+  write_array(g, "surface", H5T_NATIVE_INT, {mesh.surface().size(), 3}, mesh.surface().data());
+  write_array(g, "rest_volumes", H5T_NATIVE_DOUBLE, {static_cast<hsize_t>(tets)}, mesh.rest_volumes().data());
+  H sets = group(g, "node_sets");
+  for (const auto& [name, set] : mesh.node_sets) write_array(sets, name, H5T_NATIVE_INT, {set.size()}, set.data());
+  // One zone per tet for viewers (ParaView colours by it): the index, in /frames/volume's
+  // column order less "total", of the smallest zone that holds the tet; -1 in none.
+  if (zones.empty()) return;
+  const std::size_t T = static_cast<std::size_t>(tets);
+  std::vector<int> zone(T, -1);
+  std::vector<std::size_t> size_of(T, 0);
+  for (std::size_t z = 0; z < zones.size(); ++z)
+    for (int t : zones[z].second)
+      if (zone[static_cast<std::size_t>(t)] < 0 || zones[z].second.size() < size_of[static_cast<std::size_t>(t)]) {
+        zone[static_cast<std::size_t>(t)] = static_cast<int>(z);
+        size_of[static_cast<std::size_t>(t)] = zones[z].second.size();
+      }
+  write_array(g, "zone", H5T_NATIVE_INT, {T}, zone.data());
+  std::string names;
+  for (const auto& z : zones) names += (names.empty() ? "" : ",") + z.first;
+  H d(checked(H5Dopen2(g, "zone", H5P_DEFAULT), "open /mesh/zone"), H5Dclose);
+  string_attribute(d, "zones", names);
+  zone_index = true;
+}
+
+// /colliders/<k>: one group per collider in the scene's order (the index of its column in
+// /frames/collider_pose), with its name, shape, dimensions and rest pose; a mesh's surface.
+void OutputWriter::Impl::write_colliders(const std::vector<ColliderRecord>& colliders) {
+  H g = group(file, "colliders");
+  for (std::size_t k = 0; k < colliders.size(); ++k) {
+    const ColliderRecord& c = colliders[k];
+    H one = group(g, std::to_string(k));
+    string_attribute(one, "name", c.name);
+    string_attribute(one, "shape", c.shape);
+    for (const auto& [name, value] : c.dimensions) number_attribute(one, name, value);
+    vector_attribute(one, "rest_pose", c.rest_pose.data(), 12);
+    if (c.shape != "mesh") continue;
+    write_array(one, "vertices", H5T_NATIVE_DOUBLE, {static_cast<hsize_t>(c.vertices.cols()), 3}, c.vertices.data());
+    write_array(one, "triangles", H5T_NATIVE_INT, {c.triangles.size(), 3}, c.triangles.data());
+  }
+}
+
+// /zones, /frames (its series and the sidecar's views) and /stats.
+void OutputWriter::Impl::create_series(const Zones& zones) {
+  H g = group(file, "zones");
+  for (const auto& [name, set] : zones) write_array(g, name, H5T_NATIVE_INT, {set.size()}, set.data());
+  frames_group = group(file, "frames");
+  {
+    // One link per frame (and two with pressures): tracking the links' creation order makes this
+    // a new-style group (a fractal heap and a v2 B-tree of names, 1.8 format, the superblock
+    // unchanged), whose insertions stay as cheap at the 100,000th frame as at the 10th.
+    H gcpl(H5Pcreate(H5P_GROUP_CREATE), H5Pclose);
+    check(H5Pset_link_creation_order(gcpl, H5P_CRT_ORDER_TRACKED), "link creation order");
+    xdmf_group = H(checked(H5Gcreate2(frames_group, "xdmf", H5P_DEFAULT, gcpl, H5P_DEFAULT), "create group xdmf"), H5Gclose);
+  }
+  stats_group = group(file, "stats");
+  time = std::make_unique<Series>(frames_group, "time", std::vector<hsize_t>{}, H5T_NATIVE_DOUBLE);
+  positions = std::make_unique<Series>(frames_group, "positions", std::vector<hsize_t>{static_cast<hsize_t>(nodes), 3},
+                                       H5T_NATIVE_DOUBLE);
+  volume = std::make_unique<Series>(frames_group, "volume", std::vector<hsize_t>{1 + zones.size()}, H5T_NATIVE_DOUBLE);
+  std::string columns = "total";
+  for (const auto& z : zones) columns += "," + z.first;
+  H vol(H5Dopen2(frames_group, "volume", H5P_DEFAULT), H5Dclose);
+  string_attribute(vol, "columns", columns);
+  energy = std::make_unique<Series>(frames_group, "energy", std::vector<hsize_t>{3}, H5T_NATIVE_DOUBLE);
+  H en(H5Dopen2(frames_group, "energy", H5P_DEFAULT), H5Dclose);
+  string_attribute(en, "columns", "kinetic,elastic,external");
+  if (pressure)
+    pressure_series = std::make_unique<Series>(frames_group, "pressure", std::vector<hsize_t>{static_cast<hsize_t>(tets)},
+                                               H5T_NATIVE_DOUBLE);
+}
+
+OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh, const Zones& zones, const RunInfo& info,
+                           bool pressure, Mode mode)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.path = path;
+  m.h5_name = std::filesystem::path(path).filename().string();
+  m.nodes = mesh.num_nodes();
+  m.tets = mesh.num_tets();
+  m.pressure = pressure;
+  m.lock_path(mode, info);
+  const H fapl = file_access();
   if (mode == Mode::resume) {
     m.open_for_resume(fapl, info, zones.size());
     return;
@@ -571,81 +694,15 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh,
   hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   if (f < 0) {
     const std::string reason = hdf5_reason();
-    if (!existed) std::filesystem::remove(path, ec);
+    std::error_code ec;
+    if (!m.existed) std::filesystem::remove(path, ec);
     throw Error(path + ": cannot be created" + reason);
   }
   m.file = H(f, H5Fclose);
-  string_attribute(m.file, "status", "running");
-
-  string_attribute(m.file, "scene", info.scene_text);
-  string_attribute(m.file, "scene_file", info.scene_file);
-  // Where the scene's relative file names (meshes, paint, mesh colliders) resolve, for tools that
-  // read the run from another directory (render.py draws mesh colliders from their files).
-  if (!info.scene_file.empty()) {
-    std::error_code ec;
-    const std::filesystem::path dir = std::filesystem::absolute(info.scene_file, ec).parent_path();
-    string_attribute(m.file, "scene_directory", ec ? std::string() : dir.string());
-  }
-  string_attribute(m.file, "command", info.command);
-  string_attribute(m.file, "isochor_version", isochor_version());
-  string_attribute(m.file, "git_revision", isochor_git_revision());
-
-  {
-    H g = group(m.file, "mesh");
-    write_array(g, "rest_positions", H5T_NATIVE_DOUBLE, {static_cast<hsize_t>(m.nodes), 3}, mesh.rest_positions().data());
-    write_array(g, "tets", H5T_NATIVE_INT, {static_cast<hsize_t>(m.tets), 4}, mesh.tets().data());
-    write_array(g, "surface", H5T_NATIVE_INT, {mesh.surface().size(), 3}, mesh.surface().data());
-    write_array(g, "rest_volumes", H5T_NATIVE_DOUBLE, {static_cast<hsize_t>(m.tets)}, mesh.rest_volumes().data());
-    H sets = group(g, "node_sets");
-    for (const auto& [name, nodes] : mesh.node_sets)
-      write_array(sets, name, H5T_NATIVE_INT, {nodes.size()}, nodes.data());
-    // One zone per tet for viewers (ParaView colours by it): the index, in /frames/volume's
-    // column order less "total", of the smallest zone that holds the tet; -1 in none.
-    if (!zones.empty()) {
-      std::vector<int> zone(static_cast<std::size_t>(m.tets), -1);
-      std::vector<std::size_t> size_of(static_cast<std::size_t>(m.tets), 0);
-      for (std::size_t z = 0; z < zones.size(); ++z)
-        for (int t : zones[z].second)
-          if (zone[static_cast<std::size_t>(t)] < 0 || zones[z].second.size() < size_of[static_cast<std::size_t>(t)]) {
-            zone[static_cast<std::size_t>(t)] = static_cast<int>(z);
-            size_of[static_cast<std::size_t>(t)] = zones[z].second.size();
-          }
-      write_array(g, "zone", H5T_NATIVE_INT, {static_cast<hsize_t>(m.tets)}, zone.data());
-      std::string names;
-      for (const auto& z : zones) names += (names.empty() ? "" : ",") + z.first;
-      H d(checked(H5Dopen2(g, "zone", H5P_DEFAULT), "open /mesh/zone"), H5Dclose);
-      string_attribute(d, "zones", names);
-      m.zone_index = true;
-    }
-  }
-  {
-    H g = group(m.file, "zones");
-    for (const auto& [name, tets] : zones) write_array(g, name, H5T_NATIVE_INT, {tets.size()}, tets.data());
-  }
-  m.frames_group = group(m.file, "frames");
-  {
-    // One link per frame (and two with pressures): tracking the links' creation order makes this
-    // a new-style group (a fractal heap and a v2 B-tree of names, 1.8 format, the superblock
-    // unchanged), whose insertions stay as cheap at the 100,000th frame as at the 10th.
-    H gcpl(H5Pcreate(H5P_GROUP_CREATE), H5Pclose);
-    check(H5Pset_link_creation_order(gcpl, H5P_CRT_ORDER_TRACKED), "link creation order");
-    m.xdmf_group = H(checked(H5Gcreate2(m.frames_group, "xdmf", H5P_DEFAULT, gcpl, H5P_DEFAULT), "create group xdmf"), H5Gclose);
-  }
-  m.stats_group = group(m.file, "stats");
-  m.time = std::make_unique<Series>(m.frames_group, "time", std::vector<hsize_t>{}, H5T_NATIVE_DOUBLE);
-  m.positions = std::make_unique<Series>(m.frames_group, "positions",
-                                         std::vector<hsize_t>{static_cast<hsize_t>(m.nodes), 3}, H5T_NATIVE_DOUBLE);
-  m.volume = std::make_unique<Series>(m.frames_group, "volume", std::vector<hsize_t>{1 + zones.size()}, H5T_NATIVE_DOUBLE);
-  std::string columns = "total";
-  for (const auto& z : zones) columns += "," + z.first;
-  H vol(H5Dopen2(m.frames_group, "volume", H5P_DEFAULT), H5Dclose);
-  string_attribute(vol, "columns", columns);
-  m.energy = std::make_unique<Series>(m.frames_group, "energy", std::vector<hsize_t>{3}, H5T_NATIVE_DOUBLE);
-  H en(H5Dopen2(m.frames_group, "energy", H5P_DEFAULT), H5Dclose);
-  string_attribute(en, "columns", "kinetic,elastic,external");
-  if (pressure)
-    m.pressure_series = std::make_unique<Series>(m.frames_group, "pressure",
-                                                 std::vector<hsize_t>{static_cast<hsize_t>(m.tets)}, H5T_NATIVE_DOUBLE);
+  m.write_header(info);
+  m.write_mesh(mesh, zones);
+  m.write_colliders(info.scene.colliders);
+  m.create_series(zones);
   check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
   // A frame's bytes before any is measured: positions, velocities, loads, pressures, the
   // scalars and their per-frame views.
@@ -716,6 +773,15 @@ void OutputWriter::Impl::append_frame(const Frame& f, hsize_t k) {
     if (colliders != m.collider_pose->row[0]) throw Error(m.path + ": a frame's colliders changed in number");
     m.collider_pose->append(k, f.collider_poses->data());
   }
+  if (f.collider_scales && !f.collider_scales->empty()) {
+    const hsize_t colliders = f.collider_scales->size();
+    if (!m.collider_scale) {
+      if (k > 0) throw Error(m.path + ": collider scales appeared after the first frame");
+      m.collider_scale = std::make_unique<Series>(m.frames_group, "collider_scale", std::vector<hsize_t>{colliders}, H5T_NATIVE_DOUBLE);
+    }
+    if (colliders != m.collider_scale->row[0]) throw Error(m.path + ": a frame's colliders changed in number");
+    m.collider_scale->append(k, f.collider_scales->data());
+  }
   m.volume->append(k, f.volumes.data());
   m.energy->append(k, f.energy.data());
   m.add_frame_view("/frames/positions", m.frames, 3, "position");
@@ -784,6 +850,7 @@ void OutputWriter::close() {
   m.velocities.reset();
   m.multipliers.reset();
   m.collider_pose.reset();
+  m.collider_scale.reset();
   m.volume.reset();
   m.energy.reset();
   m.pressure_series.reset();

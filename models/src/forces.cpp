@@ -44,6 +44,11 @@ void ExternalPotential::pose_numbers(std::vector<double>& out) const {
   }
 }
 
+void ExternalPotential::scale_numbers(std::vector<double>& out) const {
+  out.clear();
+  for (const ColliderPose& P : poses_) out.push_back(P.radius_scale);
+}
+
 template <class F>
 void ExternalPotential::for_each_contact(std::size_t c, const Points& x, bool free_only, F&& f) const {
   const Collider& C = colliders_[c];

@@ -22,18 +22,40 @@ from typing import Any, Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
-from . import _isochor
-from ._isochor import Error, Scene
-from .runfile import Run, open  # noqa: A001 (isochor.open is the name users expect)
+from .errors import Error
+from .runfile import Collider, Run, open  # noqa: A001 (isochor.open is the name users expect)
 
-__all__ = ["Error", "Scene", "Frame", "RunResult", "Run", "load", "scene", "run", "open",
+try:
+    from . import _isochor
+except ImportError as _why:  # run files are read without the compiled part (tools/ do so)
+    _isochor = None
+    _built = any(n.startswith("_isochor") for n in os.listdir(os.path.dirname(os.path.abspath(__file__))))
+    _missing = f"it does not load: {_why}" if _built else "it is not built there"
+
+__all__ = ["Error", "Scene", "Frame", "RunResult", "Run", "Collider", "load", "scene", "run", "open",
            "study", "study_cases", "executable"]
 
-Error.__module__ = "isochor"  # shown as isochor.Error
-Scene.__module__ = "isochor"
 
-executable: str = _isochor.executable
-"""The isochor command line this module was built with (studies run their cases with it)."""
+def _core():
+    """The compiled part, or an Error saying that it is not importable here."""
+    if _isochor is None:
+        raise Error(f"isochor's compiled part (_isochor) is not importable from {os.path.dirname(__file__)} "
+                    f"({_missing}): build it (make build) and put build/python on PYTHONPATH; "
+                    "isochor.open reads run files without it")
+    return _isochor
+
+
+if _isochor is not None:
+    Scene = _isochor.Scene
+    Scene.__module__ = "isochor"
+    executable: str = _isochor.executable
+    """The isochor command line this module was built with (studies run their cases with it)."""
+
+
+def __getattr__(name: str) -> Any:  # Scene and executable without the compiled part
+    if name in ("Scene", "executable"):
+        return getattr(_core(), name)
+    raise AttributeError(f"module 'isochor' has no attribute {name!r}")
 
 Overrides = Union[None, str, Sequence[str], Mapping[str, Any]]
 
@@ -41,14 +63,14 @@ Overrides = Union[None, str, Sequence[str], Mapping[str, Any]]
 def load(path: Union[str, os.PathLike], overrides: Overrides = None) -> Scene:
     """A scene file with overrides: a dict of dotted keys to values ({"material.mu": 3e4};
     a nested dict stands for its keys) or `--set` strings ("material.mu=3e4")."""
-    return _isochor.load_scene(os.fspath(path), overrides)
+    return _core().load_scene(os.fspath(path), overrides)
 
 
 def scene(table: Mapping[str, Any], overrides: Overrides = None, *, name: str = "<dict>",
           directory: Union[str, os.PathLike] = ".") -> Scene:
     """A scene from a dict shaped like the TOML file (what tomllib.load returns); relative file
     names in it are resolved against `directory`."""
-    return _isochor.scene_from_dict(dict(table), overrides, name, os.fspath(directory))
+    return _core().scene_from_dict(dict(table), overrides, name, os.fspath(directory))
 
 
 @dataclasses.dataclass
@@ -92,7 +114,7 @@ class RunResult:
 
 
 def _as_scene(s: Union[Scene, str, os.PathLike, Mapping[str, Any]], overrides: Overrides) -> Scene:
-    if isinstance(s, Scene):
+    if isinstance(s, _core().Scene):
         if overrides:
             raise TypeError("run(): overrides go with a scene file or dict, not a loaded Scene "
                             "(isochor.load(path, overrides) applies them)")
@@ -123,12 +145,12 @@ def run(s: Union[Scene, str, os.PathLike, Mapping[str, Any]], output: Union[str,
             return on_frame(Frame(zone_names=zone_names, **d))
     mode = "resume" if resume else "overwrite" if overwrite else "create"
     out = "" if output is None else os.fspath(output)
-    return RunResult(**_isochor.run(sc, out, mode, progress, callback))
+    return RunResult(**_core().run(sc, out, mode, progress, callback))
 
 
 def study_cases(path: Union[str, os.PathLike], overrides: Overrides = None) -> list:
     """The cases of a study file (the reference first): method, label, overrides, sweep."""
-    return _isochor.study_cases(os.fspath(path), overrides)[1]
+    return _core().study_cases(os.fspath(path), overrides)[1]
 
 
 def study(path: Union[str, os.PathLike], overrides: Overrides = None, *, resume: bool = False,
@@ -136,9 +158,9 @@ def study(path: Union[str, os.PathLike], overrides: Overrides = None, *, resume:
     """Runs a study as `isochor study` does (each case in its own process, `study.jobs` at once)
     and returns its results.csv as a list of dicts (numbers as floats, failed cases with their
     reason). `report` also writes the charts and report.md (tools/study_report.py)."""
-    out, _failed = _isochor.run_study(os.fspath(path), overrides, resume, progress)
+    out, _failed = _core().run_study(os.fspath(path), overrides, resume, progress)
     if report:
-        subprocess.run(["/usr/bin/python3", os.path.join(_isochor.tools_dir, "study_report.py"), out], check=True)
+        subprocess.run(["/usr/bin/python3", os.path.join(_core().tools_dir, "study_report.py"), out], check=True)
     rows = []
     with builtins.open(os.path.join(out, "results.csv"), newline="") as f:
         for row in csv.DictReader(f):

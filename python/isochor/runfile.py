@@ -1,13 +1,40 @@
-"""Reading a run's HDF5 file (docs/output.md) as NumPy arrays: isochor.open(PATH)."""
+"""Reading a run's HDF5 file (docs/output.md) as NumPy arrays: isochor.open(PATH).
+
+Pure Python (h5py and NumPy): the scripts of tools/ read run files through it without the
+compiled module, and none of them indexes the file's layout or parses the scene's text itself.
+"""
 from __future__ import annotations
 
+import dataclasses
 import functools
 import os
-from typing import Dict, List, Optional, Union
+from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
-from ._isochor import Error
+from .errors import Error
+
+
+def _text(v: object) -> object:
+    return v.decode() if isinstance(v, bytes) else v
+
+
+@dataclasses.dataclass
+class Collider:
+    """A collider as the run recorded it (/colliders): its shape and dimensions (m) in its own
+    frame (axis z; a mesh: its file's, scaled), its rest pose, and a mesh collider's surface.
+    Where it is at frame k: Run.collider_pose(k, index)."""
+    index: int                    # its column in /frames/collider_pose (the scene's order)
+    name: str                     # "contact.ground", "contact.plane[0]", "collider[2]"
+    shape: str                    # plane, sphere, capsule, box, cylinder, mesh
+    dimensions: Dict[str, float]  # radius, length, size_x/y/z, wall, rounding: what the shape has
+    rest_pose: np.ndarray         # (12,) local -> world x = A l + b: A row-major, then b
+    vertices: Optional[np.ndarray] = None   # (V,3) a mesh's surface in its frame
+    triangles: Optional[np.ndarray] = None  # (T,3)
+
+    @property
+    def is_ground(self) -> bool:
+        return self.name == "contact.ground"
 
 
 class Run:
@@ -25,6 +52,9 @@ class Run:
         if not os.path.exists(self.path):
             raise Error(f"{self.path}: no such file (expected a run's .h5 file)")
         try:
+            # HDF5's default locking, as h5py and meshio open files (one process cannot open a
+            # file with two settings); the writer takes no HDF5 lock, so a run still being
+            # written is read as far as it is.
             self._h5 = h5py.File(self.path, "r")
         except OSError as e:
             raise Error(f"{self.path}: cannot be read as HDF5 ({e}; expected a run's .h5 file)") from None
@@ -32,7 +62,7 @@ class Run:
         if "mesh" not in h or "frames" not in h:
             h.close()
             raise Error(f"{self.path}: has no /mesh and /frames (expected a file written by isochor run)")
-        attr = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in h.attrs.items()}
+        attr = {k: _text(v) for k, v in h.attrs.items()}
         self.attributes: Dict[str, object] = attr
         self.status: str = str(attr.get("status", ""))
         self.scene: str = str(attr.get("scene", ""))
@@ -43,6 +73,8 @@ class Run:
         self.rest_volumes: np.ndarray = m["rest_volumes"][()]
         self.node_sets: Dict[str, np.ndarray] = {k: v[()] for k, v in m.get("node_sets", {}).items()}
         self.zones: Dict[str, np.ndarray] = {k: v[()] for k, v in h.get("zones", {}).items()}
+        # Each tet's smallest zone, as an index into volume_columns[1:] (-1: in none), for viewers.
+        self.tet_zone: np.ndarray = m["zone"][()] if "zone" in m else np.full(len(self.tets), -1)
         f = h["frames"]
         # A run killed while writing a frame may hold one series a frame longer: the shortest
         # series is what is complete (as `isochor run --resume` cuts it).
@@ -60,10 +92,28 @@ class Run:
         self.volumes: np.ndarray = vol[:n]
         self.energy: np.ndarray = f["energy"][:n]
         st = h.get("stats")
-        self.totals: Dict[str, object] = ({k: (v.decode() if isinstance(v, bytes) else v) for k, v in st.attrs.items()}
-                                          if st is not None else {})
+        self.totals: Dict[str, object] = {k: _text(v) for k, v in st.attrs.items()} if st is not None else {}
         self.stats: Dict[str, np.ndarray] = ({k: v[:n] for k, v in st.items() if hasattr(v, "shape")}
                                              if st is not None else {})
+        self._read_scene_record(h, attr)
+
+    def _read_scene_record(self, h, attr: Dict[str, object]) -> None:
+        """The up direction and the colliders that the run recorded (absent in a file written
+        before they were: up z, no colliders)."""
+        up = np.asarray(attr.get("up", (0.0, 0.0, 1.0)), float)
+        self.up: np.ndarray = up / np.linalg.norm(up) if up.shape == (3,) and np.linalg.norm(up) > 0 else np.array([0.0, 0.0, 1.0])
+        self.up_source: str = str(attr.get("up_source", "z (the file records no up direction)"))
+        self.scene_directory: str = str(attr.get("scene_directory", "") or os.path.dirname(str(attr.get("scene_file", ""))))
+        self.colliders: List[Collider] = []
+        g = h.get("colliders")
+        for key in sorted(g.keys() if g is not None else [], key=int):
+            c = g[key]
+            a = {k: _text(v) for k, v in c.attrs.items()}
+            dims = {k: float(v) for k, v in a.items() if k not in ("name", "shape", "rest_pose")}
+            self.colliders.append(Collider(int(key), str(a.get("name", "")), str(a.get("shape", "")), dims,
+                                           np.asarray(a.get("rest_pose", np.r_[np.eye(3).ravel(), 0, 0, 0]), float),
+                                           c["vertices"][()] if "vertices" in c else None,
+                                           c["triangles"][()] if "triangles" in c else None))
 
     # The per-frame node arrays, read when first asked for.
     def _series(self, name: str) -> Optional[np.ndarray]:
@@ -95,13 +145,52 @@ class Run:
         """(F,M) the constraints' multipliers."""
         return self._series("multipliers")
 
-    def frame_positions(self, k: int) -> np.ndarray:
-        """(N,3) node positions at frame k (negative k counts from the end)."""
+    @functools.cached_property
+    def contact(self) -> Optional[np.ndarray]:
+        """(F,N,3) the colliders' force on every node (N), when the scene had colliders."""
+        return self._series("contact")
+
+    def has(self, name: str) -> bool:
+        """Whether the run has the per-frame series /frames/NAME (load, contact, pressure, ...)."""
+        return name in self._h5["frames"]
+
+    def _frame_index(self, k: int) -> int:
         if k < 0:
             k += self.num_frames
         if not 0 <= k < self.num_frames:
             raise IndexError(f"{self.path}: frame {k} (it has {self.num_frames})")
-        return self._h5["frames"]["positions"][k]
+        return k
+
+    def frame(self, name: str, k: int) -> np.ndarray:
+        """One frame of the series /frames/NAME ("positions", "load", "contact", "pressure", ...),
+        read alone (negative k counts from the end)."""
+        if not self.has(name):
+            raise KeyError(f"{self.path}: no /frames/{name}")
+        return self._h5["frames"][name][self._frame_index(k)]
+
+    def frame_range(self, name: str, start: int, stop: int) -> np.ndarray:
+        """Frames start..stop-1 of /frames/NAME, read together (a long run read in blocks)."""
+        if not self.has(name):
+            raise KeyError(f"{self.path}: no /frames/{name}")
+        return self._h5["frames"][name][max(start, 0):min(stop, self.num_frames)]
+
+    def frame_positions(self, k: int) -> np.ndarray:
+        """(N,3) node positions at frame k (negative k counts from the end)."""
+        return self.frame("positions", k)
+
+    def collider_scale(self, k: int, c: int) -> float:
+        """Collider c's factor on its radius at frame k (a band that tightens; 1: its own)."""
+        f = self._h5["frames"]
+        k = self._frame_index(k)
+        return float(f["collider_scale"][k][c]) if "collider_scale" in f and f["collider_scale"].shape[0] > k else 1.0
+
+    def collider_pose(self, k: int, c: int) -> Tuple[np.ndarray, np.ndarray]:
+        """Collider c's pose at frame k: (A (3,3), b (3,)), its local point l at A l + b. The rest
+        pose where the run did not write poses (an integrator that moves no collider)."""
+        f = self._h5["frames"]
+        k = self._frame_index(k)
+        p = f["collider_pose"][k][c] if "collider_pose" in f and f["collider_pose"].shape[0] > k else self.colliders[c].rest_pose
+        return np.asarray(p[:9], float).reshape(3, 3), np.asarray(p[9:], float)
 
     def zone_volume(self, name: str) -> np.ndarray:
         """(F,) the volume of a zone ("total": the whole body) at every frame."""
@@ -126,7 +215,7 @@ class Run:
 
     def __repr__(self) -> str:
         return (f"<isochor.Run {self.path!r}: {len(self.rest_positions)} nodes, {len(self.tets)} tets, "
-                f"{self.num_frames} frames, zones {list(self.zones)}, {self.status}>")
+                f"{self.num_frames} frames, zones {list(self.zones)}, {len(self.colliders)} colliders, {self.status}>")
 
 
 def open(path: Union[str, os.PathLike]) -> Run:  # noqa: A001

@@ -219,12 +219,15 @@ std::shared_ptr<Scene> scene_from_dict(py::dict d, py::object overrides, const s
 
 PYBIND11_MODULE(_isochor, m) {
   m.doc() = "isochor's C++ core (use the isochor package)";
-  static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
+  // One isochor.Error for the compiled part and the pure-Python reader (isochor/errors.py): its
+  // class is kept for the interpreter's life (never released: no destructor runs at exit).
+  static PyObject* const error = py::object(py::module_::import("isochor.errors").attr("Error")).release().ptr();
+  m.attr("Error") = py::handle(error);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const Error& e) {
-      error(e.what());
+      PyErr_SetString(error, e.what());
     }
   });
 

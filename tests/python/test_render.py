@@ -1,4 +1,4 @@
-"""tools/render.py's geometry (issue 21): up from the scene, the camera, the rigid fit that the
+"""tools/render.py's geometry: up from the run, the camera, the rigid fit that the
 deformation colour subtracts, the surface triangles' tets; and a picture of a y-up run."""
 import os
 import subprocess
@@ -19,12 +19,15 @@ def rotation(axis, angle):
     return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K  # Rodrigues
 
 
-def test_up_comes_from_the_ground_then_gravity_then_the_option():
-    assert np.allclose(render.up_of({"contact": {"ground": True, "normal": [0, 2, 0]}}, "")[0], [0, 1, 0])
-    assert np.allclose(render.up_of({"forces": {"gravity": [0, -9.81, 0]}}, "")[0], [0, 1, 0])
-    assert np.allclose(render.up_of({}, "")[0], [0, 0, 1])  # the default gravity is along -z
-    assert np.allclose(render.up_of({"forces": {"gravity": [0, 0, 0]}}, "")[0], [0, 0, 1])
-    assert np.allclose(render.up_of({"forces": {"gravity": [0, -9.81, 0]}}, "-x")[0], [-1, 0, 0])
+class _Recorded:
+    up, up_source = np.array([0.0, 1.0, 0.0]), "the ground's normal"
+
+
+def test_up_is_what_the_run_recorded_unless_the_option_says_otherwise():
+    # The rule itself (ground, gravity, z) is the C++ side's: SceneRecord.UpIsTheGroundsNormal...
+    assert np.allclose(render.up_of(_Recorded, "")[0], [0, 1, 0])
+    assert render.up_of(_Recorded, "")[1] == "the ground's normal"
+    assert np.allclose(render.up_of(_Recorded, "-x")[0], [-1, 0, 0])
     assert np.allclose(render.parse_up("1,1,0"), np.array([1, 1, 0]) / np.sqrt(2))
     with pytest.raises(SystemExit):
         render.parse_up("w")

@@ -35,14 +35,14 @@ import sys
 import time
 
 import bpy
-import h5py
 import numpy as np
 from mathutils import Vector
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, ".."))
 import export  # noqa: E402  (tools/export.py: the PC2 writer)
-import render  # noqa: E402  (tools/render.py: up from the scene, planes, camera angles)
+import render  # noqa: E402  (tools/render.py: up, planes, camera angles)
+from run_file import Error, Run  # noqa: E402  (the one reader of run files)
 
 
 def args():
@@ -112,136 +112,138 @@ SET1 = [(0.6, 0.6, 0.6, 1), (0.89, 0.10, 0.11, 1), (0.22, 0.49, 0.72, 1), (0.30,
         (0.60, 0.31, 0.64, 1), (1.0, 0.5, 0.0, 1), (1.0, 1.0, 0.2, 1), (0.65, 0.34, 0.16, 1), (0.97, 0.51, 0.75, 1)]
 
 
-def main():
-    a = args()
-    if not os.path.exists(a.run):
-        fail(f"{a.run}: no such file")
-    run = os.path.abspath(a.run)
-    f = h5py.File(run, "r")
-    S = f["/mesh/surface"][()]
-    T = f["/mesh/tets"][()]
-    P = f["/frames/positions"]
-    times = f["/frames/time"][()]
-    n = min(P.shape[0], len(times))
-    if a.max_frames > 0:
-        n = min(n, a.max_frames)
-    if n == 0:
-        fail(f"{a.run}: no frames")
-    scene_table = render.scene_of(f)
-    up, up_from = render.up_of(scene_table, a.up)
-    nodes = export.surface_nodes(f)
-    index = -np.ones(P.shape[1], dtype=np.int64)
-    index[nodes] = np.arange(len(nodes))
-    faces = index[S]
-    started = time.perf_counter()
+class Body:
+    """The run's surface as a Blender mesh under one empty that turns the run's up to Blender's z."""
 
-    # An empty scene at the run's frame rate.
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    rate = 1.0 / float(np.median(np.diff(times[:n]))) if n > 1 else 24.0
-    sc.render.fps = max(1, round(rate))
-    sc.render.fps_base = sc.render.fps / rate
-    sc.frame_start, sc.frame_end = 1, n
+    def __init__(self, a, run):
+        self.run = run
+        self.n = run.num_frames if a.max_frames <= 0 else min(run.num_frames, a.max_frames)
+        if self.n == 0:
+            fail(f"{a.run}: no frames")
+        self.up, self.up_from = render.up_of(run, a.up)
+        self.nodes = export.surface_nodes(run)
+        index = -np.ones(len(run.rest_positions), dtype=np.int64)
+        index[self.nodes] = np.arange(len(self.nodes))
+        # An empty scene at the run's frame rate.
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        self.sc = sc = bpy.context.scene
+        times = run.times[:self.n]
+        self.rate = 1.0 / float(np.median(np.diff(times))) if self.n > 1 else 24.0
+        sc.render.fps = max(1, round(self.rate))
+        sc.render.fps_base = sc.render.fps / self.rate
+        sc.frame_start, sc.frame_end = 1, self.n
+        self.root = bpy.data.objects.new("isochor", None)
+        sc.collection.objects.link(self.root)
+        R = Vector((0, 0, 1)).rotation_difference(Vector(self.up.tolist())).inverted()  # run's up -> +z
+        self.root.rotation_mode = "QUATERNION"
+        self.root.rotation_quaternion = R
+        self.Rm = np.array(R.to_matrix())
+        # The body: the surface of frame 0, smooth-shaded.
+        self.mesh = bpy.data.meshes.new(os.path.basename(run.path))
+        self.mesh.from_pydata(self.surface(0).tolist(), [], index[run.surface].tolist())
+        self.mesh.update()
+        self.mesh.polygons.foreach_set("use_smooth", [True] * len(self.mesh.polygons))
+        self.obj = bpy.data.objects.new("body", self.mesh)
+        sc.collection.objects.link(self.obj)
+        self.obj.parent = self.root
 
-    # Everything of the run hangs under one empty that turns its up to Blender's z.
-    root = bpy.data.objects.new("isochor", None)
-    sc.collection.objects.link(root)
-    R = Vector((0, 0, 1)).rotation_difference(Vector(up.tolist())).inverted()  # run's up -> +z
-    root.rotation_mode = "QUATERNION"
-    root.rotation_quaternion = R
-    Rm = np.array(R.to_matrix())
+    def surface(self, k):
+        return self.run.frame_positions(k)[self.nodes]
 
-    # The body: the surface of frame 0, smooth-shaded.
-    mesh = bpy.data.meshes.new(os.path.basename(run))
-    mesh.from_pydata(P[0][nodes].tolist(), [], faces.tolist())
-    mesh.update()
-    mesh.polygons.foreach_set("use_smooth", [True] * len(mesh.polygons))
-    body = bpy.data.objects.new("body", mesh)
-    sc.collection.objects.link(body)
-    body.parent = root
 
-    # Colour attributes per face corner: the zone of the tet under each triangle, and the
-    # pressure of one frame.
-    under = render.tri_tet(S, T)
-    if "/mesh/zone" in f:
-        zone = f["/mesh/zone"][()]
-        names = f["/mesh/zone"].attrs.get("zones", b"")
-        zone_names = (names.decode() if isinstance(names, bytes) else str(names)).split(",")
-    else:
-        zone, zone_names = np.full(len(T), -1), []
-    zc = np.array([SET1[(z + 1) % len(SET1)] for z in zone[under]])
+def add_colours(a, body):
+    """Colour attributes per face corner: the zone of the tet under each triangle, and the
+    pressure of one frame; the body's material coloured by one of them. Returns which."""
+    run, mesh = body.run, body.mesh
+    under = render.tri_tet(run.surface, run.tets)
+    zone_names = run.volume_columns[1:]
+    zc = np.array([SET1[(z + 1) % len(SET1)] for z in run.tet_zone[under]])
     attr = mesh.color_attributes.new("zone", "FLOAT_COLOR", "CORNER")
     attr.data.foreach_set("color", np.repeat(linear(zc), 3, axis=0).ravel())
-    has_pressure = "/frames/pressure" in f
+    has_pressure = run.has("pressure")
     if has_pressure:
-        k = a.pressure_frame % n
-        p = f["/frames/pressure"][k][under]
+        p = run.frame("pressure", a.pressure_frame % body.n)[under]
         lo, hi = np.percentile(p, 2), np.percentile(p, 98)
         attr = mesh.color_attributes.new("pressure", "FLOAT_COLOR", "CORNER")
         attr.data.foreach_set("color", np.repeat(linear(colour_rows(p, lo, hi, viridis)), 3, axis=0).ravel())
     color = a.color or ("zone" if len(zone_names) > 1 else "pressure" if has_pressure else "none")
     if color == "pressure" and not has_pressure:
         fail(f"{a.run}: no /frames/pressure (run the scene with output.pressure = true)")
-    body.data.materials.append(material("tissue", None if color == "none" else color))
+    body.obj.data.materials.append(material("tissue", None if color == "none" else color))
+    return color
 
-    # The motion.
+
+def add_motion(a, body):
+    """The motion: a PC2 cache (written beside the run when missing or older) or shape keys."""
+    run, n = body.run, body.n
     if a.cache == "pc2":
-        pc2 = os.path.splitext(run)[0] + ".pc2"
-        if a.max_frames > 0:
-            pc2 = os.path.splitext(run)[0] + f"_{n}.pc2"
-        if not os.path.exists(pc2) or os.path.getmtime(pc2) < os.path.getmtime(run):
-            export.write_cache(run, pc2, "pc2", frames=n)
-        mod = body.modifiers.new("isochor motion", "MESH_CACHE")
+        stem = os.path.splitext(run.path)[0]
+        pc2 = stem + (f"_{n}.pc2" if a.max_frames > 0 else ".pc2")
+        if not os.path.exists(pc2) or os.path.getmtime(pc2) < os.path.getmtime(run.path):
+            export.write_cache(run.path, pc2, "pc2", frames=n)
+        mod = body.obj.modifiers.new("isochor motion", "MESH_CACHE")
         mod.cache_format = "PC2"
         mod.filepath = pc2
         mod.frame_start = 1.0  # PC2 sample 0 at Blender frame 1
         mod.time_mode = "FRAME"
         mod.play_mode = "SCENE"
-    else:
-        body.shape_key_add(name="Basis", from_mix=False)
-        for k in range(n):
-            key = body.shape_key_add(name=f"frame_{k}", from_mix=False)
-            key.data.foreach_set("co", P[k][nodes].astype(np.float32).ravel())
-            key.value = 0.0
-            for fr, v in ((k, 0.0), (k + 1, 1.0), (k + 2, 0.0)):
-                if 1 <= fr <= n:
-                    key.value = v
-                    key.keyframe_insert("value", frame=fr)
-    setup_seconds = time.perf_counter() - started
+        return
+    body.obj.shape_key_add(name="Basis", from_mix=False)
+    for k in range(n):
+        key = body.obj.shape_key_add(name=f"frame_{k}", from_mix=False)
+        key.data.foreach_set("co", body.surface(k).astype(np.float32).ravel())
+        key.value = 0.0
+        for fr, v in ((k, 0.0), (k + 1, 1.0), (k + 2, 0.0)):
+            if 1 <= fr <= n:
+                key.value = v
+                key.keyframe_insert("value", frame=fr)
 
-    # What the run visits (a sample of at most 200 frames), in Blender's world.
+
+def view_extent(body):
+    """Centre and size of what the run visits (a sample of at most 200 frames, and the body's
+    shadow on the ground), in Blender's world."""
+    n, Rm = body.n, body.Rm
     sample = sorted(set(np.linspace(0, n - 1, min(n, 200)).astype(int)))
-    pts = np.concatenate([P[k][nodes] for k in sample]) @ Rm.T
-    planes = render.planes_of(scene_table)
-    for pl in planes:
-        if pl["ground"]:
-            gp, gn = Rm @ pl["point"], Rm @ pl["normal"]
+    pts = np.concatenate([body.surface(k) for k in sample]) @ Rm.T
+    for c in body.run.colliders:
+        if c.is_ground:
+            point, normal = render.plane_at(body.run, c, 0)
+            gp, gn = Rm @ point, Rm @ normal
             pts = np.concatenate([pts, pts - np.outer((pts - gp) @ gn, gn)])
     lo, hi = pts.min(0), pts.max(0)
-    centre, span = (lo + hi) / 2, float(np.linalg.norm(hi - lo)) or 1.0
+    return (lo + hi) / 2, float(np.linalg.norm(hi - lo)) or 1.0
 
-    # The ground and the contact planes (moving ones keyframed from t0 to t1).
-    for i, pl in enumerate(planes):
+
+def add_planes(body, centre, span):
+    """The ground and the other planes, each keyframed at every frame where it moved."""
+    run = body.run
+    c_run = body.Rm.T @ centre
+    for c in (c for c in run.colliders if c.shape == "plane"):
         bpy.ops.mesh.primitive_plane_add(size=1.5 * span)
         obj = bpy.context.active_object
-        obj.name = "ground" if pl["ground"] else f"plane_{i}"
-        obj.parent = root
+        obj.name = "ground" if c.is_ground else f"plane_{c.index}"
+        obj.parent = body.root
+        obj.data.materials.append(material("ground" if c.is_ground else "plane", None,
+                                           (0.8, 0.8, 0.78, 1.0) if c.is_ground else (0.55, 0.7, 0.85, 1.0)))
         obj.rotation_mode = "QUATERNION"
-        obj.rotation_quaternion = Vector((0, 0, 1)).rotation_difference(Vector(pl["normal"].tolist()))
-        c_run = Rm.T @ centre
-        base = pl["point"] + ((c_run - pl["point"]) - ((c_run - pl["point"]) @ pl["normal"]) * pl["normal"])
-        obj.location = base.tolist()
-        m = material("ground" if pl["ground"] else "plane", None,
-                     (0.8, 0.8, 0.78, 1.0) if pl["ground"] else (0.55, 0.7, 0.85, 1.0))
-        obj.data.materials.append(m)
-        if "displacement" in pl and np.any(pl["displacement"]):
-            for t, s in ((pl["t0"], 0.0), (pl["t1"], 1.0)):
-                obj.location = (base + s * pl["displacement"]).tolist()
-                obj.keyframe_insert("location", frame=1 + t * rate)
+        last = None
+        for k in range(body.n):
+            point, normal = render.plane_at(run, c, k)
+            base = point + ((c_run - point) - ((c_run - point) @ normal) * normal)
+            if last is not None and np.allclose(base, last[0]) and np.allclose(normal, last[1]):
+                continue
+            obj.rotation_quaternion = Vector((0, 0, 1)).rotation_difference(Vector(normal.tolist()))
+            obj.location = base.tolist()
+            if k > 0 or body.n > 1:
+                obj.keyframe_insert("location", frame=k + 1)
+                obj.keyframe_insert("rotation_quaternion", frame=k + 1)
+            last = (base, normal)
 
-    # Camera and lights framed on the motion (the camera as isochor render places it).
-    cam_angles = render.Camera(up, a.elev, a.azim)
-    toward = Rm @ cam_angles.toward
+
+def add_camera_and_lights(a, body, centre, span):
+    """Camera and lights framed on the motion (the camera as isochor render places it)."""
+    sc = body.sc
+    toward = body.Rm @ render.Camera(body.up, a.elev, a.azim).toward
     cam_data = bpy.data.cameras.new("camera")
     cam_data.lens = 50
     cam = bpy.data.objects.new("camera", cam_data)
@@ -271,75 +273,105 @@ def main():
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.6
     sc.world = world
     sc.view_settings.view_transform = "Standard"  # colours as the colour maps give them
-    print(f"isochor_blender: {os.path.basename(run)}: {n} frames of {len(nodes)} surface vertices at "
-          f"{rate:g} fps, up {np.round(up, 3).tolist()} ({up_from}) turned to z, colour {color}, "
-          f"{a.cache} set up in {setup_seconds:.2f} s")
 
-    if a.verify is not None:
-        k = a.verify % n
+
+def verify(body, k):
+    """Frame k's evaluated surface in Blender's world against the run's, turned by Rm."""
+    body.sc.frame_set(k + 1)
+    dg = bpy.context.evaluated_depsgraph_get()
+    ev = body.obj.evaluated_get(dg)
+    co = np.empty(len(ev.data.vertices) * 3)
+    ev.data.vertices.foreach_get("co", co)
+    world_m = np.array(ev.matrix_world)
+    got = co.reshape(-1, 3) @ world_m[:3, :3].T + world_m[:3, 3]
+    x = body.surface(k)
+    print(f"isochor_blender: verify frame {k}: largest distance {np.abs(got - x @ body.Rm.T).max():.3e} m "
+          f"(lowest z {got[:, 2].min():.6f}, run's lowest height {np.min(x @ body.up):.6f})")
+
+
+def scrub(body, count):
+    t0 = time.perf_counter()
+    dg = bpy.context.evaluated_depsgraph_get()
+    for k in np.linspace(0, body.n - 1, count).astype(int):
+        body.sc.frame_set(int(k) + 1)
+        body.obj.evaluated_get(dg).data.vertices[0].co  # the evaluated mesh at that frame
+    print(f"isochor_blender: scrub {count} frames: {(time.perf_counter() - t0) / count * 1e3:.2f} ms per frame")
+
+
+def render_frames(a, body):
+    """Cycles on the CPU, one PNG per frame asked for; an MP4 with ffmpeg."""
+    n, sc = body.n, body.sc
+    if a.frames:
+        frames = sorted({int(k) % n for k in a.frames.split(",")})
+    else:
+        frames = list(range(0, n, a.every)) if a.every else list(range(n))
+    try:
+        w, h = (int(x) for x in a.size.lower().split("x"))
+    except ValueError:
+        fail(f"--size {a.size}: expected WIDTHxHEIGHT, e.g. 640x480")
+    sc.render.engine = "CYCLES"
+    sc.cycles.device = "CPU"
+    sc.cycles.samples = a.samples
+    sc.cycles.use_denoising = False  # Debian's Blender is built without OpenImageDenoise
+    sc.render.resolution_x, sc.render.resolution_y = w, h
+    sc.render.resolution_percentage = 100
+    sc.render.image_settings.file_format = "PNG"
+    os.makedirs(a.render, exist_ok=True)
+    written = []
+    t0 = time.perf_counter()
+    for k in frames:
         sc.frame_set(k + 1)
-        dg = bpy.context.evaluated_depsgraph_get()
-        ev = body.evaluated_get(dg)
-        co = np.empty(len(ev.data.vertices) * 3)
-        ev.data.vertices.foreach_get("co", co)
-        world_m = np.array(ev.matrix_world)
-        got = co.reshape(-1, 3) @ world_m[:3, :3].T + world_m[:3, 3]
-        want = P[k][nodes] @ Rm.T
-        print(f"isochor_blender: verify frame {k}: largest distance {np.abs(got - want).max():.3e} m "
-              f"(lowest z {got[:, 2].min():.6f}, run's lowest height {np.min(P[k][nodes] @ up):.6f})")
+        sc.render.filepath = os.path.join(os.path.abspath(a.render), f"frame_{k:06d}.png")
+        bpy.ops.render.render(write_still=True)
+        written.append(sc.render.filepath)
+    per = (time.perf_counter() - t0) / max(len(written), 1)
+    print(f"isochor_blender: rendered {len(written)} frames to {a.render} ({per:.2f} s per frame, "
+          f"{a.samples} samples, {w}x{h})")
+    if a.mp4:
+        write_mp4(a, body, written)
 
+
+def write_mp4(a, body, written):
+    if not subprocess.run(["sh", "-c", "command -v ffmpeg"], capture_output=True).stdout:
+        fail("ffmpeg is not installed (apt-get install -y ffmpeg); the PNG files are written")
+    listing = os.path.join(a.render, "frames.txt")
+    with open(listing, "w") as lf:
+        for p in written:
+            lf.write(f"file '{p}'\nduration {1 / body.rate}\n")
+    mp4 = os.path.splitext(body.run.path)[0] + "_blender.mp4"
+    subprocess.run(["ffmpeg", "-y", "-loglevel", "error", "-f", "concat", "-safe", "0", "-i", listing,
+                    "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", mp4], check=True)
+    print(f"isochor_blender: wrote {mp4}")
+
+
+def main():
+    a = args()
+    if not os.path.exists(a.run):
+        fail(f"{a.run}: no such file")
+    try:
+        run = Run(os.path.abspath(a.run))
+    except Error as e:
+        fail(str(e))
+    started = time.perf_counter()
+    body = Body(a, run)
+    color = add_colours(a, body)
+    add_motion(a, body)
+    setup_seconds = time.perf_counter() - started
+    centre, span = view_extent(body)
+    add_planes(body, centre, span)
+    add_camera_and_lights(a, body, centre, span)
+    print(f"isochor_blender: {os.path.basename(run.path)}: {body.n} frames of {len(body.nodes)} surface vertices at "
+          f"{body.rate:g} fps, up {np.round(body.up, 3).tolist()} ({body.up_from}) turned to z, colour {color}, "
+          f"{a.cache} set up in {setup_seconds:.2f} s")
+    if a.verify is not None:
+        verify(body, a.verify % body.n)
     if a.scrub > 0:
-        t0 = time.perf_counter()
-        dg = bpy.context.evaluated_depsgraph_get()
-        for k in np.linspace(0, n - 1, a.scrub).astype(int):
-            sc.frame_set(int(k) + 1)
-            body.evaluated_get(dg).data.vertices[0].co  # the evaluated mesh at that frame
-        print(f"isochor_blender: scrub {a.scrub} frames: {(time.perf_counter() - t0) / a.scrub * 1e3:.2f} ms per frame")
-
+        scrub(body, a.scrub)
     if a.save:
         bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(a.save))
         print(f"isochor_blender: wrote {a.save}")
-
     if a.render:
-        if a.frames:
-            frames = sorted({int(k) % n for k in a.frames.split(",")})
-        elif a.every:
-            frames = list(range(0, n, a.every))
-        else:
-            frames = list(range(n))
-        try:
-            w, h = (int(x) for x in a.size.lower().split("x"))
-        except ValueError:
-            fail(f"--size {a.size}: expected WIDTHxHEIGHT, e.g. 640x480")
-        sc.render.engine = "CYCLES"
-        sc.cycles.device = "CPU"
-        sc.cycles.samples = a.samples
-        sc.cycles.use_denoising = False  # Debian's Blender is built without OpenImageDenoise
-        sc.render.resolution_x, sc.render.resolution_y = w, h
-        sc.render.resolution_percentage = 100
-        sc.render.image_settings.file_format = "PNG"
-        os.makedirs(a.render, exist_ok=True)
-        written = []
-        t0 = time.perf_counter()
-        for k in frames:
-            sc.frame_set(k + 1)
-            sc.render.filepath = os.path.join(os.path.abspath(a.render), f"frame_{k:06d}.png")
-            bpy.ops.render.render(write_still=True)
-            written.append(sc.render.filepath)
-        per = (time.perf_counter() - t0) / max(len(written), 1)
-        print(f"isochor_blender: rendered {len(written)} frames to {a.render} ({per:.2f} s per frame, "
-              f"{a.samples} samples, {w}x{h})")
-        if a.mp4:
-            if not subprocess.run(["sh", "-c", "command -v ffmpeg"], capture_output=True).stdout:
-                fail("ffmpeg is not installed (apt-get install -y ffmpeg); the PNG files are written")
-            listing = os.path.join(a.render, "frames.txt")
-            with open(listing, "w") as lf:
-                for p in written:
-                    lf.write(f"file '{p}'\nduration {1 / rate}\n")
-            mp4 = os.path.splitext(run)[0] + "_blender.mp4"
-            subprocess.run(["ffmpeg", "-y", "-loglevel", "error", "-f", "concat", "-safe", "0", "-i", listing,
-                            "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", mp4], check=True)
-            print(f"isochor_blender: wrote {mp4}")
+        render_frames(a, body)
 
 
 try:

@@ -11,10 +11,33 @@
 
 namespace isochor {
 
+// A collider as the run file records it under /colliders (docs/output.md), so that tools draw
+// it without parsing the scene: its shape and dimensions, its rest pose, and a mesh collider's
+// surface. Where it is at each frame is /frames/collider_pose.
+struct ColliderRecord {
+  std::string name;   // "contact.ground", "contact.plane[0]", "collider[2]"
+  std::string shape;  // plane, sphere, capsule, box, cylinder, mesh
+  std::vector<std::pair<std::string, double>> dimensions;  // m: radius, length, size_x, ..., wall
+  std::array<double, 12> rest_pose{1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};  // A (row-major), b: x = A l + b
+  Points vertices;           // mesh: its surface in the collider's frame (scaled)
+  std::vector<Tri> triangles;
+};
+
+// What a viewer needs besides the body: the scene's up direction and its colliders.
+struct SceneRecord {
+  std::array<double, 3> up{0, 0, 1};  // unit
+  std::string up_source;              // why that is up ("the ground's normal", "against gravity", ...)
+  std::vector<ColliderRecord> colliders;  // the scene's order: the ground, the planes, the [[collider]]s
+};
+
+// Named sets of tets: /zones, and the columns of /frames/volume after "total".
+using Zones = std::vector<std::pair<std::string, std::vector<int>>>;
+
 struct RunInfo {
   std::string scene_text;  // the scene as run
   std::string scene_file;  // where it came from
   std::string command;     // e.g. "run", "mesh"
+  SceneRecord scene;       // written as /colliders and the root attributes up, up_source
 };
 
 struct Frame {
@@ -30,6 +53,8 @@ struct Frame {
   // Where each collider is: 12 numbers per collider, its local-to-world rotation A (row-major)
   // and translation b (x = A l + b), in the scene's order (the ground and planes first).
   const std::vector<double>* collider_poses = nullptr;
+  // Each collider's factor on its radius (Collider::resize; 1: its own), in the same order.
+  const std::vector<double>* collider_scales = nullptr;
   std::vector<std::pair<std::string, double>> stats;  // per-frame series under /stats
 };
 
@@ -52,9 +77,8 @@ class OutputWriter {
   };
   // `zones` are written under /zones and name the columns of /frames/volume. The file is locked
   // for the writer's life (a second writer on the same path fails at start).
-  OutputWriter(const std::string& path, const Mesh& mesh,
-               const std::vector<std::pair<std::string, std::vector<int>>>& zones, const RunInfo& info,
-               bool pressure, Mode mode = Mode::create);
+  OutputWriter(const std::string& path, const Mesh& mesh, const Zones& zones, const RunInfo& info, bool pressure,
+               Mode mode = Mode::create);
   ~OutputWriter();
   OutputWriter(const OutputWriter&) = delete;
   OutputWriter& operator=(const OutputWriter&) = delete;

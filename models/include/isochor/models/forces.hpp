@@ -98,6 +98,8 @@ class ExternalPotential {
   void contact_forces(const Points& x, const Eigen::VectorXd* xdot, Points& out) const;
   // The poses as 12 numbers each: A row-major, then b.
   void pose_numbers(std::vector<double>& out) const;
+  // Each collider's radius factor at the current time (Frame::collider_scales).
+  void scale_numbers(std::vector<double>& out) const;
 
  private:
   Vec3 g() const { return gravity_scale_ * gravity_; }

@@ -49,6 +49,7 @@ class MassSpringSystem : public SceneSystem {
   bool has_contact() const override { return external_->has_contact(); }
   void contact(Points& out) const override { external_->contact_forces(x_, &xdot_, out); }
   void collider_poses(std::vector<double>& out) const override { external_->pose_numbers(out); }
+  void collider_scales(std::vector<double>& out) const override { external_->scale_numbers(out); }
   std::array<double, 3> energies() const override;  // kinetic, springs, external
   std::vector<double> volumes() const override;      // the enclosed volume (no zones)
   const DofMap& dofs() const override { return dofs_; }

@@ -15,6 +15,7 @@
 #include "isochor/integrators/statics.hpp"
 #include "isochor/integrators/xpbd.hpp"
 #include "isochor/core/mesh.hpp"
+#include "isochor/core/output.hpp"
 #include "isochor/core/scene_file.hpp"
 #include "isochor/models/skeleton.hpp"
 
@@ -120,6 +121,8 @@ struct Scene {
 // Parses a scene file with overrides; every key is checked and unknown keys are errors.
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
 Scene parse_scene(SceneFile file);
+// What the run file records besides the body: the up direction and the colliders (output.hpp).
+SceneRecord scene_record(const Scene& sc);
 
 // Keyframes of a driver or joint: `times`, `per_time` numbers of `key` per time (scaled by `scale`,
 // into x, y, z of the values) and `interpolation`; `what` names the numbers in errors.

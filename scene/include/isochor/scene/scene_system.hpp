@@ -40,6 +40,8 @@ class SceneSystem : public ConstrainedSystem {
   virtual void contact(Points& /*out*/) const {}
   // Each collider's pose at the current time (Frame::collider_poses).
   virtual void collider_poses(std::vector<double>& /*out*/) const {}
+  // Each collider's radius factor at the current time (Frame::collider_scales).
+  virtual void collider_scales(std::vector<double>& /*out*/) const {}
   // A resumed run's start (null: the scene's rest state and initial velocity): initial_state()
   // returns it for the unknowns.
   void set_start(const StartState* start) { start_ = start; }

@@ -1,0 +1,60 @@
+// What the run file records of a scene besides the body (core/output.hpp: SceneRecord): the up
+// direction a viewer turns upward and every collider's shape, so that tools read them from the
+// file instead of parsing the scene's text.
+#include "isochor/scene/scene.hpp"
+
+namespace isochor {
+
+namespace {
+
+ColliderRecord collider_record(const Collider& C) {
+  using K = ColliderShape::Kind;
+  const ColliderShape& S = C.shape;
+  ColliderRecord r;
+  r.name = C.name;
+  r.shape = S.kind == K::plane ? "plane" : S.kind == K::sphere ? "sphere" : S.kind == K::capsule ? "capsule"
+            : S.kind == K::box ? "box" : S.kind == K::cylinder ? "cylinder" : "mesh";
+  switch (S.kind) {
+    case K::plane: break;
+    case K::sphere: r.dimensions = {{"radius", S.radius}}; break;
+    case K::capsule: r.dimensions = {{"radius", S.radius}, {"length", 2 * S.half_length}}; break;
+    case K::box:
+      r.dimensions = {{"size_x", 2 * S.half_extents.x()}, {"size_y", 2 * S.half_extents.y()},
+                      {"size_z", 2 * S.half_extents.z()}, {"rounding", S.rounding}};
+      break;
+    case K::cylinder:
+      r.dimensions = {{"radius", S.radius}, {"length", 2 * S.half_length}, {"wall", S.wall}, {"rounding", S.rounding}};
+      break;
+    case K::mesh:
+      if (S.mesh) {
+        r.vertices = S.mesh->vertices();
+        r.triangles = S.mesh->triangles();
+      }
+      break;
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) r.rest_pose[3 * i + j] = C.rotation(i, j);
+    r.rest_pose[9 + i] = C.center(i);
+  }
+  return r;
+}
+
+}  // namespace
+
+SceneRecord scene_record(const Scene& sc) {
+  SceneRecord r;
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  r.up_source = "z (no ground, no gravity)";
+  if (!sc.colliders.empty() && sc.colliders.front().name == "contact.ground") {
+    up = sc.colliders.front().rotation.col(2).normalized();
+    r.up_source = "the ground's normal";
+  } else if (sc.gravity.norm() > 0) {
+    up = -sc.gravity.normalized();
+    r.up_source = "against gravity";
+  }
+  r.up = {up.x(), up.y(), up.z()};
+  for (const Collider& C : sc.colliders) r.colliders.push_back(collider_record(C));
+  return r;
+}
+
+}  // namespace isochor

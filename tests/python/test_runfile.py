@@ -1,0 +1,74 @@
+"""The one reader of run files (isochor.runfile): pure Python, so tools/ read runs without the
+compiled module; the colliders, their poses and scales, and up as the run recorded them."""
+import os
+import subprocess
+import sys
+import tomllib
+
+import numpy as np
+import pytest
+
+import isochor
+from paths import SOURCE, SWING
+
+
+@pytest.fixture(scope="module")
+def swing_with_colliders(tmp_path_factory):
+    """The swinging block with a ground, a plane that moves 0.1 m along x from t0 = 0.01 to
+    t1 = 0.03 s, and a sphere that tightens to 0.8 of its radius; 6 frames to 0.05 s."""
+    out = tmp_path_factory.mktemp("runfile") / "swing.h5"
+    with open(SWING, "rb") as f:
+        table = tomllib.load(f)
+    table["frames"]["duration"] = 0.05
+    table["contact"] = {"ground": True, "point": [0, 0, -1.0],
+                        "plane": [{"point": [2.0, 0, 0], "normal": [-1.0, 0, 0], "displacement": [0.1, 0, 0],
+                                   "t0": 0.01, "t1": 0.03}]}
+    table["collider"] = [{"shape": "sphere", "radius": 0.05, "center": [0.0, 0.0, 3.0],
+                          "resize": {"times": [0.0, 0.05], "factors": [1.0, 0.8]}}]
+    isochor.run(isochor.scene(table, directory=os.path.dirname(SWING)), out)
+    return out
+
+
+def test_colliders_come_back_as_the_scene_gave_them(swing_with_colliders):
+    with isochor.open(swing_with_colliders) as run:
+        assert [(c.name, c.shape) for c in run.colliders] == [
+            ("contact.ground", "plane"), ("contact.plane[0]", "plane"), ("collider[0]", "sphere")]
+        assert run.colliders[0].is_ground and not run.colliders[1].is_ground
+        assert run.colliders[2].dimensions == {"radius": 0.05}
+        np.testing.assert_allclose(run.colliders[2].rest_pose[9:], [0, 0, 3.0])
+        np.testing.assert_allclose(run.up, [0, 0, 1])  # the ground's default normal
+        assert run.up_source == "the ground's normal"
+
+
+def test_a_moving_plane_is_where_its_ramp_puts_it_at_every_frame(swing_with_colliders):
+    # docs/scenes.md: the point moves linearly by `displacement` from t0 to t1, still before and after.
+    with isochor.open(swing_with_colliders) as run:
+        for k, t in enumerate(run.times):
+            A, b = run.collider_pose(k, 1)
+            s = np.clip((t - 0.01) / 0.02, 0, 1)
+            np.testing.assert_allclose(b, [2.0 + 0.1 * s, 0, 0], atol=1e-12)
+            np.testing.assert_allclose(A[:, 2], [-1, 0, 0], atol=1e-15)
+            assert run.collider_scale(k, 2) == pytest.approx(1.0 - 0.2 * t / 0.05, abs=1e-12)  # linear keys
+
+
+def test_the_reader_needs_no_compiled_module(swing_with_colliders):
+    # The source tree's package has no _isochor beside it: isochor.open works, isochor.load says why not.
+    code = ("import isochor, sys\n"
+            "assert isochor._isochor is None\n"
+            f"r = isochor.open({str(swing_with_colliders)!r})\n"
+            "print(r.num_frames, len(r.colliders))\n"
+            "try:\n    isochor.load('x.toml')\nexcept isochor.Error as e:\n    print(e)\n")
+    env = dict(os.environ, PYTHONPATH=os.path.join(SOURCE, "python"), PYTHONDONTWRITEBYTECODE="1")
+    p = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    lines = p.stdout.splitlines()
+    assert lines[0] == "6 3"
+    assert "compiled part (_isochor) is not importable" in lines[1] and "isochor.open reads run files without it" in lines[1]
+
+
+def test_a_file_that_is_not_a_run_is_one_line(tmp_path):
+    bad = tmp_path / "not.h5"
+    bad.write_text("plain text")
+    with pytest.raises(isochor.Error, match=r"not\.h5: cannot be read as HDF5"):
+        isochor.open(bad)
+    p = subprocess.run([sys.executable, os.path.join(SOURCE, "tools", "render.py"), str(bad)], capture_output=True, text=True)
+    assert p.returncode == 1 and p.stderr.count("\n") == 1 and "cannot be read as HDF5" in p.stderr

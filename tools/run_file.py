@@ -1,0 +1,19 @@
+"""The run-file reader of the isochor package (python/isochor/runfile.py) for the scripts of
+tools/: pure Python (h5py, NumPy), no compiled module needed. No script indexes the file's
+layout or parses the scene's text itself."""
+import os
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "python"))
+from isochor.errors import Error  # noqa: E402
+from isochor.runfile import Collider, Run  # noqa: E402,F401
+
+
+def open_run(path, tool=""):
+    """The run at `path`; one line naming the file and exit 1 when it is missing or not a run."""
+    if not os.path.exists(path):
+        sys.exit(f"{tool + ': ' if tool else ''}{path}: no such file")
+    try:
+        return Run(path)
+    except Error as e:
+        sys.exit(f"{tool + ': ' if tool else ''}{e}")
