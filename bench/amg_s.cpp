@@ -1,4 +1,4 @@
-// Issue 18, part 3: one captured effective stiffness S (ISOCHOR_CAPTURE_S) solved with the
+// One captured effective stiffness S (ISOCHOR_CAPTURE_S) solved with the
 // right-hand side the run solved it with, by today's block-Jacobi PCG (linear_solver = "krylov",
 // one rank) and by BoomerAMG-preconditioned CG (the "amg" solver's settings) on every rank of
 // MPI_COMM_WORLD, rows split by METIS node parts. Prints per solver and round: setup and solve seconds (wall,
@@ -135,6 +135,37 @@ struct Round {
 
 }  // namespace
 
+// One round of a solver on S: setup and solve (wall, the slowest rank), iterations, the true
+// relative residual from the whole x, resident memory before and after the setup.
+Round one_round(const std::string& kind, const CapturedSystem& s, Index lo, Index hi, double tol,
+                std::vector<int>& counts, std::vector<int>& displs, bool& solved) {
+  const Index n = s.pattern.n;
+  MPI_Barrier(MPI_COMM_WORLD);
+  const double m0 = max_over_ranks(resident_mb());
+  const double t0 = MPI_Wtime();
+  std::unique_ptr<SymmetricSolver> solver;
+  if (kind == "pcg") solver = make_symmetric_solver(s.pattern, SymmetricSolverKind::pcg, tol);
+  else if (kind == "ic") solver = std::make_unique<IcPcg>(s.pattern, tol);
+  else solver = make_distributed_amg_solver(s.pattern, lo, hi, tol);
+  if (!solver) throw std::runtime_error("amg: this build has no hypre");
+  const bool factored = solver->factor(s.values.data());
+  const double t1 = max_over_ranks(MPI_Wtime() - t0);
+  const double m1 = max_over_ranks(resident_mb());
+  std::vector<double> x(static_cast<std::size_t>(n), 0.0);
+  MPI_Barrier(MPI_COMM_WORLD);
+  const double t2 = MPI_Wtime();
+  solved = factored && solver->solve(s.b.data(), x.data());
+  const double t3 = max_over_ranks(MPI_Wtime() - t2);
+  MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DOUBLE, x.data(), counts.data(), displs.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+  std::vector<double> r = s.b;
+  for (Index c = 0; c < n; ++c)
+    for (Index k = s.pattern.col_ptr[c]; k < s.pattern.col_ptr[c + 1]; ++k)
+      r[static_cast<std::size_t>(s.pattern.row_ind[k])] -= s.values[k] * x[static_cast<std::size_t>(c)];
+  double rr = 0, bb = 0;
+  for (Index i = 0; i < n; ++i) rr += r[i] * r[i], bb += s.b[i] * s.b[i];
+  return Round{t1, t3, static_cast<double>(solver->iterations()), std::sqrt(rr / bb), m0, m1};
+}
+
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
   int rank = 0, size = 1;
@@ -171,31 +202,8 @@ int main(int argc, char** argv) {
       }
       std::vector<Round> all;
       for (int round = 0; round < rounds; ++round) {
-        MPI_Barrier(MPI_COMM_WORLD);
-        const double m0 = max_over_ranks(resident_mb());
-        const double t0 = MPI_Wtime();
-        std::unique_ptr<SymmetricSolver> solver;
-        if (kind == "pcg") solver = make_symmetric_solver(s.pattern, SymmetricSolverKind::pcg, tol);
-        else if (kind == "ic") solver = std::make_unique<IcPcg>(s.pattern, tol);
-        else solver = make_distributed_amg_solver(s.pattern, lo, hi, tol);
-        if (!solver) throw std::runtime_error("amg: this build has no hypre");
-        const bool factored = solver->factor(s.values.data());
-        const double t1 = max_over_ranks(MPI_Wtime() - t0);
-        const double m1 = max_over_ranks(resident_mb());
-        std::vector<double> x(static_cast<std::size_t>(n), 0.0);
-        MPI_Barrier(MPI_COMM_WORLD);
-        const double t2 = MPI_Wtime();
-        const bool solved = factored && solver->solve(s.b.data(), x.data());
-        const double t3 = max_over_ranks(MPI_Wtime() - t2);
-        // The true residual on rank 0, from the whole x.
-        MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DOUBLE, x.data(), counts.data(), displs.data(), MPI_DOUBLE, MPI_COMM_WORLD);
-        std::vector<double> r = s.b;
-        for (Index c = 0; c < n; ++c)
-          for (Index k = s.pattern.col_ptr[c]; k < s.pattern.col_ptr[c + 1]; ++k)
-            r[static_cast<std::size_t>(s.pattern.row_ind[k])] -= s.values[k] * x[static_cast<std::size_t>(c)];
-        double rr = 0, bb = 0;
-        for (Index i = 0; i < n; ++i) rr += r[i] * r[i], bb += s.b[i] * s.b[i];
-        const Round d{t1, t3, static_cast<double>(solver->iterations()), std::sqrt(rr / bb), m0, m1};
+        bool solved = false;
+        const Round d = one_round(kind, s, lo, hi, tol, counts, displs, solved);
         all.push_back(d);
         if (rank == 0)
           std::printf("%s round %d: setup %.3f s, solve %.3f s, %g CG iterations (%.2f ms each), residual %.2e%s, resident %.0f -> %.0f MB\n",

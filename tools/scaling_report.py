@@ -58,6 +58,38 @@ def window(series, times, until):
     return float(series[k[0]]) if k.size else None
 
 
+def read_row(path, until):
+    """One run's row: its size, status and costs (whole, or read at its frame at `until`);
+    None for a file that is not a readable run."""
+    m = re.match(r"ball_(\d+)_(\w+)\.h5", os.path.basename(path))
+    try:
+        with Run(path) as run:
+            st = run.totals
+            tets = len(run.tets)
+            times = run.times
+            series = {k: run.stats[k] for k in ("wall_seconds", "steps", "newton_iterations", "resident_mb")}
+            status = run.status
+    except (Error, OSError, KeyError):
+        return None
+    if until is None:
+        wall, steps, newton = float(st.get("wall_seconds", np.nan)), float(st.get("steps", np.nan)), \
+            float(st.get("newton_iterations", np.nan))
+        frames, memory = len(times), float(st.get("peak_memory_mb", np.nan))
+        used = status == "finished"
+    else:
+        wall, steps, newton = (window(series[k], times, until) for k in ("wall_seconds", "steps", "newton_iterations"))
+        used = wall is not None
+        if not used:
+            wall = steps = newton = np.nan
+            status += f", ended before {until:g} s"
+        frames = int(np.sum(times <= until + 1e-12))
+        memory = float(np.max(series["resident_mb"][:frames])) if frames else np.nan
+    return dict(target=int(m.group(1)), solver=m.group(2), tets=tets, frames=frames, status=status, wall=wall,
+                per_step=wall / steps, per_newton=wall / newton, per_frame=wall / max(frames - 1, 1),
+                cg=float(st.get("linear_iterations", 0)) / float(st.get("newton_iterations", np.nan)),
+                memory=memory, steps=steps, used=used, last=float(times[-1]))
+
+
 def main():
     args = sys.argv[1:]
     until, name = None, "scaling"
@@ -72,35 +104,7 @@ def main():
     if len(args) != 2:
         sys.exit("usage: scaling_report.py DIR OUT_DIR [--until T] [--name NAME]")
     d, out = args
-    rows = []
-    for path in sorted(glob.glob(os.path.join(d, "ball_*_*.h5"))):
-        m = re.match(r"ball_(\d+)_(\w+)\.h5", os.path.basename(path))
-        try:
-            with Run(path) as run:
-                st = run.totals
-                tets = len(run.tets)
-                times = run.times
-                series = {k: run.stats[k] for k in ("wall_seconds", "steps", "newton_iterations", "resident_mb")}
-                status = run.status
-        except (Error, OSError, KeyError):
-            continue
-        if until is None:
-            wall, steps, newton = float(st.get("wall_seconds", np.nan)), float(st.get("steps", np.nan)), \
-                float(st.get("newton_iterations", np.nan))
-            frames, memory = len(times), float(st.get("peak_memory_mb", np.nan))
-            used = status == "finished"
-        else:
-            wall, steps, newton = (window(series[k], times, until) for k in ("wall_seconds", "steps", "newton_iterations"))
-            used = wall is not None
-            if not used:
-                wall = steps = newton = np.nan
-                status += f", ended before {until:g} s"
-            frames = int(np.sum(times <= until + 1e-12))
-            memory = float(np.max(series["resident_mb"][:frames])) if frames else np.nan
-        rows.append(dict(target=int(m.group(1)), solver=m.group(2), tets=tets, frames=frames, status=status, wall=wall,
-                         per_step=wall / steps, per_newton=wall / newton, per_frame=wall / max(frames - 1, 1),
-                         cg=float(st.get("linear_iterations", 0)) / float(st.get("newton_iterations", np.nan)),
-                         memory=memory, steps=steps, used=used, last=float(times[-1])))
+    rows = [r for path in sorted(glob.glob(os.path.join(d, "ball_*_*.h5"))) for r in [read_row(path, until)] if r]
     if not rows:
         sys.exit(f"{d}: no ball_<tets>_<solver>.h5 runs")
     solvers = sorted({r["solver"] for r in rows})

@@ -54,17 +54,37 @@ double ply_binary(const char* p, const std::string& t, bool swap, const std::str
   return get(double{});
 }
 
-PaintedPoints read_ply(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot be read (expected a PLY file)");
+struct PlyHeader {
+  std::string format;  // ascii, binary_little_endian or binary_big_endian
+  std::vector<PlyElement> elements;
+};
+
+// One "property ..." line of the header (after its tag).
+PlyProperty ply_property(std::istringstream& s, const std::string& path) {
+  PlyProperty p;
+  std::string t;
+  s >> t;
+  if (t == "list") {
+    p.list = true;
+    s >> p.count_type >> p.type >> p.name;
+    ply_size(p.count_type, path);
+  } else {
+    p.type = t;
+    s >> p.name;
+  }
+  ply_size(p.type, path);
+  return p;
+}
+
+// The header, up to end_header (the stream is left at the data).
+PlyHeader read_ply_header(std::istream& in, const std::string& path) {
   std::string line;
   long line_no = 0;
   auto fail = [&](const std::string& what) { throw Error(path + ":" + std::to_string(line_no) + ": " + what); };
   std::getline(in, line);
   ++line_no;
   if (line.rfind("ply", 0) != 0) fail("expected \"ply\" on the first line");
-  std::string format;
-  std::vector<PlyElement> elements;
+  PlyHeader h;
   while (std::getline(in, line)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -72,91 +92,100 @@ PaintedPoints read_ply(const std::string& path) {
     std::string tag;
     s >> tag;
     if (tag == "format") {
-      s >> format;
-      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
-        fail("unknown PLY format \"" + format + "\" (expected ascii, binary_little_endian or binary_big_endian)");
+      s >> h.format;
+      if (h.format != "ascii" && h.format != "binary_little_endian" && h.format != "binary_big_endian")
+        fail("unknown PLY format \"" + h.format + "\" (expected ascii, binary_little_endian or binary_big_endian)");
     } else if (tag == "element") {
       PlyElement e;
       if (!(s >> e.name >> e.count) || e.count < 0) fail("expected: element NAME COUNT");
-      elements.push_back(e);
+      h.elements.push_back(e);
     } else if (tag == "property") {
-      if (elements.empty()) fail("a property before any element");
-      PlyProperty p;
-      std::string t;
-      s >> t;
-      if (t == "list") {
-        p.list = true;
-        s >> p.count_type >> p.type >> p.name;
-        ply_size(p.count_type, path);
-      } else {
-        p.type = t;
-        s >> p.name;
-      }
-      ply_size(p.type, path);
-      if (p.name.empty()) fail("expected: property TYPE NAME");
-      elements.back().props.push_back(p);
+      if (h.elements.empty()) fail("a property before any element");
+      h.elements.back().props.push_back(ply_property(s, path));
+      if (h.elements.back().props.back().name.empty()) fail("expected: property TYPE NAME");
     } else if (tag == "end_header") {
       break;
     } else if (tag != "comment" && tag != "obj_info" && !tag.empty()) {
       fail("unexpected \"" + tag + "\" in the PLY header");
     }
   }
-  if (format.empty()) fail("no format line in the PLY header");
-  PaintedPoints out;
-  out.path = path;
-  const bool ascii = format == "ascii";
-  const bool swap = format == "binary_big_endian";  // this machine is little-endian (x86-64, arm64)
-  std::vector<std::string> ascii_tokens;
-  std::size_t next_token = 0;
-  if (ascii) {
+  if (h.format.empty()) fail("no format line in the PLY header");
+  return h;
+}
+
+// The data's values one at a time, as ASCII tokens or binary numbers of the given type.
+class PlyValues {
+ public:
+  PlyValues(std::istream& in, const std::string& format, const std::string& path)
+      : in_(in), path_(path), ascii_(format == "ascii"), swap_(format == "binary_big_endian") {
+    // binary_big_endian is swapped: this machine is little-endian (x86-64, arm64).
+    if (!ascii_) return;
     std::string rest((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     std::istringstream s(rest);
-    for (std::string t; s >> t;) ascii_tokens.push_back(t);
+    for (std::string t; s >> t;) tokens_.push_back(t);
   }
-  auto read_value = [&](const std::string& type) -> double {
-    if (ascii) {
-      if (next_token >= ascii_tokens.size()) throw Error(path + ": the PLY data end before the header's elements");
+
+  double next(const std::string& type) {
+    if (ascii_) {
+      if (next_ >= tokens_.size()) throw Error(path_ + ": the PLY data end before the header's elements");
       try {
-        return std::stod(ascii_tokens[next_token++]);
+        return std::stod(tokens_[next_++]);
       } catch (...) {
-        throw Error(path + ": \"" + ascii_tokens[next_token - 1] + "\" is not a number");
+        throw Error(path_ + ": \"" + tokens_[next_ - 1] + "\" is not a number");
       }
     }
     char b[8];
-    const int n = ply_size(type, path);
-    if (!in.read(b, n)) throw Error(path + ": the PLY data end before the header's elements");
-    return ply_binary(b, type, swap, path);
-  };
-  bool found = false;
-  for (const PlyElement& e : elements) {
-    const bool vertex = e.name == "vertex";
-    std::vector<std::vector<double>> cols(e.props.size());
-    for (long i = 0; i < e.count; ++i)
-      for (std::size_t k = 0; k < e.props.size(); ++k) {
-        const PlyProperty& p = e.props[k];
-        if (p.list) {
-          const double n = read_value(p.count_type);
-          if (!(n >= 0 && n <= 1e6) || n != std::floor(n)) throw Error(path + ": a PLY list of " + std::to_string(n) + " items");
-          for (long j = 0; j < static_cast<long>(n); ++j) read_value(p.type);
-        } else {
-          const double v = read_value(p.type);
-          if (vertex) cols[k].push_back(v);
-        }
-      }
-    if (!vertex) continue;
-    found = true;
-    for (std::size_t k = 0; k < e.props.size(); ++k) {
-      if (e.props[k].list) continue;
-      const std::string& n = e.props[k].name;
-      const bool colour = n == "red" || n == "green" || n == "blue" || n == "alpha";
-      if (colour && (e.props[k].type == "uchar" || e.props[k].type == "uint8"))
-        for (double& v : cols[k]) v /= 255.0;
-      out.names.push_back(n);
-      out.values.push_back(std::move(cols[k]));
-    }
-    break;
+    const int n = ply_size(type, path_);
+    if (!in_.read(b, n)) throw Error(path_ + ": the PLY data end before the header's elements");
+    return ply_binary(b, type, swap_, path_);
   }
-  if (!found) throw Error(path + ": no vertex element in the PLY header");
+
+ private:
+  std::istream& in_;
+  const std::string& path_;
+  bool ascii_, swap_;
+  std::vector<std::string> tokens_;
+  std::size_t next_ = 0;
+};
+
+// One element's values, property by property (lists read and dropped).
+std::vector<std::vector<double>> ply_columns(const PlyElement& e, PlyValues& values, const std::string& path) {
+  std::vector<std::vector<double>> cols(e.props.size());
+  for (long i = 0; i < e.count; ++i)
+    for (std::size_t k = 0; k < e.props.size(); ++k) {
+      const PlyProperty& p = e.props[k];
+      if (!p.list) {
+        cols[k].push_back(values.next(p.type));
+        continue;
+      }
+      const double n = values.next(p.count_type);
+      if (!(n >= 0 && n <= 1e6) || n != std::floor(n)) throw Error(path + ": a PLY list of " + std::to_string(n) + " items");
+      for (long j = 0; j < static_cast<long>(n); ++j) values.next(p.type);
+    }
+  return cols;
+}
+
+PaintedPoints read_ply(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot be read (expected a PLY file)");
+  const PlyHeader h = read_ply_header(in, path);
+  PaintedPoints out;
+  out.path = path;
+  PlyValues values(in, h.format, path);
+  // The elements before the vertices are read past; those after are not read.
+  auto vertex = std::find_if(h.elements.begin(), h.elements.end(), [](const PlyElement& e) { return e.name == "vertex"; });
+  if (vertex == h.elements.end()) throw Error(path + ": no vertex element in the PLY header");
+  for (auto e = h.elements.begin(); e != vertex; ++e) ply_columns(*e, values, path);
+  std::vector<std::vector<double>> cols = ply_columns(*vertex, values, path);
+  for (std::size_t k = 0; k < vertex->props.size(); ++k) {
+    const PlyProperty& p = vertex->props[k];
+    if (p.list) continue;
+    const bool colour = p.name == "red" || p.name == "green" || p.name == "blue" || p.name == "alpha";
+    if (colour && (p.type == "uchar" || p.type == "uint8"))
+      for (double& v : cols[k]) v /= 255.0;
+    out.names.push_back(p.name);
+    out.values.push_back(std::move(cols[k]));
+  }
   const auto* x = out.find("x");
   const auto* y = out.find("y");
   const auto* z = out.find("z");

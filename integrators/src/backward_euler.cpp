@@ -370,16 +370,9 @@ struct BackwardEuler::Impl {
       double alpha = 1.0;
       const double size = w.dq.cwiseAbs().maxCoeff();
       const double tol = tolerance();
-      if (line_search && size > 100.0 * tol) {
-        const Search found = search_along(t1, h, q, qn, qt, fresh, slope, ns.Vq, alpha);
-        if (found == Search::retry_fresh) continue;
-        if (found == Search::failed) {
-          reason = "the line search found no decrease of the merit function along Newton's direction";
-          return false;
-        }
-      } else {
-        ns.Vq = std::numeric_limits<double>::quiet_NaN();
-      }
+      const Search found = line_search_step(t1, h, q, qn, qt, fresh, slope, size, tol, ns, alpha, reason);
+      if (found == Search::retry_fresh) continue;
+      if (found == Search::failed) return false;
       if (trace_from <= t1)
         std::fprintf(stderr, "newton t=%.9g it=%d fresh=%d shift=%g |dq|=%.3e tol=%.3e alpha=%g slope=%.3e |R|=%.3e\n", t1,
                      it, static_cast<int>(fresh), shift, size, tol, alpha, slope, w.R1.norm());
@@ -613,6 +606,19 @@ struct BackwardEuler::Impl {
       refresh = true;
     }
     return Search::taken;
+  }
+
+  // The step length alpha along Newton's direction: the line search's where the update is large
+  // against the tolerance, else the whole update (the merit V(q) is then not known).
+  Search line_search_step(double t1, double h, const VectorXd& q, const VectorXd& qn, const VectorXd& qt, bool fresh,
+                          double slope, double size, double tol, NewtonState& ns, double& alpha, std::string& reason) {
+    if (!line_search || size <= 100.0 * tol) {
+      ns.Vq = std::numeric_limits<double>::quiet_NaN();
+      return Search::taken;
+    }
+    const Search found = search_along(t1, h, q, qn, qt, fresh, slope, ns.Vq, alpha);
+    if (found == Search::failed) reason = "the line search found no decrease of the merit function along Newton's direction";
+    return found;
   }
 
   // Newton's test after a whole update of size `size` in q and `lsize` in the multipliers, `since`

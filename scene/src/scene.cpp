@@ -637,16 +637,10 @@ void check_initial_contact(const Section& root, const Scene& sc) {
 
 }  // namespace
 
-Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, 0.0, true, {}, {}, {}, {}};
-  const Section root = sc.file.root();
-  Section mesh = root.table("mesh");
-  if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
-  sc.mesh = mesh_from_scene(mesh, sc.file);
-  sc.material = parse_material(root.table("material"));
-  sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.file, sc.material.model == MaterialModel::cnh);
-  sc.keep_zones = root.table("zones").boolean("keep", true);
-  sc.zone_restore_time = root.table("zones").number("restore_time", 0.0, Range::non_negative());
+namespace {
+
+// The [[boundary]]s in file order; returns which boundary drives each node (-1: none).
+std::vector<int> parse_boundaries(const Section& root, Scene& sc) {
   std::vector<int> driven_by(sc.mesh.num_nodes(), -1);
   for (const Section& b : root.tables("boundary")) {
     sc.boundary.push_back(parse_boundary(b, sc.mesh));
@@ -660,6 +654,87 @@ Scene parse_scene(SceneFile file) {
       driven_by[v] = k;
     }
   }
+  return driven_by;
+}
+
+// [integrator]: its kind (from the registry) and its options, and the kinds the material allows.
+void parse_integrator(const Section& root, Scene& sc) {
+  const Section in = root.table("integrator");
+  IntegratorSpec& ig = sc.integrator;
+  std::vector<std::pair<std::string, IntegratorKind>> kinds;
+  for (const IntegratorEntry& e : integrator_registry()) kinds.emplace_back(e.name, e.kind);
+  ig.kind = parse_choice(in, "kind", ig.kind, kinds);
+  for (const IntegratorEntry& e : integrator_registry()) e.parse(in, ig.kind, ig);
+  const bool mass_spring = sc.material.model == MaterialModel::mass_spring;
+  if (ig.kind == IntegratorKind::xpbd && mass_spring)
+    in.fail("kind", "\"xpbd\" needs a tet material (expected material.model other than \"mass_spring\")");
+  if (ig.kind == IntegratorKind::mass_spring && !mass_spring)
+    in.fail("kind", "\"mass_spring\" is Hong et al.'s step for material.model = \"mass_spring\"");
+  if (std::isinf(sc.material.lambda) && ig.kind != IntegratorKind::xpbd)
+    root.table("material").fail("nu", "nu = 0.5 (incompressible) needs integrator.kind = \"xpbd\" (expected nu < 0.5)");
+}
+
+// Limits before work: a frame count that the frame times alone would not fit, and fixed steps
+// that could not reach the end within integrator.max_steps.
+void check_run_length(const Section& fr, const Section& in, const Scene& sc) {
+  const IntegratorSpec& ig = sc.integrator;
+  const double frames = std::floor(sc.frames.duration * sc.frames.rate + 1e-9) + 1;
+  if (frames > 1e8) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "%g s at frames.rate = %g makes %.3g frames (expected at most 1e8)", sc.frames.duration,
+                  sc.frames.rate, frames);
+    fr.fail(fr.has("duration") ? "duration" : "rate", buf);
+  }
+  double dt = 0;
+  long max_steps = 0;
+  if (ig.kind == IntegratorKind::backward_euler || ig.kind == IntegratorKind::semi_implicit) {
+    dt = ig.backward_euler.dt;
+    max_steps = ig.backward_euler.max_steps;
+  } else if (ig.kind == IntegratorKind::xpbd) {
+    dt = ig.xpbd.dt;
+    max_steps = ig.xpbd.max_steps;
+  } else if (ig.kind == IntegratorKind::mass_spring) {
+    dt = ig.hong.dt;
+    max_steps = ig.hong.max_steps;
+  }
+  if (dt > 0 && sc.frames.duration / dt > static_cast<double>(max_steps)) {
+    char buf[240];
+    std::snprintf(buf, sizeof buf,
+                  "%g s makes %.3g steps over frames.duration = %g s, more than integrator.max_steps = %ld (expected a "
+                  "larger dt or a shorter run)",
+                  dt, sc.frames.duration / dt, sc.frames.duration, max_steps);
+    in.fail("dt", buf);
+  }
+}
+
+// [frames]: a rate and duration (dynamics) or a count (statics), as the integrator needs.
+void parse_frames(const Section& root, Scene& sc) {
+  const Section fr = root.table("frames");
+  const bool statics = sc.integrator.kind == IntegratorKind::statics;
+  if (fr.has("count") && (fr.has("rate") || fr.has("duration")))
+    fr.fail("count", "give either count (statics) or rate and duration, not both");
+  sc.frames.rate = fr.number("rate", sc.frames.rate, Range::positive());
+  sc.frames.duration = fr.number("duration", sc.frames.duration, Range::non_negative());
+  sc.frames.count = static_cast<int>(fr.integer("count", 0, 1, 1000000));
+  if (statics != (sc.frames.count > 0))
+    fr.fail(statics ? "count" : "rate", statics ? "a static run needs frames.count (load increments)"
+                                                : "frames.count is for statics; a dynamic run needs frames.rate and frames.duration");
+  if (!statics) check_run_length(fr, root.table("integrator"), sc);
+}
+
+}  // namespace
+
+Scene parse_scene(SceneFile file) {
+  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, 0.0, true, {}, {}, {}, {}};
+  const Section root = sc.file.root();
+  Section mesh = root.table("mesh");
+  if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
+  sc.mesh = mesh_from_scene(mesh, sc.file);
+  sc.material = parse_material(root.table("material"));
+  sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.file, sc.material.model == MaterialModel::cnh);
+  sc.keep_zones = root.table("zones").boolean("keep", true);
+  sc.zone_restore_time = root.table("zones").number("restore_time", 0.0, Range::non_negative());
+  const std::vector<int> driven_by = parse_boundaries(root, sc);
   sc.skeleton = parse_skeleton(root.table("skeleton"), sc.file, sc.mesh, driven_by);
 
   const Section forces = root.table("forces");
@@ -673,65 +748,8 @@ Scene parse_scene(SceneFile file) {
   const Section initial = root.table("initial");
   sc.initial_velocity = initial.vec3("velocity", Eigen::Vector3d::Zero());
   parse_flatten(initial, sc);
-
-  const Section in = root.table("integrator");
-  IntegratorSpec& ig = sc.integrator;
-  {
-    std::vector<std::pair<std::string, IntegratorKind>> kinds;
-    for (const IntegratorEntry& e : integrator_registry()) kinds.emplace_back(e.name, e.kind);
-    ig.kind = parse_choice(in, "kind", ig.kind, kinds);
-    for (const IntegratorEntry& e : integrator_registry()) e.parse(in, ig.kind, ig);
-  }
-  const bool mass_spring = sc.material.model == MaterialModel::mass_spring;
-  if (ig.kind == IntegratorKind::xpbd && mass_spring)
-    in.fail("kind", "\"xpbd\" needs a tet material (expected material.model other than \"mass_spring\")");
-  if (ig.kind == IntegratorKind::mass_spring && !mass_spring)
-    in.fail("kind", "\"mass_spring\" is Hong et al.'s step for material.model = \"mass_spring\"");
-  if (std::isinf(sc.material.lambda) && ig.kind != IntegratorKind::xpbd)
-    root.table("material").fail("nu", "nu = 0.5 (incompressible) needs integrator.kind = \"xpbd\" (expected nu < 0.5)");
-
-  const Section fr = root.table("frames");
-  if (fr.has("count") && (fr.has("rate") || fr.has("duration")))
-    fr.fail("count", "give either count (statics) or rate and duration, not both");
-  sc.frames.rate = fr.number("rate", sc.frames.rate, Range::positive());
-  sc.frames.duration = fr.number("duration", sc.frames.duration, Range::non_negative());
-  sc.frames.count = static_cast<int>(fr.integer("count", 0, 1, 1000000));
-  if ((ig.kind == IntegratorKind::statics) != (sc.frames.count > 0))
-    fr.fail(ig.kind == IntegratorKind::statics ? "count" : "rate",
-            ig.kind == IntegratorKind::statics ? "a static run needs frames.count (load increments)"
-                                               : "frames.count is for statics; a dynamic run needs frames.rate and frames.duration");
-
-  // Limits before work: a frame count that the frame times alone would not fit, and fixed steps
-  // that could not reach the end within integrator.max_steps.
-  if (ig.kind != IntegratorKind::statics) {
-    const double frames = std::floor(sc.frames.duration * sc.frames.rate + 1e-9) + 1;
-    if (frames > 1e8) {
-      char buf[200];
-      std::snprintf(buf, sizeof buf, "%g s at frames.rate = %g makes %.3g frames (expected at most 1e8)", sc.frames.duration,
-                    sc.frames.rate, frames);
-      fr.fail(fr.has("duration") ? "duration" : "rate", buf);
-    }
-    double dt = 0;
-    long max_steps = 0;
-    if (ig.kind == IntegratorKind::backward_euler || ig.kind == IntegratorKind::semi_implicit) {
-      dt = ig.backward_euler.dt;
-      max_steps = ig.backward_euler.max_steps;
-    } else if (ig.kind == IntegratorKind::xpbd) {
-      dt = ig.xpbd.dt;
-      max_steps = ig.xpbd.max_steps;
-    } else if (ig.kind == IntegratorKind::mass_spring) {
-      dt = ig.hong.dt;
-      max_steps = ig.hong.max_steps;
-    }
-    if (dt > 0 && sc.frames.duration / dt > static_cast<double>(max_steps)) {
-      char buf[240];
-      std::snprintf(buf, sizeof buf,
-                    "%g s makes %.3g steps over frames.duration = %g s, more than integrator.max_steps = %ld (expected a "
-                    "larger dt or a shorter run)",
-                    dt, sc.frames.duration / dt, sc.frames.duration, max_steps);
-      in.fail("dt", buf);
-    }
-  }
+  parse_integrator(root, sc);
+  parse_frames(root, sc);
   check_initial_contact(root, sc);
 
   const Section out = root.table("output");
