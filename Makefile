@@ -3,7 +3,7 @@
 JOBS ?= $(shell nproc)
 BUILD ?= build
 
-.PHONY: demo test test-long test-mpi sanitize deps configure build bench clean
+.PHONY: demo test test-long test-mpi sanitize deps configure build bench clean format format-check
 
 demo: build
 	./demos/run-default.sh $(BUILD)
@@ -37,6 +37,15 @@ sanitize: deps
 bench: build
 	cmake --build $(BUILD) -j$(JOBS) --target isochor_bench
 	./$(BUILD)/isochor_bench
+
+# The C++ style (.clang-format): format-check fails on any tracked source that clang-format would
+# change (tests/data/ holds inputs made to be bad and is left alone); format rewrites them.
+FORMAT_FILES = git ls-files '*.cpp' '*.hpp' ':!tests/data/'
+format-check:
+	$(FORMAT_FILES) | xargs clang-format --dry-run -Werror
+
+format:
+	$(FORMAT_FILES) | xargs clang-format -i
 
 deps:
 	./tools/install-deps.sh

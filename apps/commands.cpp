@@ -59,15 +59,16 @@ void install_signal_handlers() {
   std::signal(SIGXFSZ, SIG_IGN);
 }
 
-
-int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& overrides, std::string out, bool overwrite) {
+int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& overrides, std::string out,
+             bool overwrite) {
   Scene sc = load_scene(scene_path, overrides);
   if (out.empty()) {
     std::filesystem::path p(sc.output.path);
     out = (p.parent_path() / (p.stem().string() + "_mesh.h5")).string();
   }
   RunInfo info{sc.file.text_as_run(), scene_path, "mesh", scene_record(sc)};
-  OutputWriter w(out, sc.mesh, sc.zones, info, false, overwrite ? OutputWriter::Mode::overwrite : OutputWriter::Mode::create);
+  OutputWriter w(out, sc.mesh, sc.zones, info, false,
+                 overwrite ? OutputWriter::Mode::overwrite : OutputWriter::Mode::create);
   Frame f;
   f.positions = &sc.mesh.rest_positions();
   f.volumes = zone_volumes(sc.mesh, sc.mesh.rest_positions(), sc.zones);
@@ -94,7 +95,9 @@ int cmd_run(const RunCommand& c, int argc, char** argv) {
   RunOptions opt;
   opt.output = c.out_path;
   opt.progress = !c.quiet;
-  opt.mode = c.resume ? OutputWriter::Mode::resume : c.overwrite ? OutputWriter::Mode::overwrite : OutputWriter::Mode::create;
+  opt.mode = c.resume      ? OutputWriter::Mode::resume
+             : c.overwrite ? OutputWriter::Mode::overwrite
+                           : OutputWriter::Mode::create;
   RunSummary r;
   try {
     r = run_scene(sc, opt);
@@ -103,15 +106,18 @@ int cmd_run(const RunCommand& c, int argc, char** argv) {
     return 128 + e.signal;
   }
   if (r.already_finished) {
-    std::printf("%s: finished earlier (%d frames, t = %g s): nothing to resume\n", r.output.c_str(), r.frames, r.resumed_time);
+    std::printf("%s: finished earlier (%d frames, t = %g s): nothing to resume\n", r.output.c_str(), r.frames,
+                r.resumed_time);
     return 0;
   }
-  if (r.resumed_from >= 0) std::printf("%s: resumed from frame %d (t = %g s)\n", r.output.c_str(), r.resumed_from, r.resumed_time);
+  if (r.resumed_from >= 0)
+    std::printf("%s: resumed from frame %d (t = %g s)\n", r.output.c_str(), r.resumed_from, r.resumed_time);
   const RunStats& s = r.stats;
-  std::printf("%s: %d frames, %ld steps, %ld Newton iterations, %ld Jacobians, %.2f s wall "
-              "(assembly %.2f, factorisation %.2f, solve %.2f",
-              c.scene_path.c_str(), r.frames, s.steps, s.newton_iterations, s.jacobian_evals, s.wall_seconds,
-              s.assembly_seconds, s.factor_seconds, s.solve_seconds);
+  std::printf(
+      "%s: %d frames, %ld steps, %ld Newton iterations, %ld Jacobians, %.2f s wall "
+      "(assembly %.2f, factorisation %.2f, solve %.2f",
+      c.scene_path.c_str(), r.frames, s.steps, s.newton_iterations, s.jacobian_evals, s.wall_seconds,
+      s.assembly_seconds, s.factor_seconds, s.solve_seconds);
   if (sc.skeleton) std::printf(", Simbody %.2f", r.simbody_seconds);
   std::printf(")");
   if (s.line_search_cuts || s.regularisations || s.step_halvings)
@@ -124,7 +130,9 @@ int cmd_run(const RunCommand& c, int argc, char** argv) {
 int cmd_study(const StudyCommand& c) {
   const Study s = load_study(c.study_path, c.overrides);
   const std::string exe = std::filesystem::read_symlink("/proc/self/exe").string();
-  if (static_cast<int>(c.list) + static_cast<int>(!c.case_id.empty()) + static_cast<int>(c.mpi) + static_cast<int>(c.resume) > 1)
+  if (static_cast<int>(c.list) + static_cast<int>(!c.case_id.empty()) + static_cast<int>(c.mpi) +
+          static_cast<int>(c.resume) >
+      1)
     throw Error("study: --list, --case, --mpi and --resume exclude each other");
   if (c.list) {
     for (const StudyCase& sc : s.cases) std::printf("%s\n", sc.label.c_str());
@@ -138,19 +146,20 @@ int cmd_study(const StudyCommand& c) {
     return rc;
   }
   if (c.mpi) return study_mpi(s, exe, c.study_path);
-  std::fprintf(stderr, "%s: %zu cases (the reference first), %d at a time, into %s\n", c.study_path.c_str(), s.cases.size(),
-               s.jobs, s.output.c_str());
+  std::fprintf(stderr, "%s: %zu cases (the reference first), %d at a time, into %s\n", c.study_path.c_str(),
+               s.cases.size(), s.jobs, s.output.c_str());
   const int failed = run_study(s, exe, c.resume, true);
   const int rc = study_report(s.output.string());
-  std::printf("%s: %zu cases, %d failed (reasons in results.csv); wrote %s/report.md\n", c.study_path.c_str(), s.cases.size(),
-              failed, s.output.c_str());
+  std::printf("%s: %zu cases, %d failed (reasons in results.csv); wrote %s/report.md\n", c.study_path.c_str(),
+              s.cases.size(), failed, s.output.c_str());
   return rc;
 }
 
 // A Python tool of tools/ on a run file, with the options after the file passed on as they are.
 int run_tool(const std::string& script, const std::string& h5_path, const std::vector<std::string>& options) {
   if (!std::filesystem::exists(h5_path)) throw Error(h5_path + ": no such file");
-  std::string cmd = "/usr/bin/python3 " + shell_quoted(std::string(ISOCHOR_TOOLS_DIR "/") + script) + " " + shell_quoted(h5_path);
+  std::string cmd =
+      "/usr/bin/python3 " + shell_quoted(std::string(ISOCHOR_TOOLS_DIR "/") + script) + " " + shell_quoted(h5_path);
   for (const std::string& a : options) cmd += " " + shell_quoted(a);
   return std::system(cmd.c_str()) == 0 ? 0 : 1;
 }
@@ -160,8 +169,9 @@ int run_tool(const std::string& script, const std::string& h5_path, const std::v
 int run_blender(const std::string& h5_path, const std::vector<std::string>& options) {
   if (!std::filesystem::exists(h5_path)) throw Error(h5_path + ": no such file");
   if (std::system("command -v blender > /dev/null 2>&1") != 0)
-    throw Error("Blender is not installed (Debian 12: apt-get install blender, 3.4; it is optional); "
-                "`isochor render` without --blender draws with matplotlib");
+    throw Error(
+        "Blender is not installed (Debian 12: apt-get install blender, 3.4; it is optional); "
+        "`isochor render` without --blender draws with matplotlib");
   std::filesystem::path p(h5_path);
   std::string cmd = "set -o pipefail; blender -b --python-exit-code 1 --python " +
                     shell_quoted(ISOCHOR_TOOLS_DIR "/blender/isochor_blender.py") + " -- " + shell_quoted(h5_path) +
@@ -175,7 +185,8 @@ int run_blender(const std::string& h5_path, const std::vector<std::string>& opti
 int study_report(const std::string& dir) {
   if (!std::filesystem::exists(std::filesystem::path(dir) / "results.csv"))
     throw Error(dir + ": no results.csv (expected the output directory of `isochor study`)");
-  const std::string cmd = "/usr/bin/python3 " + shell_quoted(ISOCHOR_TOOLS_DIR "/study_report.py") + " " + shell_quoted(dir);
+  const std::string cmd =
+      "/usr/bin/python3 " + shell_quoted(ISOCHOR_TOOLS_DIR "/study_report.py") + " " + shell_quoted(dir);
   const int rc = std::system(cmd.c_str());
   if (rc != 0) throw Error(dir + ": the report tool failed (" + cmd + ")");
   return 0;

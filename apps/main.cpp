@@ -35,7 +35,8 @@ struct Line {
 
 void add_mesh_and_run(CLI::App& app, Line& l) {
   RunCommand& r = l.run_cmd;
-  l.mesh = app.add_subcommand("mesh", "Write the rest configuration of a scene as frame 0 (inspect a mesh before simulating it)");
+  l.mesh = app.add_subcommand(
+      "mesh", "Write the rest configuration of a scene as frame 0 (inspect a mesh before simulating it)");
   l.mesh->add_option("scene", r.scene_path, "Scene file (TOML)")->required();
   l.mesh->add_option("--set", r.overrides, "Override a scene key, e.g. --set mesh.cells=8")->take_all();
   l.mesh->add_option("-o,--output", r.out_path, "Output .h5 (default: output.path with _mesh)");
@@ -47,8 +48,9 @@ void add_mesh_and_run(CLI::App& app, Line& l) {
   l.run->add_option("-o,--output", r.out_path, "Output .h5 (default: output.path of the scene)");
   l.run->add_flag("-q,--quiet", r.quiet, "No progress line");
   l.run->add_flag("--overwrite", r.overwrite, "Replace an existing output (else an existing output is an error)");
-  l.run->add_flag("--resume", r.resume,
-                  "Continue a killed, interrupted or failed run from the last complete frame of its output (same scene and --set)");
+  l.run->add_flag(
+      "--resume", r.resume,
+      "Continue a killed, interrupted or failed run from the last complete frame of its output (same scene and --set)");
   l.run->get_option("--overwrite")->excludes("--resume");
 
   l.info = app.add_subcommand("info", "Summarise an output file: mesh, zones, frames, volume drift, solver statistics");
@@ -57,38 +59,49 @@ void add_mesh_and_run(CLI::App& app, Line& l) {
 
 void add_study(CLI::App& app, Line& l) {
   StudyCommand& s = l.study_cmd;
-  l.study = app.add_subcommand("study", "Run a study: every method and sweep of a base scene against a reference; results, charts, report");
+  l.study = app.add_subcommand(
+      "study", "Run a study: every method and sweep of a base scene against a reference; results, charts, report");
   l.study->add_option("study", s.study_path, "Study file (TOML)")->required();
   l.study->add_option("--set", s.overrides, "Override a study key, e.g. --set study.jobs=1")->take_all();
   l.study->add_flag("--resume", s.resume, "Keep cases that already finished");
-  l.study->add_flag("--list", s.list, "Print the study's case ids, one per line (the reference first), and run nothing");
+  l.study->add_flag("--list", s.list,
+                    "Print the study's case ids, one per line (the reference first), and run nothing");
   l.study->add_option("--case", s.case_id, "Run exactly this case (an id from --list) into the study's directory");
-  l.study->add_flag("--mpi", s.mpi, "Under mpirun: each rank runs its share of the cases (skipping those done), rank 0 writes the report");
+  l.study->add_flag(
+      "--mpi", s.mpi,
+      "Under mpirun: each rank runs its share of the cases (skipping those done), rank 0 writes the report");
 
   l.report = app.add_subcommand("report", "Write a study's charts, results.h5 and report.md from its results");
   l.report->add_option("dir", l.dir, "The study's output directory")->required();
 }
 
 void add_viewers(CLI::App& app, Line& l) {
-  l.render = app.add_subcommand("render", "Draw frames of a run to PNG (smooth-shaded surface, up from the scene, coloured by deformation, displacement, pressure or zone; --mp4 with ffmpeg)");
-  l.render->add_flag("--blender", l.with_blender, "Render with Blender (Cycles on the CPU) through tools/blender/isochor_blender.py");
+  l.render = app.add_subcommand("render",
+                                "Draw frames of a run to PNG (smooth-shaded surface, up from the scene, coloured by "
+                                "deformation, displacement, pressure or zone; --mp4 with ffmpeg)");
+  l.render->add_flag("--blender", l.with_blender,
+                     "Render with Blender (Cycles on the CPU) through tools/blender/isochor_blender.py");
   l.render->add_option("file", l.h5_path, "Output file (.h5)")->required();
-  l.render->footer("Options after the file go to tools/render.py: --frames 0,10,-1|flattest | --every N, "
-                   "--color deformation|displacement|pressure|zone, --up z|y|-y|a,b,c, --elev, --azim, "
-                   "--out DIR|FILE.png, --size PIXELS, --loads, --mp4. With --blender, to "
-                   "tools/blender/isochor_blender.py: --render DIR (default RUN_blender), --frames, --every, "
-                   "--samples 8, --size 640x480, --mp4, --color zone|pressure|none, --save FILE.blend");
+  l.render->footer(
+      "Options after the file go to tools/render.py: --frames 0,10,-1|flattest | --every N, "
+      "--color deformation|displacement|pressure|zone, --up z|y|-y|a,b,c, --elev, --azim, "
+      "--out DIR|FILE.png, --size PIXELS, --loads, --mp4. With --blender, to "
+      "tools/blender/isochor_blender.py: --render DIR (default RUN_blender), --frames, --every, "
+      "--samples 8, --size 640x480, --mp4, --color zone|pressure|none, --save FILE.blend");
   l.render->prefix_command();
 
-  l.exporter = app.add_subcommand("export", "Write a run's surface motion as a point cache (PC2 or MDD) for Blender, Maya, Houdini");
+  l.exporter = app.add_subcommand(
+      "export", "Write a run's surface motion as a point cache (PC2 or MDD) for Blender, Maya, Houdini");
   l.exporter->add_option("file", l.h5_path, "Output file (.h5)")->required();
   l.exporter->footer("Options after the file go to tools/export.py: --format pc2|mdd, --out FILE, --all-nodes");
   l.exporter->prefix_command();
 
-  l.paraview = app.add_subcommand("paraview", "Write a ParaView script that opens a run ready to play (pressure and zones, time, ground)");
+  l.paraview = app.add_subcommand(
+      "paraview", "Write a ParaView script that opens a run ready to play (pressure and zones, time, ground)");
   l.paraview->add_option("file", l.h5_path, "Output file (.h5)")->required();
-  l.paraview->footer("Options after the file go to tools/paraview.py: --out SCRIPT.py, --up z|y|a,b,c. Then: "
-                     "paraview --script=SCRIPT.py, or xvfb-run -a pvpython SCRIPT.py --screenshot F.png [--frame K]");
+  l.paraview->footer(
+      "Options after the file go to tools/paraview.py: --out SCRIPT.py, --up z|y|a,b,c. Then: "
+      "paraview --script=SCRIPT.py, or xvfb-run -a pvpython SCRIPT.py --screenshot F.png [--frame K]");
   l.paraview->prefix_command();
 
   l.obj = app.add_subcommand("export-obj", "Write the surface of every frame as an OBJ sequence");
@@ -133,7 +146,8 @@ int main(int argc, char** argv) {
   CLI::App app{"isochor: volume-preserving simulation of soft, nearly incompressible solids"};
   app.require_subcommand(1);
   // Bad command lines, like bad input, stop with one line.
-  app.failure_message([](const CLI::App*, const CLI::Error& e) { return std::string("isochor: ") + e.what() + " (see --help)\n"; });
+  app.failure_message(
+      [](const CLI::App*, const CLI::Error& e) { return std::string("isochor: ") + e.what() + " (see --help)\n"; });
   app.set_version_flag("--version", std::string(isochor_version()) + " (" + isochor_git_revision() + ")");
   Line line;
   add_mesh_and_run(app, line);

@@ -128,7 +128,9 @@ int study_mpi(const Study& s, const std::string& exe, const std::string& study_p
   return rc;
 #else
   (void)s, (void)exe;
-  throw Error(study_path + ": --mpi needs isochor built with MPI (Debian: apt-get install libopenmpi-dev openmpi-bin, then rebuild)");
+  throw Error(
+      study_path +
+      ": --mpi needs isochor built with MPI (Debian: apt-get install libopenmpi-dev openmpi-bin, then rebuild)");
 #endif
 }
 

@@ -52,8 +52,8 @@ class IcPcg : public SymmetricSolver {
  public:
   IcPcg(const SparsePattern& p, double tol) : p_(p) { cg_.setTolerance(tol); }
   bool factor(const double* values) override {
-    A_ = Eigen::Map<const Eigen::SparseMatrix<double, Eigen::ColMajor, Index>>(
-        p_.n, p_.n, p_.nnz(), p_.col_ptr.data(), p_.row_ind.data(), values);
+    A_ = Eigen::Map<const Eigen::SparseMatrix<double, Eigen::ColMajor, Index>>(p_.n, p_.n, p_.nnz(), p_.col_ptr.data(),
+                                                                               p_.row_ind.data(), values);
     cg_.setMaxIterations(std::max<Index>(1000, p_.n / 10));
     cg_.compute(A_);
     return cg_.info() == Eigen::Success;
@@ -117,7 +117,8 @@ std::vector<Index> partition(CapturedSystem& s, int parts) {
   std::vector<double> values(s.values.size()), b(s.b.size());
   for (Index c = 0; c < p.n; ++c) {
     Index out = q.col_ptr[dof(c)];
-    for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k, ++out) q.row_ind[out] = dof(p.row_ind[k]), values[out] = s.values[k];
+    for (Index k = p.col_ptr[c]; k < p.col_ptr[c + 1]; ++k, ++out)
+      q.row_ind[out] = dof(p.row_ind[k]), values[out] = s.values[k];
     b[dof(c)] = s.b[c];
   }
   s.pattern = std::move(q), s.values = std::move(values), s.b = std::move(b);
@@ -125,7 +126,7 @@ std::vector<Index> partition(CapturedSystem& s, int parts) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   if (rank == 0)
     std::printf("METIS: %d parts, %lld edges cut of %lld\n", parts, static_cast<long long>(cut),
-              static_cast<long long>(adjncy.size() / 2));
+                static_cast<long long>(adjncy.size() / 2));
   return first;
 }
 
@@ -144,9 +145,12 @@ Round one_round(const std::string& kind, const CapturedSystem& s, Index lo, Inde
   const double m0 = max_over_ranks(resident_mb());
   const double t0 = MPI_Wtime();
   std::unique_ptr<SymmetricSolver> solver;
-  if (kind == "pcg") solver = make_symmetric_solver(s.pattern, SymmetricSolverKind::pcg, tol);
-  else if (kind == "ic") solver = std::make_unique<IcPcg>(s.pattern, tol);
-  else solver = make_distributed_amg_solver(s.pattern, lo, hi, tol);
+  if (kind == "pcg")
+    solver = make_symmetric_solver(s.pattern, SymmetricSolverKind::pcg, tol);
+  else if (kind == "ic")
+    solver = std::make_unique<IcPcg>(s.pattern, tol);
+  else
+    solver = make_distributed_amg_solver(s.pattern, lo, hi, tol);
   if (!solver) throw std::runtime_error("amg: this build has no hypre");
   const bool factored = solver->factor(s.values.data());
   const double t1 = max_over_ranks(MPI_Wtime() - t0);
@@ -188,9 +192,10 @@ int main(int argc, char** argv) {
     const Index lo = first[static_cast<std::size_t>(rank)], hi = first[static_cast<std::size_t>(rank) + 1];
     const double read_mb = max_over_ranks(resident_mb());
     if (rank == 0)
-      std::printf("S: n = %lld, nnz = %lld, c_j = %.6g, t = %.6g s; %d rank(s), tol %.1e; resident after reading %.0f MB (largest rank)\n",
-                  static_cast<long long>(n), static_cast<long long>(s.pattern.nnz()), s.cj, s.t, size, tol,
-                  read_mb);
+      std::printf(
+          "S: n = %lld, nnz = %lld, c_j = %.6g, t = %.6g s; %d rank(s), tol %.1e; resident after reading %.0f MB "
+          "(largest rank)\n",
+          static_cast<long long>(n), static_cast<long long>(s.pattern.nnz()), s.cj, s.t, size, tol, read_mb);
     std::vector<int> counts(size), displs(size);
     for (int r = 0; r < size; ++r)
       counts[r] = static_cast<int>(first[r + 1] - first[r]), displs[r] = static_cast<int>(first[r]);
@@ -206,9 +211,11 @@ int main(int argc, char** argv) {
         const Round d = one_round(kind, s, lo, hi, tol, counts, displs, solved);
         all.push_back(d);
         if (rank == 0)
-          std::printf("%s round %d: setup %.3f s, solve %.3f s, %g CG iterations (%.2f ms each), residual %.2e%s, resident %.0f -> %.0f MB\n",
-                      kind.c_str(), round + 1, d.setup, d.solve, d.its, 1000 * d.solve / std::max(1.0, d.its), d.residual,
-                      solved ? "" : " (FAILED)", d.mem_before, d.mem_after);
+          std::printf(
+              "%s round %d: setup %.3f s, solve %.3f s, %g CG iterations (%.2f ms each), residual %.2e%s, resident "
+              "%.0f -> %.0f MB\n",
+              kind.c_str(), round + 1, d.setup, d.solve, d.its, 1000 * d.solve / std::max(1.0, d.its), d.residual,
+              solved ? "" : " (FAILED)", d.mem_before, d.mem_after);
       }
       auto med = [&](double Round::*f) {
         std::vector<double> v;
@@ -217,9 +224,11 @@ int main(int argc, char** argv) {
       };
       // Memory: round 1's growth over the setup (later rounds reuse what round 1 freed).
       if (rank == 0)
-        std::printf("%s median (%d ranks): setup %.3f s, solve %.3f s, total %.3f s, %g iterations, memory of the setup %.0f MB\n",
-                    kind.c_str(), size, med(&Round::setup), med(&Round::solve), med(&Round::setup) + med(&Round::solve),
-                    med(&Round::its), all.front().mem_after - all.front().mem_before);
+        std::printf(
+            "%s median (%d ranks): setup %.3f s, solve %.3f s, total %.3f s, %g iterations, memory of the setup %.0f "
+            "MB\n",
+            kind.c_str(), size, med(&Round::setup), med(&Round::solve), med(&Round::setup) + med(&Round::solve),
+            med(&Round::its), all.front().mem_after - all.front().mem_before);
     }
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 18, part 3: the effective stiffness S of the damped ball (demos/ball_drop.toml) captured
+# The effective stiffness S of the damped ball (demos/ball_drop.toml) captured
 # from a real run (ISOCHOR_CAPTURE_S: the first setup at or after time T, in free flight, where
 # IDA's steps are longest and S hardest for CG), then solved with the right-hand side the run
 # solved it with: block-Jacobi PCG (today's krylov), Eigen's incomplete Cholesky CG and BoomerAMG

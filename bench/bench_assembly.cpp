@@ -49,10 +49,12 @@ double bytes_per_tet(const Ball& b, bool hessian) {
 
 void set_counters(benchmark::State& state, const Ball& b, bool hessian) {
   state.counters["tets"] = b.mesh.num_tets();
-  state.counters["tets_per_s"] = benchmark::Counter(static_cast<double>(b.mesh.num_tets()), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["tets_per_s"] =
+      benchmark::Counter(static_cast<double>(b.mesh.num_tets()), benchmark::Counter::kIsIterationInvariantRate);
   state.counters["bytes_per_tet"] = bytes_per_tet(b, hessian);
-  state.counters["bytes_per_s"] = benchmark::Counter(bytes_per_tet(b, hessian) * b.mesh.num_tets(),
-                                                     benchmark::Counter::kIsIterationInvariantRate, benchmark::Counter::kIs1024);
+  state.counters["bytes_per_s"] =
+      benchmark::Counter(bytes_per_tet(b, hessian) * b.mesh.num_tets(), benchmark::Counter::kIsIterationInvariantRate,
+                         benchmark::Counter::kIs1024);
 }
 
 // One thread reading 512 MB of doubles in sequence: the bandwidth a streaming pass could reach.
@@ -63,8 +65,8 @@ void BM_ReadBandwidth(benchmark::State& state) {
     for (double d : data) sum += d;
     benchmark::DoNotOptimize(sum);
   }
-  state.counters["bytes_per_s"] = benchmark::Counter(8.0 * data.size(), benchmark::Counter::kIsIterationInvariantRate,
-                                                     benchmark::Counter::kIs1024);
+  state.counters["bytes_per_s"] =
+      benchmark::Counter(8.0 * data.size(), benchmark::Counter::kIsIterationInvariantRate, benchmark::Counter::kIs1024);
 }
 
 void BM_EnergyGradient(benchmark::State& state) {
@@ -106,7 +108,25 @@ void BM_OnePassGradientHessian(benchmark::State& state) {
 }
 }  // namespace
 
-BENCHMARK(BM_EnergyGradient)->Args({64000, 1})->Args({64000, 2})->Unit(benchmark::kMillisecond)->UseRealTime()->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_EnergyGradient)
+    ->Args({64000, 1})
+    ->Args({64000, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
 BENCHMARK(BM_ReadBandwidth)->Unit(benchmark::kMillisecond)->UseRealTime()->Repetitions(5)->ReportAggregatesOnly(true);
-BENCHMARK(BM_OnePassGradientHessian)->Args({64000, 1})->Args({64000, 2})->Unit(benchmark::kMillisecond)->UseRealTime()->Repetitions(5)->ReportAggregatesOnly(true);
-BENCHMARK(BM_EnergyGradientHessian)->Args({64000, 1})->Args({64000, 2})->Unit(benchmark::kMillisecond)->UseRealTime()->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_OnePassGradientHessian)
+    ->Args({64000, 1})
+    ->Args({64000, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+BENCHMARK(BM_EnergyGradientHessian)
+    ->Args({64000, 1})
+    ->Args({64000, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);

@@ -12,7 +12,6 @@
 #include "isochor/core/meshing.hpp"
 #include "isochor/core/output.hpp"
 
-
 int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::atoi(argv[1]) : 100000;
   const std::string path = argc > 2 ? argv[2] : "out/bench/output_frames.h5";
@@ -22,7 +21,8 @@ int main(int argc, char** argv) {
   const int tenth = std::max(1, frames / 10);
   auto t0 = std::chrono::steady_clock::now();
   double rss10 = 0;
-  std::printf("%d frames of %d nodes into %s\n%8s %12s\n", frames, mesh.num_nodes(), path.c_str(), "frames", "frames/s");
+  std::printf("%d frames of %d nodes into %s\n%8s %12s\n", frames, mesh.num_nodes(), path.c_str(), "frames",
+              "frames/s");
   for (int k = 0; k < frames; ++k) {
     x(2, 0) = 1e-6 * k;
     isochor::Frame f;

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# How a run's motion should go into Blender (issue 21): a Mesh Cache modifier over a PC2 file
+# How a run's motion should go into Blender: a Mesh Cache modifier over a PC2 file
 # against one shape key per frame, at 10^2, 10^3 and 10^4 frames of a 1,152-tet block
 # (325 surface vertices, demos/swing.toml at 1000 frames per second): the import's time in
 # Blender (building the mesh and its motion), the time to show a frame (50 frame changes spread

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The bodies of issue 17, seconds per frame measured side by side, run alternately in rounds on
+# The bodies, seconds per frame measured side by side, run alternately in rounds on
 # one thread; medians:
 #   demos/waistband_dynamic.toml (~12.7K tets, a band tightening by 10% over 1 s, IDA): CNH with
 #     its 9 zones, UNH nu = 0.4545 and UNH nu = 0.499 (zones measured only);

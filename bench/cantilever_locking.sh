@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The locking figure (issue 22): the tip deflection of demos/cantilever_tip.toml (an
+# The locking figure: the tip deflection of demos/cantilever_tip.toml (an
 # incompressible cantilever under a small end load, E = 3 mu) against the mesh (10 x 1 x 1 to
 # 80 x 8 x 8 cells), for UNH at nu = 0.45 and 0.499 (no zones), CNH with 1-ring zones, with
 # 2-ring patches, and with the global zone plus the local penalty at nu = 0.45; each divided by

@@ -75,7 +75,9 @@ int main(int argc, char** argv) {
                             {"reduced", LinearSolverKind::reduced, KluOrdering::metis},
                             {"krylov", LinearSolverKind::krylov, KluOrdering::metis},
                             {"amg", LinearSolverKind::amg, KluOrdering::metis}};
-  std::printf("problem,method,solver,tol,ok,digits,trajectory_digits,lambda_digits,steps,newton,newton_failures,error_test_failures,factorisations,cpu_s\n");
+  std::printf(
+      "problem,method,solver,tol,ok,digits,trajectory_digits,lambda_digits,steps,newton,newton_failures,error_test_"
+      "failures,factorisations,cpu_s\n");
   for (const char* problem : {"pendulum", "caraxis"}) {
     if (what == "all" || what == "ida")
       for (const Solver& s : solvers) {

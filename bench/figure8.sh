@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The CNH paper's Figure 8 (issue 20): the potential energy (elastic + gravity) of the settling
+# The CNH paper's Figure 8: the potential energy (elastic + gravity) of the settling
 # 16^3 cube of demos/cube_gravity.toml over the paper's 1000 frames (8 s), for CNH with backward
 # Euler at 8 ms and at 33 ms, Irving's 1-ring zones (backward Euler, 8 ms), the naive global
 # volume rescaling with backward Euler at nu = 0.48 and semi-implicit at nu = 0.495, and UNH at

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 15's fine-ball figure: the ball of demos/ball_drop.toml at ~64K tets, damped (beta = 1e-4 s),
+# The fine-ball figure: the ball of demos/ball_drop.toml at ~64K tets, damped (beta = 1e-4 s),
 # the default demo's tolerances (rtol 1e-4, atol 1e-6 m), the whole 0.3 s (300 frames), one thread.
 # Prints each run's wall seconds per frame, steps and worst volume error, and the median over the
 # rounds; with a second build, the two run side by side in each round (one thread each), so that
@@ -14,7 +14,7 @@ mkdir -p out/bench
 builds=("$build")
 [ -n "$other" ] && builds+=("$other")
 # Side by side, each run is pinned to its own core and the two swap cores every round: on this
-# machine one core was at times 35-40% slower than the other (session 16, docs/decisions.md), which
+# machine one core was at times 35-40% slower than the other (docs/decisions.md), which
 # an unpinned pair turns into a difference between builds.
 pin=()
 for r in $(seq 1 "$rounds"); do

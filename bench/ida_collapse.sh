@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Issue 20, part 3: IDA's linear solvers through the 16^3 collapse (demos/cube_collapse.toml,
+# IDA's linear solvers through the 16^3 collapse (demos/cube_collapse.toml,
 # 24.6K tets, rtol 1e-4, atol 1e-8, max_step 33 ms, one thread), runs interleaved in rounds so that
 # machine noise spreads over both. Prints per solver the median wall seconds, IDA's steps and the
 # wall seconds per step; the steps must agree (the linear solver does not change them).
-# COLLAPSE_SET (environment) adds --set overrides to every run, e.g. the settings of session 16's
-# figure: COLLAPSE_SET="integrator.jacobian_age=10 integrator.linear_tol=1e-6".
+# COLLAPSE_SET (environment) adds --set overrides to every run, e.g. the settings of the collapse's
+# figure in docs/decisions.md: COLLAPSE_SET="integrator.jacobian_age=10 integrator.linear_tol=1e-6".
 #   bench/ida_collapse.sh [rounds] [duration s]
 set -euo pipefail
 rounds=${1:-3}

@@ -7,9 +7,9 @@
 # both. Prints, per size and integrator, the median over the rounds of the whole run's wall time per
 # frame (total / 120: the frames where tets invert cost most), Newton iterations per step, and
 # the speed against the peer HOBAK (Kim & Eberle; backward Euler, one CG solve per step with a
-# PSD-projected Hessian), measured on this kind of machine by the author of issue 18: 0.185 s per
+# PSD-projected Hessian), measured on this kind of machine and reported with the target: 0.185 s per
 # frame at 13.2K tets and 1.9-2.7 s per frame at ~100K (the faster figure is used). No HOBAK
-# figure was recorded at 2.1K; the script prints the peer time that would meet the issue's aim there
+# figure was recorded at 2.1K; the script prints the peer time that would meet the aim there
 # (3x with backward Euler, 1x with IDA).
 #   bench/pinned_cube.sh [build] [rounds] [cells ...]        (default: build 3 7 13 26)
 #   LINEAR_SOLVER=reduced bench/pinned_cube.sh build 1 26     (CHOLMOD, for comparison)
@@ -41,7 +41,7 @@ done
 /usr/bin/python3 - "$out" "$rounds" ${sizes[*]} <<'PY'
 import sys, h5py, numpy as np
 out, rounds, sizes = sys.argv[1], int(sys.argv[2]), [int(c) for c in sys.argv[3:]]
-hobak = {13: 0.185, 26: 1.9}  # s per frame (issue 18)
+hobak = {13: 0.185, 26: 1.9}  # s per frame
 print(f"pinned cube, 120 frames, one thread each, medians over {rounds} round(s)")
 print("| cells | tets | integrator | solver | s per frame | Newton per step | HOBAK s per frame | x HOBAK |")
 print("|---|---|---|---|---|---|---|---|")
@@ -62,7 +62,7 @@ for c in sizes:
         if c in hobak:
             ref, ratio = f"{hobak[c]:.3f}", f"{hobak[c] / m:.1f}"
         else:
-            target = 3 if kind == "backward_euler" else 1  # issue 18's aims: 3x with backward Euler, 1x with IDA
+            target = 3 if kind == "backward_euler" else 1  # the aims: 3x with backward Euler, 1x with IDA
             ref, ratio = "–", f"({target}x needs HOBAK ≥ {target * m:.4f})"
         print(f"| {c}^3 | {tets:,} | {kind} | {solver} | {m:.4f} | {np.median(newton):.2f} | {ref} | {ratio} |")
 PY

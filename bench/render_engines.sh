@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# isochor render's engine, measured (issue 21): the same frame of the fine ball (~64K tets)
+# isochor render's engine, measured: the same frame of the fine ball (~64K tets)
 # drawn by tools/render.py (matplotlib, Gouraud triangles back to front) and by VTK offscreen
 # (bench/render_vtk.py in ParaView's pvpython under xvfb-run: Debian's VTK needs an X server),
 # interleaved, 3 times each; median wall time of the whole command (what a user waits for).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# One scene's cost against its mesh (issue 18): the damped ball (demos/ball_drop.toml, Rayleigh
+# One scene's cost against its mesh: the damped ball (demos/ball_drop.toml, Rayleigh
 # beta = 1e-4 s) at ~1K, 4.5K, 16K and 64K tets (add 250000 1000000 as arguments for the rest of
 # the curve: hours), through its impact (50 ms: the impact at 30 ms, 20 ms of contact), with
 # linear_solver = krylov and reduced, the two solvers side by side (one thread each), then

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The soak benchmark (issue 16): 10^5 frames of a small scene (demos/swing.toml: a soft block
+# The soak benchmark: 10^5 frames of a small scene (demos/swing.toml: a soft block
 # clamped at one end, swinging; backward Euler with a step per frame), run once straight through and once
 # killed (SIGKILL) twice along the way and resumed each time. Prints resident memory at 10%, 50%
 # and 100% of the run and frames per second per decile (both from the file's per-frame /stats),

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# What a support costs as constraint rows against the same support as a dof map (issue 22):
+# What a support costs as constraint rows against the same support as a dof map:
 # demos/cantilever_tip.toml's clamped face held once as a full [[boundary]] (its nodes leave the
 # unknowns: the dof map) and once as three [[boundary]] blocks with components = ["x"], ["y"],
 # ["z"] (three constraint rows per node, the path that rollers and symmetry planes take). Statics

@@ -67,7 +67,8 @@ class TestDae : public ConstrainedSystem {
   }
   // An independent reference along the whole run: the index-1 form integrated by the classical
   // Runge-Kutta method with step h (error O(h^4)), its state at each of `times` (increasing, from 0).
-  void reference_trajectory(const std::vector<double>& times, double h, std::vector<VectorXd>& qs, std::vector<VectorXd>& vs) {
+  void reference_trajectory(const std::vector<double>& times, double h, std::vector<VectorXd>& qs,
+                            std::vector<VectorXd>& vs) {
     VectorXd q, v;
     initial_state(0.0, q, v);
     double t = 0;
@@ -154,7 +155,8 @@ class MebdfPendulum : public TestDae {
     values[0] += 2 * scale * w[0];
     values[3] += 2 * scale * w[0];
   }
-  void constraint_velocity_jacobian(double, const VectorXd&, const VectorXd& v, std::vector<std::vector<double>>& rows) override {
+  void constraint_velocity_jacobian(double, const VectorXd&, const VectorXd& v,
+                                    std::vector<std::vector<double>>& rows) override {
     rows[0] = {2 * v[0], 2 * v[1]};
   }
   VectorXd constraint_velocity_t(double, const VectorXd&, const VectorXd&) const override { return VectorXd::Zero(1); }
@@ -244,7 +246,8 @@ class CarAxis : public TestDae {
     }
   }
   // d(G v + dg/dt)/dq.
-  void constraint_velocity_jacobian(double t, const VectorXd&, const VectorXd& v, std::vector<std::vector<double>>& rows) override {
+  void constraint_velocity_jacobian(double t, const VectorXd&, const VectorXd& v,
+                                    std::vector<std::vector<double>>& rows) override {
     double xb, yb, dxb, dyb;
     axle(t, xb, yb, dxb, dyb);
     const double du = v[0] - v[2], dv = v[1] - v[3];
@@ -306,8 +309,8 @@ struct DaeRun {
 inline DaeRun run_dae(TestDae& d, Integrator& integ, const std::vector<VectorXd>& qr, const std::vector<VectorXd>& vr) {
   DaeRun r;
   std::vector<VectorXd> qs, vs;
-  r.stats = integ.run(dae_frames(d.end_time()), [&](int, double, const VectorXd& q, const VectorXd& v, const VectorXd& l,
-                                                     const RunStats::FrameSample&) {
+  r.stats = integ.run(dae_frames(d.end_time()), [&](int, double, const VectorXd& q, const VectorXd& v,
+                                                    const VectorXd& l, const RunStats::FrameSample&) {
     qs.push_back(q);
     vs.push_back(v);
     r.lambda = l;

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# interrupt.sh ISOCHOR: the command line under signals (issue 16). A run interrupted by SIGINT
+# interrupt.sh ISOCHOR: the command line under signals. A run interrupted by SIGINT
 # or SIGTERM stops at a step boundary, says in one line how far it got and how to continue, exits
 # 130 / 143, and marks its file; a SIGKILLed one is reported unfinished by `isochor info`; each is
 # continued by --resume, and the finished file has every frame once, in order.

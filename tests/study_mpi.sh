@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The MPI executor against the local one (issue 18): studies/quick.toml run by `isochor study`
+# The MPI executor against the local one: studies/quick.toml run by `isochor study`
 # (2 jobs) and by `mpirun -n 2 isochor study --mpi`, into two directories; the results must list
 # the same cases with the same status and frames, and errors equal to 1e-12 (the cases are
 # deterministic: one thread each). Then --case and `isochor report` on a third directory: one case

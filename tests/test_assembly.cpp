@@ -49,7 +49,8 @@ Eigen::MatrixXd fd_hessian(const Scene3x2x2& s, G&& grad) {
       xm(d, s.dofs.free_nodes[f]) -= h;
       Eigen::VectorXd gp = grad(xp), gm = grad(xm);
       for (int g = 0; g < nf; ++g)
-        for (int e = 0; e < 3; ++e) H(3 * g + e, 3 * f + d) = (gp[3 * s.dofs.free_nodes[g] + e] - gm[3 * s.dofs.free_nodes[g] + e]) / (2 * h);
+        for (int e = 0; e < 3; ++e)
+          H(3 * g + e, 3 * f + d) = (gp[3 * s.dofs.free_nodes[g] + e] - gm[3 * s.dofs.free_nodes[g] + e]) / (2 * h);
     }
   return H;
 }
@@ -123,7 +124,8 @@ TEST(Assembly, ColoursShareNoNodeAndThreadsAgree) {
   std::vector<std::vector<int>> tets;
   for (const Tet& t : m.tets()) tets.emplace_back(t.begin(), t.end());
   Points centres(3, m.num_tets());
-  for (int e = 0; e < m.num_tets(); ++e) centres.col(e) = gather(m.rest_positions(), m.tets()[e]).reshaped(3, 4).rowwise().mean();
+  for (int e = 0; e < m.num_tets(); ++e)
+    centres.col(e) = gather(m.rest_positions(), m.tets()[e]).reshaped(3, 4).rowwise().mean();
   const ElementSchedule s = colour_elements(m.num_nodes(), tets, &centres);
   std::vector<int> visits(tets.size(), 0);
   int serial = 0;  // elements in colours of one chunk (no work for a second thread)
@@ -273,7 +275,8 @@ TEST(VolumeConstraints, SurfaceVolumeByDivergenceTheorem) {
     }
   std::vector<double> values(a.pattern().nnz(), 0.0);
   c.add_hessian(s.x, Eigen::VectorXd::Constant(1, 1.3), 1.0, values.data());
-  const Eigen::MatrixXd Hfd = fd_hessian(s, [&](const Points& y) { return Eigen::VectorXd(1.3 * c.full_gradient(y, 0)); });
+  const Eigen::MatrixXd Hfd =
+      fd_hessian(s, [&](const Points& y) { return Eigen::VectorXd(1.3 * c.full_gradient(y, 0)); });
   EXPECT_LT((dense(a.pattern(), values) - Hfd).norm() / Hfd.norm(), 1e-6);
 }
 
@@ -314,7 +317,8 @@ TEST(Drivers, VelocityIsTheTimeDerivativeOfPosition) {
   for (int k : {3, 4}) {
     drivers[k].kind = k == 3 ? Driver::Kind::keyframes_linear : Driver::Kind::keyframes_cubic;
     drivers[k].times = {0.0, 0.2, 0.5, 1.0};
-    drivers[k].values = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(1, 1, 0), Eigen::Vector3d(0, 1, 2)};
+    drivers[k].values = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(1, 1, 0),
+                         Eigen::Vector3d(0, 1, 2)};
   }
   for (const Driver& d : drivers)
     for (double t : {0.05, 0.15, 0.33, 0.7, 0.95}) {

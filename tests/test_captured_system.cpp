@@ -17,7 +17,8 @@ using namespace isochor;
 namespace {
 
 std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("isochor_capture_" + std::to_string(::getpid()) + "_" + name)).string();
+  return (std::filesystem::temp_directory_path() / ("isochor_capture_" + std::to_string(::getpid()) + "_" + name))
+      .string();
 }
 
 std::string error_of(const std::string& path) {

@@ -49,10 +49,11 @@ void check_fd(const std::function<double(const Vec3&, Vec3*, Mat3*)>& f, const V
 // of radius R about the origin; outward oriented.
 void icosphere(double R, int levels, Points& x, std::vector<Tri>& tris) {
   const double t = (1 + std::sqrt(5.0)) / 2;
-  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  tris = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-          {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8}, {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  std::vector<Vec3> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  tris = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+          {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+          {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (Vec3& p : v) p.normalize();
   for (int l = 0; l < levels; ++l) {
     std::map<std::pair<int, int>, int> mid;
@@ -131,14 +132,15 @@ std::vector<Vec3> near_surface(const Collider& c, const ColliderPose& P, double 
 
 TEST(Colliders, DistancesMatchTheirClosedForms) {
   using K = ColliderShape::Kind;
-  const ColliderShape sphere{K::sphere, 0.2}, capsule{K::capsule, 0.1, 0.15}, box{K::box, 0, 0, Vec3(0.2, 0.1, 0.15), 0.03},
-      cyl{K::cylinder, 0.2, 0.1, Vec3::Zero(), 0.02}, band{K::cylinder, 0.2, 0.05, Vec3::Zero(), 0.01, 0.04};
+  const ColliderShape sphere{K::sphere, 0.2}, capsule{K::capsule, 0.1, 0.15},
+      box{K::box, 0, 0, Vec3(0.2, 0.1, 0.15), 0.03}, cyl{K::cylinder, 0.2, 0.1, Vec3::Zero(), 0.02},
+      band{K::cylinder, 0.2, 0.05, Vec3::Zero(), 0.01, 0.04};
   EXPECT_NEAR(sphere.distance(Vec3(0.3, 0.4, 0), nullptr, nullptr), 0.5 - 0.2, 1e-15);
   EXPECT_NEAR(sphere.distance(Vec3(0.0, 0.0, 0.05), nullptr, nullptr), -0.15, 1e-15);
-  EXPECT_NEAR(capsule.distance(Vec3(0.3, 0.4, 0.1), nullptr, nullptr), 0.5 - 0.1, 1e-15);         // beside the segment
-  EXPECT_NEAR(capsule.distance(Vec3(0, 0.3, 0.15 + 0.4), nullptr, nullptr), 0.5 - 0.1, 1e-15);    // beyond its end
-  EXPECT_NEAR(box.distance(Vec3(0.05, 0.02, 0.15 + 0.07), nullptr, nullptr), 0.07, 1e-15);        // above a face
-  EXPECT_NEAR(box.distance(Vec3(0.05, 0.02, 0.15 - 0.01), nullptr, nullptr), -0.01, 1e-15);       // just inside it
+  EXPECT_NEAR(capsule.distance(Vec3(0.3, 0.4, 0.1), nullptr, nullptr), 0.5 - 0.1, 1e-15);       // beside the segment
+  EXPECT_NEAR(capsule.distance(Vec3(0, 0.3, 0.15 + 0.4), nullptr, nullptr), 0.5 - 0.1, 1e-15);  // beyond its end
+  EXPECT_NEAR(box.distance(Vec3(0.05, 0.02, 0.15 + 0.07), nullptr, nullptr), 0.07, 1e-15);      // above a face
+  EXPECT_NEAR(box.distance(Vec3(0.05, 0.02, 0.15 - 0.01), nullptr, nullptr), -0.01, 1e-15);     // just inside it
   // Beyond a rounded edge: the distance to the inner box's edge minus the rounding radius.
   EXPECT_NEAR(box.distance(Vec3(0.2 + 0.03, 0.0, 0.15 + 0.04), nullptr, nullptr), std::hypot(0.06, 0.07) - 0.03, 1e-15);
   EXPECT_NEAR(cyl.distance(Vec3(0.3, 0.4, 0.0), nullptr, nullptr), 0.5 - 0.2, 1e-15);
@@ -149,7 +151,8 @@ TEST(Colliders, DistancesMatchTheirClosedForms) {
   EXPECT_NEAR(band.distance(Vec3(0.06, 0.08, 0.01), nullptr, nullptr), 0.2 - 0.1, 1e-15);
   EXPECT_NEAR(band.distance(Vec3(0.22, 0, 0.0), nullptr, nullptr), -0.02, 1e-15);  // in the middle of the wall
   EXPECT_NEAR(band.distance(Vec3(0.3, 0, 0.0), nullptr, nullptr), 0.3 - 0.24, 1e-15);
-  EXPECT_NEAR(band.distance(Vec3(0.0, 0.1, 0.4), nullptr, nullptr), std::hypot(0.2 + 0.01 - 0.1, 0.4 - 0.04) - 0.01, 1e-15);
+  EXPECT_NEAR(band.distance(Vec3(0.0, 0.1, 0.4), nullptr, nullptr), std::hypot(0.2 + 0.01 - 0.1, 0.4 - 0.04) - 0.01,
+              1e-15);
 }
 
 TEST(Colliders, GradientAndHessianOfEveryShapeAgainstFiniteDifferences) {
@@ -160,7 +163,7 @@ TEST(Colliders, GradientAndHessianOfEveryShapeAgainstFiniteDifferences) {
       Vec3 g;
       c.distance(P, x, &g, nullptr);
       if (c.shape.kind != ColliderShape::Kind::mesh) {  // (a mesh's is a smoothed distance)
-        EXPECT_NEAR(g.norm(), 1.0, 1e-12) << c.name;      // a distance: |grad s| = 1
+        EXPECT_NEAR(g.norm(), 1.0, 1e-12) << c.name;    // a distance: |grad s| = 1
       }
     }
   }
@@ -184,12 +187,14 @@ TEST(Colliders, ContactEnergyDampingAndFrictionAgainstFiniteDifferences) {
     std::uniform_real_distribution<double> u(-1, 1);
     for (const Vec3& x : near_surface(c, P, delta, 20, 9)) {
       if (c.distance(P, x, nullptr, nullptr) > 0.9 * delta) continue;
-      check_fd([&](const Vec3& y, Vec3* g, Mat3* H) {
-        Vec3 n;
-        Mat3 Hs;
-        const double s = c.distance(P, y, &n, &Hs);
-        return contact_energy(k, delta, s, n, Hs, g, H);
-      }, x, std::string(c.name) + " energy", 1e-5);
+      check_fd(
+          [&](const Vec3& y, Vec3* g, Mat3* H) {
+            Vec3 n;
+            Mat3 Hs;
+            const double s = c.distance(P, y, &n, &Hs);
+            return contact_energy(k, delta, s, n, Hs, g, H);
+          },
+          x, std::string(c.name) + " energy", 1e-5);
       const Vec3 v(u(rng), u(rng), u(rng));
       auto force = [&](const Vec3& y, const Vec3& vy, Mat3* Dx, Mat3* Dv) {
         Vec3 n;
@@ -255,7 +260,8 @@ TEST(MeshCollider, AFaceIsItsPlaneAndASphereItsClosedFormToTheSplinesError) {
       worst_rest = std::max(worst_rest, std::abs(sphere.distance(p, nullptr, nullptr) - closed - first));
     }
     EXPECT_LE(worst_exact, sag + 1e-15) << h;
-    EXPECT_LT(worst_rest, sag + 0.1 * worst_first) << "cell " << h << ": the spline's error is not h^2 / (3 r) to first order";
+    EXPECT_LT(worst_rest, sag + 0.1 * worst_first)
+        << "cell " << h << ": the spline's error is not h^2 / (3 r) to first order";
   }
 }
 
@@ -269,16 +275,23 @@ TEST(MeshCollider, ItsOrientationDoesNotMatterAndBadSurfacesAreNamed) {
   for (const Vec3& p : {Vec3(0.0, 0.0, 0.0), Vec3(0.21, 0.0, 0.0), Vec3(0.1, 0.05, 0.149)})
     EXPECT_EQ(out.distance(p, nullptr, nullptr), in.distance(p, nullptr, nullptr));
   tris.pop_back();
-  EXPECT_NE(test::error_of([&] { MeshSdf(x, tris, 0.02, 0.02, "holed.obj"); }).find("holed.obj: the surface is not closed (3 edges"),
+  EXPECT_NE(test::error_of([&] {
+              MeshSdf(x, tris, 0.02, 0.02, "holed.obj");
+            }).find("holed.obj: the surface is not closed (3 edges"),
             std::string::npos);
-  const std::string mesh = "[mesh]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = 1\ncenter = [0, 0, 0.2]\n[material]\nmu = 1.0\nlambda = 1.0\n";
+  const std::string mesh =
+      "[mesh]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = 1\ncenter = [0, 0, 0.2]\n[material]\nmu = 1.0\nlambda "
+      "= 1.0\n";
   auto err = [&](const std::string& collider) {
-    return test::error_of([&] { parse_scene(SceneFile::parse(mesh + "[[collider]]\nshape = \"mesh\"\n" + collider, "c.toml")); });
+    return test::error_of(
+        [&] { parse_scene(SceneFile::parse(mesh + "[[collider]]\nshape = \"mesh\"\n" + collider, "c.toml")); });
   };
   EXPECT_NE(err("").find("collider[0].file: missing"), std::string::npos);
-  EXPECT_NE(err("file = \"" ISOCHOR_SOURCE_DIR "/tests/data/open_box.obj\"\n").find("collider[0].file: " ISOCHOR_SOURCE_DIR "/tests/data/open_box.obj: the surface is not closed"),
+  EXPECT_NE(err("file = \"" ISOCHOR_SOURCE_DIR "/tests/data/open_box.obj\"\n")
+                .find("collider[0].file: " ISOCHOR_SOURCE_DIR "/tests/data/open_box.obj: the surface is not closed"),
             std::string::npos);
-  EXPECT_NE(err("file = \"" ISOCHOR_SOURCE_DIR "/tests/data/good_box.toml\"\n").find("collider[0].file: \"" ISOCHOR_SOURCE_DIR "/tests/data/good_box.toml\" has an unknown extension"),
+  EXPECT_NE(err("file = \"" ISOCHOR_SOURCE_DIR "/tests/data/good_box.toml\"\n")
+                .find("collider[0].file: \"" ISOCHOR_SOURCE_DIR "/tests/data/good_box.toml\" has an unknown extension"),
             std::string::npos);
 }
 
@@ -366,23 +379,30 @@ bone = "arm"
 }
 
 TEST(Colliders, BadCollidersAreNamed) {
-  const std::string mesh = "[mesh]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = 1\ncenter = [0, 0, 0.2]\n[material]\nmu = 1.0\nlambda = 1.0\n";
+  const std::string mesh =
+      "[mesh]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = 1\ncenter = [0, 0, 0.2]\n[material]\nmu = 1.0\nlambda "
+      "= 1.0\n";
   auto err = [&](const std::string& collider) {
     return test::error_of([&] { parse_scene(SceneFile::parse(mesh + "[[collider]]\n" + collider, "c.toml")); });
   };
   EXPECT_NE(err("radius = 0.1\n").find("collider[0].shape: missing"), std::string::npos);
   EXPECT_NE(err("shape = \"cone\"\n").find("collider[0].shape"), std::string::npos);
   EXPECT_NE(err("shape = \"sphere\"\n").find("collider[0].radius: missing"), std::string::npos);
-  EXPECT_NE(err("shape = \"box\"\nsize = [0.1, 0.0, 0.1]\n").find("collider[0].size: expected three positive"), std::string::npos);
-  EXPECT_NE(err("shape = \"cylinder\"\nradius = 0.1\nlength = 0.1\nrounding = 0.2\n").find("collider[0].rounding: expected at most"),
+  EXPECT_NE(err("shape = \"box\"\nsize = [0.1, 0.0, 0.1]\n").find("collider[0].size: expected three positive"),
             std::string::npos);
-  EXPECT_NE(err("shape = \"sphere\"\nradius = 0.1\nbone = \"arm\"\n").find("collider[0].bone: the scene has no [skeleton]"),
+  EXPECT_NE(err("shape = \"cylinder\"\nradius = 0.1\nlength = 0.1\nrounding = 0.2\n")
+                .find("collider[0].rounding: expected at most"),
             std::string::npos);
-  EXPECT_NE(err("shape = \"sphere\"\nradius = 0.1\nsize = [1, 1, 1]\n").find("size"), std::string::npos);  // not a sphere's key
+  EXPECT_NE(
+      err("shape = \"sphere\"\nradius = 0.1\nbone = \"arm\"\n").find("collider[0].bone: the scene has no [skeleton]"),
+      std::string::npos);
+  EXPECT_NE(err("shape = \"sphere\"\nradius = 0.1\nsize = [1, 1, 1]\n").find("size"),
+            std::string::npos);  // not a sphere's key
   // The body inside a sphere at t = 0: its 8 corners are 0.0866 m from the centre.
-  EXPECT_NE(err("shape = \"sphere\"\nradius = 0.1\ncenter = [0, 0, 0.2]\n")
-                .find("collider[0].shape: 8 of 8 nodes start more than the contact thickness (0.001 m) inside this sphere"),
-            std::string::npos);
+  EXPECT_NE(
+      err("shape = \"sphere\"\nradius = 0.1\ncenter = [0, 0, 0.2]\n")
+          .find("collider[0].shape: 8 of 8 nodes start more than the contact thickness (0.001 m) inside this sphere"),
+      std::string::npos);
 }
 
 namespace {
@@ -419,9 +439,12 @@ kind = "%s"
 )",
                 0.05 + 1e-3 - p, 9.81 * std::sin(a), -9.81 * std::cos(a),
                 (mesh_file.empty() ? std::string("shape = \"box\"\ncenter = [0.0, 0.0, -0.05]\nsize = [2.0, 2.0, 0.1]")
-                                   : "shape = \"mesh\"\nfile = \"" + mesh_file + "\"").c_str(),
+                                   : "shape = \"mesh\"\nfile = \"" + mesh_file + "\"")
+                    .c_str(),
                 friction, kind.c_str(),
-                kind == "static" ? "[frames]\ncount = 3" : "rtol = 1e-6\natol = 1e-9\n[damping]\nbeta = 1e-3\n[frames]\nrate = 20\nduration = 0.3");
+                kind == "static"
+                    ? "[frames]\ncount = 3"
+                    : "rtol = 1e-6\natol = 1e-9\n[damping]\nbeta = 1e-3\n[frames]\nrate = 20\nduration = 0.3");
   return parse_scene(SceneFile::parse(text, "block.toml"));
 }
 
@@ -492,7 +515,8 @@ TEST(Colliders, ABlockSlidesDownATiltedBoxAtCoulombsAcceleration) {
 TEST(Colliders, ABandTightensByItsResizeFactors) {
   // A hollow cylinder (a band of hole radius 0.2 m) whose radius goes to 0.9 of it over 1 s
   // (linear keys): a point in its hole at distance r from the axis is 0.2 f(t) - r from it.
-  const std::string mesh = "[mesh]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = 1\n[material]\nmu = 1.0\nlambda = 1.0\n";
+  const std::string mesh =
+      "[mesh]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = 1\n[material]\nmu = 1.0\nlambda = 1.0\n";
   const std::string band =
       "[[collider]]\nshape = \"cylinder\"\nradius = 0.2\nwall = 0.02\nlength = 0.05\n"
       "resize = { times = [0.0, 1.0], factors = [1.0, 0.9] }\n";
@@ -509,13 +533,15 @@ TEST(Colliders, ABandTightensByItsResizeFactors) {
   auto err = [&](const std::string& extra) {
     return test::error_of([&] { parse_scene(SceneFile::parse(mesh + band + extra, "band.toml")); });
   };
-  EXPECT_NE(err("damping = 0.1\n").find("collider[0].resize: a collider whose radius changes has no damping"), std::string::npos);
-  EXPECT_NE(test::error_of([&] {
-              parse_scene(SceneFile::parse(mesh + "[[collider]]\nshape = \"box\"\nsize = [1, 1, 1]\ncenter = [0, 0, 2]\n"
-                                                  "resize = { times = [0.0, 1.0], factors = [1.0, 0.9] }\n",
-                                           "box.toml"));
-            }).find("collider[0].resize: only a sphere's, capsule's or cylinder's radius can change"),
+  EXPECT_NE(err("damping = 0.1\n").find("collider[0].resize: a collider whose radius changes has no damping"),
             std::string::npos);
+  EXPECT_NE(
+      test::error_of([&] {
+        parse_scene(SceneFile::parse(mesh + "[[collider]]\nshape = \"box\"\nsize = [1, 1, 1]\ncenter = [0, 0, 2]\n"
+                                            "resize = { times = [0.0, 1.0], factors = [1.0, 0.9] }\n",
+                                     "box.toml"));
+      }).find("collider[0].resize: only a sphere's, capsule's or cylinder's radius can change"),
+      std::string::npos);
 }
 
 TEST(Colliders, TheWaistbandHoldsTheWaistInsideItsTighteningBand) {
@@ -530,7 +556,8 @@ TEST(Colliders, TheWaistbandHoldsTheWaistInsideItsTighteningBand) {
   ASSERT_EQ(f.num_frames(), 11);
   const auto volumes = f.volumes();
   for (std::size_t k = 0; k < volumes.size(); ++k)
-    for (std::size_t z = 0; z < volumes[k].size(); ++z) EXPECT_NEAR(volumes[k][z] / volumes[0][z], 1.0, 1e-10) << "frame " << k;
+    for (std::size_t z = 0; z < volumes[k].size(); ++z)
+      EXPECT_NEAR(volumes[k][z] / volumes[0][z], 1.0, 1e-10) << "frame " << k;
   const Points X = f.positions(0), x = f.positions(f.num_frames() - 1);
   const double R = 0.131 * 0.95, delta = 2e-3;
   double widest_rest = 0, widest = 0;
@@ -712,8 +739,8 @@ rate = 10.0
 duration = 0.5
 )";
   for (bool on : {false, true}) {
-    const Scene sc = parse_scene(SceneFile::parse(scene, "blocks.toml", {on ? "contact.self.enabled=true" : "contact.self.enabled=false"},
-                                                  dir.string()));
+    const Scene sc = parse_scene(SceneFile::parse(
+        scene, "blocks.toml", {on ? "contact.self.enabled=true" : "contact.self.enabled=false"}, dir.string()));
     RunFile f(run_scene(sc, (dir / (on ? "on.h5" : "off.h5")).string(), false).output);
     ASSERT_EQ(f.num_frames(), 6);
     const double deepest = deepest_below(sc.mesh, f.positions(5), sc.mesh.num_nodes() / 2, 0.04, 0.06);

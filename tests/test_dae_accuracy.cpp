@@ -16,11 +16,11 @@
 
 using namespace isochor;
 using test::CarAxis;
-using test::MebdfPendulum;
-using test::DaeRun;
-using test::TestDae;
 using test::dae_frames;
+using test::DaeRun;
+using test::MebdfPendulum;
 using test::run_dae;
+using test::TestDae;
 
 namespace {
 
@@ -74,7 +74,8 @@ TEST(DaeProblems, CarAxisDerivativesAreTheFiniteDifferences) {
     // H_w = sum_j w_j d^2 g_j / dq^2: column d is the difference of w . G's rows.
     VectorXd col = VectorXd::Zero(4);
     for (int j = 0; j < 2; ++j)
-      for (std::size_t k = 0; k < G[j].size(); ++k) col[c.constraint_rows()[j][k]] += w[j] * (Gp[j][k] - Gm[j][k]) / (2 * e);
+      for (std::size_t k = 0; k < G[j].size(); ++k)
+        col[c.constraint_rows()[j][k]] += w[j] * (Gp[j][k] - Gm[j][k]) / (2 * e);
     for (int r = 0; r < 4; ++r) EXPECT_NEAR(H[d * 4 + r], col[r], 1e-7) << d << " " << r;
   }
   // dg/dt, and the explicit time derivative of G v + dg/dt.
@@ -92,8 +93,10 @@ TEST(DaeProblems, CarAxisDerivativesAreTheFiniteDifferences) {
 TEST(DaeProblems, ReferencesAgreeWithThePublishedValues) {
   for (int p = 0; p < 2; ++p) {
     std::unique_ptr<TestDae> d;
-    if (p == 0) d = std::make_unique<MebdfPendulum>();
-    else d = std::make_unique<CarAxis>();
+    if (p == 0)
+      d = std::make_unique<MebdfPendulum>();
+    else
+      d = std::make_unique<CarAxis>();
     std::vector<VectorXd> qs, vs;
     d->reference_trajectory({d->end_time()}, 2e-5, qs, vs);
     EXPECT_GT(d->correct_digits(qs[0], vs[0]), 9.0) << p;
@@ -146,7 +149,8 @@ void expect_one_accuracy_per_tolerance(const char* problem) {
     double sx = 0, sy = 0, sxx = 0, sxy = 0;
     for (std::size_t i = 0; i < x.size(); ++i) sx += x[i], sy += y[i], sxx += x[i] * x[i], sxy += x[i] * y[i];
     const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx), at7 = (sy - slope * sx) / n + slope * 7;
-    std::printf("%s %-10s slope %.3f, %.3f digits at rtol 1e-7, %ld Newton iterations\n", problem, s.name, slope, at7, newton);
+    std::printf("%s %-10s slope %.3f, %.3f digits at rtol 1e-7, %ld Newton iterations\n", problem, s.name, slope, at7,
+                newton);
     EXPECT_GT(slope, 0.8) << problem << " " << s.name;
     EXPECT_LT(slope, 1.2) << problem << " " << s.name;
     lowest = std::min(lowest, at7);
@@ -155,8 +159,12 @@ void expect_one_accuracy_per_tolerance(const char* problem) {
   EXPECT_LT(highest - lowest, 0.1) << problem;
 }
 
-TEST(DaeAccuracy, IdaGivesThePendulumOneAccuracyPerToleranceOnEverySolver) { expect_one_accuracy_per_tolerance("pendulum"); }
-TEST(DaeAccuracy, IdaGivesTheCarAxisOneAccuracyPerToleranceOnEverySolver) { expect_one_accuracy_per_tolerance("caraxis"); }
+TEST(DaeAccuracy, IdaGivesThePendulumOneAccuracyPerToleranceOnEverySolver) {
+  expect_one_accuracy_per_tolerance("pendulum");
+}
+TEST(DaeAccuracy, IdaGivesTheCarAxisOneAccuracyPerToleranceOnEverySolver) {
+  expect_one_accuracy_per_tolerance("caraxis");
+}
 
 // Backward Euler's steps converged whatever it reuses: KLU on a KKT matrix factored a handful of
 // times in the run gives the pendulum of exact Newton (a fresh matrix at every iteration) to the
@@ -177,7 +185,7 @@ TEST(DaeAccuracy, BackwardEulerStepsConvergeWhateverIsReused) {
       return run_dae(p, be, qr, vr);
     };
     const DaeRun exact = be_run(LinearSolverKind::klu, false), klu = be_run(LinearSolverKind::klu, true),
-              reduced = be_run(LinearSolverKind::reduced, true);
+                 reduced = be_run(LinearSolverKind::reduced, true);
     std::printf("h %g: end digits exact %.4f, klu %.4f (%ld factorisations), reduced %.4f; |q_klu - q_exact| %.2e\n", h,
                 exact.end_digits, klu.end_digits, klu.stats.fresh_factorisations, reduced.end_digits,
                 (klu.q - exact.q).norm());

@@ -108,8 +108,8 @@ TEST(Elements, TriangleAreaAndEpidermis) {
     Vec9n x = X;
     for (int i = 0; i < 9; ++i) x[i] += u(rng);
     check_derivatives<9>([](const Vec9n& y, Vec9n* g, Mat9n* H) { return triangle_area(y, g, H); }, x, "area");
-    check_derivatives<9>([&](const Vec9n& y, Vec9n* g, Mat9n* H) { return epidermis_energy(A0, 3.0, 1.0, y, g, H); },
-                         x, "epidermis");
+    check_derivatives<9>([&](const Vec9n& y, Vec9n* g, Mat9n* H) { return epidermis_energy(A0, 3.0, 1.0, y, g, H); }, x,
+                         "epidermis");
   }
   Vec9n g;
   EXPECT_EQ(epidermis_energy(A0, 3.0, 1.0, X, &g, nullptr), 0.0);
@@ -136,8 +136,12 @@ TEST(Elements, SpringAndDamping) {
       xm[k] -= h;
       vp[k] += h;
       vm[k] -= h;
-      fdx.col(k) = (spring_damping_force(0.7, xp, v, nullptr, nullptr) - spring_damping_force(0.7, xm, v, nullptr, nullptr)) / (2 * h);
-      fdv.col(k) = (spring_damping_force(0.7, x, vp, nullptr, nullptr) - spring_damping_force(0.7, x, vm, nullptr, nullptr)) / (2 * h);
+      fdx.col(k) =
+          (spring_damping_force(0.7, xp, v, nullptr, nullptr) - spring_damping_force(0.7, xm, v, nullptr, nullptr)) /
+          (2 * h);
+      fdv.col(k) =
+          (spring_damping_force(0.7, x, vp, nullptr, nullptr) - spring_damping_force(0.7, x, vm, nullptr, nullptr)) /
+          (2 * h);
     }
     EXPECT_LT((dfdx - fdx).norm() / fdx.norm(), 1e-6);
     EXPECT_LT((dfdv - fdv).norm() / fdv.norm(), 1e-6);
@@ -170,7 +174,8 @@ TEST(Elements, HessianTimesDirectionWithoutTheHessian) {
   const TetShape s = TetShape::make(Vec3(0, 0, 0), Vec3(1, 0.1, 0), Vec3(0.2, 1, 0), Vec3(0.1, 0.3, 1.2));
   Vec12 x, d;
   for (int i = 0; i < 12; ++i) {
-    x[i] = (i % 3 == 0 ? 1.1 : 1.0) * std::array<double, 12>{0, 0, 0, 1, 0.1, 0, 0.2, 1, 0, 0.1, 0.3, 1.2}[i] + 0.05 * u(rng);
+    x[i] = (i % 3 == 0 ? 1.1 : 1.0) * std::array<double, 12>{0, 0, 0, 1, 0.1, 0, 0.2, 1, 0, 0.1, 0.3, 1.2}[i] +
+           0.05 * u(rng);
     d[i] = u(rng);
   }
   for (const auto& m : {make_unh(3, 20), make_snh(3, 20), make_cnh(3, 20, 2, 0.1), make_xpbd_pair(3, 20)}) {

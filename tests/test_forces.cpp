@@ -142,7 +142,8 @@ TEST(Forces, ContactDampingRestitutionMatchesTheFirstOrderFormula) {
     auto acc = [&](double z, double vz) {
       Vec3 g;
       ground_energy(k, delta, origin, n, Vec3(0, 0, z), &g, nullptr);
-      const Vec3 f = -g + ground_damping_force(k, alpha, delta, origin, n, Vec3(0, 0, z), Vec3(0, 0, vz), nullptr, nullptr);
+      const Vec3 f =
+          -g + ground_damping_force(k, alpha, delta, origin, n, Vec3(0, 0, z), Vec3(0, 0, vz), nullptr, nullptr);
       return f.z() / mass;
     };
     double z = delta, vz = -v0;

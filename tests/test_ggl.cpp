@@ -17,7 +17,9 @@ using namespace isochor;
 
 namespace {
 SymmetricSolverKind solver_kind(const std::string& name) {
-  return name == "pcg" ? SymmetricSolverKind::pcg : name == "amg" ? SymmetricSolverKind::amg : SymmetricSolverKind::cholmod;
+  return name == "pcg"   ? SymmetricSolverKind::pcg
+         : name == "amg" ? SymmetricSolverKind::amg
+                         : SymmetricSolverKind::cholmod;
 }
 // Every solver of the effective stiffness this build has (amg: with hypre).
 std::vector<std::string> symmetric_solvers() {
@@ -134,7 +136,8 @@ TEST(Ggl, JacobianWithoutDampingMatchesExactly) {
   form.jacobian(t, cj, y.data(), f.yp.data(), vals.data());
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(form.size(), form.size());
   for (Index c = 0; c < form.pattern().n; ++c)
-    for (Index k = form.pattern().col_ptr[c]; k < form.pattern().col_ptr[c + 1]; ++k) J(form.pattern().row_ind[k], c) = vals[k];
+    for (Index k = form.pattern().col_ptr[c]; k < form.pattern().col_ptr[c + 1]; ++k)
+      J(form.pattern().row_ind[k], c) = vals[k];
   Eigen::MatrixXd Jfd(form.size(), form.size());
   VectorXd rp(form.size()), rm(form.size());
   for (Index i = 0; i < form.size(); ++i) {
@@ -191,8 +194,8 @@ void check_reduced_solve(const std::string& kind, double unrefined, bool retarge
       EXPECT_LT(res0, unrefined) << kind << " cj " << cj;
       EXPECT_LT(res, std::max(1e-10, 3.0 * dense)) << kind << " cj " << cj << " residual " << res;
       EXPECT_LT((x - xd).norm() / xd.norm(), 1e-8) << kind << " cj " << cj;
-      std::printf("%s cj %g: residual %.2e, refined %.2e, dense LU %.2e, %ld CG iterations\n", kind.c_str(), cj, res0, res,
-                  dense, rs.iterations());
+      std::printf("%s cj %g: residual %.2e, refined %.2e, dense LU %.2e, %ld CG iterations\n", kind.c_str(), cj, res0,
+                  res, dense, rs.iterations());
     }
     if (kind == "pcg") {
       EXPECT_GT(rs.iterations(), 0);
@@ -277,7 +280,6 @@ TEST(MeshSystem, OnePassForceAndJacobiansEqualTheSeparateCalls) {
   EXPECT_LT(dd, 1e-12 * sk);
 }
 
-
 // With an inverted element (one node pushed through its opposite face: CNH stays finite there),
 // S can be indefinite: the direct reduced solve (CHOLMOD, LDL^T once indefinite) still matches a
 // dense LU; so does PCG, which falls back to CHOLMOD for the setup where CG fails.
@@ -319,7 +321,8 @@ TEST(Ggl, ReducedSolversWithAnInvertedElement) {
       const bool ok = rs.setup(cj, vals.data()) && rs.solve(b.data(), x.data(), 1);
       ASSERT_TRUE(ok) << kind << " cj " << cj;
       const double res = (J * x - b).norm() / b.norm();
-      std::printf("%s cj %g: refined residual %.2e, dense LU %.2e, fallbacks %ld\n", kind.c_str(), cj, res, dense, rs.fallbacks());
+      std::printf("%s cj %g: refined residual %.2e, dense LU %.2e, fallbacks %ld\n", kind.c_str(), cj, res, dense,
+                  rs.fallbacks());
       EXPECT_LT(res, std::max(1e-10, 3.0 * dense)) << kind << " cj " << cj;
     }
   }
@@ -356,7 +359,8 @@ TEST(Ggl, SolversOnJacobiansCapturedFromABallDrop) {
     const int inverted = sys.inverted_tets();
     if (t < 0.0335 || count++ % 3) return;
     if (inverted > 0 ? with_inverted++ >= 2 : with_contact++ >= 2) return;
-    captured.push_back({t, cj, inverted, std::vector<double>(y, y + N), std::vector<double>(values, values + form.pattern().nnz())});
+    captured.push_back(
+        {t, cj, inverted, std::vector<double>(y, y + N), std::vector<double>(values, values + form.pattern().nnz())});
   };
   IdaIntegrator(sys, o).run(scene.frames.times(), [](int, double, const VectorXd&, const VectorXd&, const VectorXd&,
                                                      const RunStats::FrameSample&) {});
@@ -384,8 +388,8 @@ TEST(Ggl, SolversOnJacobiansCapturedFromABallDrop) {
         const VectorXd xd = lu.solve(b);
         const double res = (J * x - b).norm() / b.norm(), dense = (J * xd - b).norm() / b.norm();
         EXPECT_LT(res, std::max(1e-10, 3.0 * dense)) << kind << " t " << c.t << " cj " << c.cj;
-        std::printf("%s t %.5f cj %.3g, %d inverted tets, mu %.3g: residual %.2e, dense LU %.2e\n", kind.c_str(), c.t, c.cj,
-                    c.inverted, c.y[2 * n + form.m()], res, dense);
+        std::printf("%s t %.5f cj %.3g, %d inverted tets, mu %.3g: residual %.2e, dense LU %.2e\n", kind.c_str(), c.t,
+                    c.cj, c.inverted, c.y[2 * n + form.m()], res, dense);
       }
     }
   }

@@ -46,7 +46,9 @@ class Pendulum : public ConstrainedSystem {
   }
   void force(double, const VectorXd&, const VectorXd&, VectorXd& f) override { f = Eigen::Vector2d(0, -kMass * kG); }
   void add_force_jacobians(double, const VectorXd&, const VectorXd&, double*, double*) override {}
-  void constraint(double, const VectorXd& q, VectorXd& g) override { g.resize(1), g[0] = 0.5 * (q.squaredNorm() - kL * kL); }
+  void constraint(double, const VectorXd& q, VectorXd& g) override {
+    g.resize(1), g[0] = 0.5 * (q.squaredNorm() - kL * kL);
+  }
   void constraint_jacobian(double, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* gt) override {
     G[0] = {q[0], q[1]};
     if (gt) gt->setZero(1);
@@ -55,7 +57,8 @@ class Pendulum : public ConstrainedSystem {
     values[0] += scale * w[0];
     values[3] += scale * w[0];
   }
-  void constraint_velocity_jacobian(double, const VectorXd&, const VectorXd& v, std::vector<std::vector<double>>& rows) override {
+  void constraint_velocity_jacobian(double, const VectorXd&, const VectorXd& v,
+                                    std::vector<std::vector<double>>& rows) override {
     rows[0] = {v[0], v[1]};
   }
   double force_scale() const override { return kMass * kG; }
@@ -101,7 +104,9 @@ class KickedPendulum : public Pendulum {
     if (t >= t_kick_) f[0] += 0.5 * kMass * kG;
     calls.push_back(t);
   }
-  std::vector<double> breakpoints() const override { return declare_ ? std::vector<double>{t_kick_} : std::vector<double>{}; }
+  std::vector<double> breakpoints() const override {
+    return declare_ ? std::vector<double>{t_kick_} : std::vector<double>{};
+  }
   std::vector<double> calls;
 
  private:
@@ -120,18 +125,19 @@ PendulumRun run_pendulum(Pendulum& p, const std::vector<double>& times, double t
   o.stop_at_frames = stop_at_frames;
   IdaIntegrator ida(p, o);
   PendulumRun r;
-  r.stats = ida.run(times, [&](int, double, const VectorXd& q, const VectorXd& v, const VectorXd&, const RunStats::FrameSample&) {
-    r.q.push_back(q);
-    r.v.push_back(v);
-    r.worst_g = std::max(r.worst_g, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
-    r.worst_gv = std::max(r.worst_gv, std::abs(q.dot(v)));
-  });
+  r.stats = ida.run(
+      times, [&](int, double, const VectorXd& q, const VectorXd& v, const VectorXd&, const RunStats::FrameSample&) {
+        r.q.push_back(q);
+        r.v.push_back(v);
+        r.worst_g = std::max(r.worst_g, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
+        r.worst_gv = std::max(r.worst_gv, std::abs(q.dot(v)));
+      });
   return r;
 }
 
 }  // namespace
 
-// Frames from IDA's interpolant (issue 15): dense frames cost (almost) no steps, and each frame,
+// Frames from IDA's interpolant: dense frames cost (almost) no steps, and each frame,
 // projected, holds both constraint levels to rounding although the interpolant holds them only to
 // the integration error.
 TEST(Ida, InterpolatedFramesCostNoStepsAndKeepTheConstraints) {
@@ -189,7 +195,8 @@ class TwicePendulum : public Pendulum {
   void add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) override {
     Pendulum::add_constraint_hessian(t, q, VectorXd::Constant(1, w.sum()), scale, values);
   }
-  void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v, std::vector<std::vector<double>>& rows) override {
+  void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,
+                                    std::vector<std::vector<double>>& rows) override {
     Pendulum::constraint_velocity_jacobian(t, q, v, rows);
     for (auto& row : rows) row = rows[0];
   }
@@ -208,15 +215,17 @@ TEST(Ida, DependentConstraintsMoveLikeOne) {
   o.linear_solver = LinearSolverKind::reduced;
   IdaIntegrator ida(p, o);
   double err = 0, worst_g = 0, worst_gv = 0, worst_split = 0;
-  ida.run(times, [&](int k, double, const VectorXd& q, const VectorXd& v, const VectorXd& lambda, const RunStats::FrameSample&) {
+  ida.run(times, [&](int k, double, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
+                     const RunStats::FrameSample&) {
     const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
     err = std::max(err, (q - exact).norm());
     worst_g = std::max(worst_g, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
     worst_gv = std::max(worst_gv, std::abs(q.dot(v)));
-    worst_split = std::max(worst_split, std::abs(lambda[0] - lambda[1]) / (std::abs(lambda[0]) + std::abs(lambda[1]) + 1e-300));
+    worst_split =
+        std::max(worst_split, std::abs(lambda[0] - lambda[1]) / (std::abs(lambda[0]) + std::abs(lambda[1]) + 1e-300));
   });
-  std::printf("twice-constrained pendulum: error %.2e, max |g| %.2e, |G v| %.2e, multipliers split %.2e\n", err, worst_g,
-              worst_gv, worst_split);
+  std::printf("twice-constrained pendulum: error %.2e, max |g| %.2e, |G v| %.2e, multipliers split %.2e\n", err,
+              worst_g, worst_gv, worst_split);
   EXPECT_LT(err, 100 * tol);
   EXPECT_LT(worst_g, 1e-12);
   EXPECT_LT(worst_gv, 1e-12);
@@ -228,8 +237,8 @@ TEST(Ida, DependentConstraintsMoveLikeOne) {
 // projections and initial multipliers use the sparse LDL^T of G M^-1 G^T + delta I instead (ridge
 // regression, delta = 1e-12 of its largest pivot), and the motion is still the pendulum's, each
 // of the 1,001 identical rows' initial multipliers summing to the single row's (how the force is
-// split among them is not unique, and is not asserted). Until session 18 such a run stopped at its start, and Irving's
-// 1-ring zones on the held cube of docs/results/stability_cube (4,913 zones) with it.
+// split among them is not unique, and is not asserted). Irving's 1-ring zones on the held cube of
+// docs/results/stability_cube (4,913 zones) are such a run.
 TEST(Ida, ManyDependentConstraintsMoveLikeOne) {
   const double tol = 1e-6;
   const auto times = test::frame_times(0.1, 0.02);
@@ -241,26 +250,27 @@ TEST(Ida, ManyDependentConstraintsMoveLikeOne) {
   {
     Pendulum one;
     IdaIntegrator ida(one, o);
-    ida.run(times, [&](int, double, const VectorXd&, const VectorXd&, const VectorXd& lambda, const RunStats::FrameSample&) {
-      force_single.push_back(lambda[0]);
-    });
+    ida.run(times, [&](int, double, const VectorXd&, const VectorXd&, const VectorXd& lambda,
+                       const RunStats::FrameSample&) { force_single.push_back(lambda[0]); });
   }
   TwicePendulum p(1001);
   IdaIntegrator ida(p, o);
   double err = 0, worst_g = 0, worst_force = 0;
   int frames = 0;
-  ida.run(times, [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd& lambda, const RunStats::FrameSample&) {
-    ++frames;
-    const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
-    err = std::max(err, (q - exact).norm());
-    worst_g = std::max(worst_g, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
-    // Identical rows: only the sum of their multipliers acts, and it is the single row's. At the
-    // first frame the multipliers are the initial ones, solved through G M^-1 G^T (+ delta I);
-    // later frames carry IDA's interpolated multipliers, which differ between the two runs' steps
-    // by ~1e-3 (the multipliers are outside the error test), so they are not compared.
-    if (k == 0) worst_force = std::abs(lambda.sum() - force_single[k]) / std::abs(force_single[k]);
-  });
-  std::printf("1001-times-constrained pendulum: error %.2e, max |g| %.2e, total force off by %.2e\n", err, worst_g, worst_force);
+  ida.run(times,
+          [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd& lambda, const RunStats::FrameSample&) {
+            ++frames;
+            const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
+            err = std::max(err, (q - exact).norm());
+            worst_g = std::max(worst_g, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
+            // Identical rows: only the sum of their multipliers acts, and it is the single row's. At the
+            // first frame the multipliers are the initial ones, solved through G M^-1 G^T (+ delta I);
+            // later frames carry IDA's interpolated multipliers, which differ between the two runs' steps
+            // by ~1e-3 (the multipliers are outside the error test), so they are not compared.
+            if (k == 0) worst_force = std::abs(lambda.sum() - force_single[k]) / std::abs(force_single[k]);
+          });
+  std::printf("1001-times-constrained pendulum: error %.2e, max |g| %.2e, total force off by %.2e\n", err, worst_g,
+              worst_force);
   EXPECT_EQ(frames, static_cast<int>(times.size()));
   EXPECT_LT(err, 100 * tol);
   EXPECT_LT(worst_g, 1e-12);
@@ -275,7 +285,8 @@ TEST(Ida, DependentConstraintsOnKluStopWithTheReason) {
   o.linear_solver = LinearSolverKind::klu;
   IdaIntegrator ida(p, o);
   try {
-    ida.run({0.0, 0.1}, [](int, double, const VectorXd&, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {});
+    ida.run({0.0, 0.1},
+            [](int, double, const VectorXd&, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {});
     FAIL() << "expected the run to stop";
   } catch (const IntegrationError& e) {
     EXPECT_NE(std::string(e.what()).find("linearly dependent"), std::string::npos) << e.what();
@@ -316,10 +327,11 @@ TEST(Ida, PendulumErrorFallsWithTheTolerance) {
     o.atol_v = rtol;
     IdaIntegrator ida(p, o);
     double worst = 0;
-    ida.run(times, [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {
-      const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
-      worst = std::max(worst, (q - exact).norm());
-    });
+    ida.run(times,
+            [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {
+              const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
+              worst = std::max(worst, (q - exact).norm());
+            });
     errors.push_back(worst);
   }
   for (double e : errors) std::printf("pendulum max position error %.3e\n", e);
@@ -339,7 +351,8 @@ TEST(Ida, PendulumStaysOnTheCircleForTenPeriods) {
   IdaIntegrator ida(p, o);
   double worst = 0;
   int frames = 0;
-  RunStats st = ida.run(times, [&](int, double, const VectorXd& q, const VectorXd&, const VectorXd& lambda, const RunStats::FrameSample&) {
+  RunStats st = ida.run(times, [&](int, double, const VectorXd& q, const VectorXd&, const VectorXd& lambda,
+                                   const RunStats::FrameSample&) {
     worst = std::max(worst, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
     EXPECT_GT(lambda[0], 0.0);  // the rod pulls: tension (lambda > 0 with F_v = M v' - f + G^T lambda)
     frames++;
@@ -373,11 +386,12 @@ TEST(BackwardEuler, PendulumConvergesWithOrderOne) {
     o.dt = h;
     BackwardEuler be(p, o);
     double worst = 0, worst_g = 0;
-    be.run(times, [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {
-      const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
-      worst = std::max(worst, (q - exact).norm());
-      worst_g = std::max(worst_g, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
-    });
+    be.run(times,
+           [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {
+             const Eigen::Vector2d exact(kL * std::sin(ref[k]), -kL * std::cos(ref[k]));
+             worst = std::max(worst, (q - exact).norm());
+             worst_g = std::max(worst_g, std::abs(0.5 * (q.squaredNorm() - kL * kL)));
+           });
     EXPECT_LT(worst_g, 1e-9) << h;  // the constraint holds at every step, whatever the step
     errors.push_back(worst);
   }
@@ -389,7 +403,7 @@ TEST(BackwardEuler, PendulumConvergesWithOrderOne) {
   }
 }
 
-// A run that makes no progress (issue 16) stops with that reason instead of crawling for days:
+// A run that makes no progress stops with that reason instead of crawling for days:
 // 1,000 steps in a row below 1e-7 of the frame interval. Here the steps are held below it by
 // integrator.max_step (1e-9 s against frames 0.1 s apart); a body crushed at once, or an inverted
 // mesh, does it by itself.
@@ -436,7 +450,8 @@ TEST(SerialVector, WeightedRmsNormsAreTheDefinition) {
       plain += t * t;
       if (NV_Ith_S(id, i) > 0) masked += t * t;
     }
-    const double ref_plain = std::sqrt(static_cast<double>(plain / n)), ref_masked = std::sqrt(static_cast<double>(masked / n));
+    const double ref_plain = std::sqrt(static_cast<double>(plain / n)),
+                 ref_masked = std::sqrt(static_cast<double>(masked / n));
     EXPECT_NEAR(N_VWrmsNorm(x, w), ref_plain, 1e-14 * ref_plain) << n;
     EXPECT_NEAR(N_VWrmsNorm(c, w), ref_plain, 1e-14 * ref_plain) << n;
     EXPECT_NEAR(N_VWrmsNormMask(c, w, id), ref_masked, 1e-14 * ref_plain) << n;
@@ -449,10 +464,10 @@ TEST(SerialVector, WeightedRmsNormsAreTheDefinition) {
 // recoverable failure); with s = 1 the first correction is exact.
 namespace {
 struct FakeNewtonSystem {
-  double s = 1.0;              // the matrix the solver holds is s A
-  double next_setup_s = 1.0;   // what the next setup installs
+  double s = 1.0;             // the matrix the solver holds is s A
+  double next_setup_s = 1.0;  // what the next setup installs
   int setups = 0, fresh_asked = 0;
-  bool kept = false;           // what kept_matrix() answers after a setup
+  bool kept = false;  // what kept_matrix() answers after a setup
 } fake;
 const double kA[3] = {2, 3, 4}, kB[3] = {1, -2, 3};
 int fake_sys(N_Vector y, N_Vector F, void*) {

@@ -95,7 +95,8 @@ class Chain : public ConstrainedSystem {
         values[b * n_ + a] -= scale * w[j];
       }
   }
-  void constraint_velocity_jacobian(double, const VectorXd&, const VectorXd& v, std::vector<std::vector<double>>& rows) override {
+  void constraint_velocity_jacobian(double, const VectorXd&, const VectorXd& v,
+                                    std::vector<std::vector<double>>& rows) override {
     for (int j = 0; j < num_constraints(); ++j) {
       const Eigen::Vector2d d = link(v, j);
       rows[j] = j == 0 ? std::vector<double>{d[0], d[1]} : std::vector<double>{-d[0], -d[1], d[0], d[1]};
@@ -115,7 +116,8 @@ class Chain : public ConstrainedSystem {
 
 // The chain of one or two links in angle coordinates (from the downward vertical), equal masses,
 // started at rest, integrated by RK4 at 1e-5 s; positions of every particle at `times`.
-std::vector<VectorXd> reference(const std::vector<double>& L, const std::vector<double>& th0, const std::vector<double>& times) {
+std::vector<VectorXd> reference(const std::vector<double>& L, const std::vector<double>& th0,
+                                const std::vector<double>& times) {
   const int P = static_cast<int>(L.size());
   Eigen::Vector4d y(th0[0], P > 1 ? th0[1] : 0.0, 0, 0);  // theta1, theta2, omega1, omega2
   auto rhs = [&](const Eigen::Vector4d& s) {
@@ -125,7 +127,8 @@ std::vector<VectorXd> reference(const std::vector<double>& L, const std::vector<
     } else {  // equal masses m1 = m2: the double pendulum's equations of motion
       const double a = s[0], b = s[1], wa = s[2], wb = s[3], den = 3.0 - std::cos(2 * a - 2 * b);
       d[2] = (-3 * kG * std::sin(a) - kG * std::sin(a - 2 * b) -
-              2 * std::sin(a - b) * (wb * wb * L[1] + wa * wa * L[0] * std::cos(a - b))) / (L[0] * den);
+              2 * std::sin(a - b) * (wb * wb * L[1] + wa * wa * L[0] * std::cos(a - b))) /
+             (L[0] * den);
       d[3] = 2 * std::sin(a - b) * (wa * wa * L[0] * 2 + 2 * kG * std::cos(a) + wb * wb * L[1] * std::cos(a - b)) /
              (L[1] * den);
     }
@@ -151,13 +154,13 @@ std::vector<VectorXd> reference(const std::vector<double>& L, const std::vector<
   return out;
 }
 
-
 // Largest position error over the frames.
 double worst_error(Integrator& integrator, const std::vector<double>& times, const std::vector<VectorXd>& ref) {
   double worst = 0;
-  integrator.run(times, [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {
-    worst = std::max(worst, (q - ref[k]).cwiseAbs().maxCoeff());
-  });
+  integrator.run(times,
+                 [&](int k, double, const VectorXd& q, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {
+                   worst = std::max(worst, (q - ref[k]).cwiseAbs().maxCoeff());
+                 });
   return worst;
 }
 
@@ -183,11 +186,21 @@ TEST(Integrators, DofsNotAMultipleOfTheGroupSizeAreRejectedWhereGroupsOrderTheSo
   be_klu.linear_solver = LinearSolverKind::klu;
   StaticOptions statics_klu;
   statics_klu.linear_solver = LinearSolverKind::klu;
-  const std::string refused[] = {message([&] { Chain c({1.0}, {0.5}, 3); IdaIntegrator i(c, klu_metis); }),
-                                 message([&] { Chain c({1.0}, {0.5}, 3); BackwardEuler i(c, be_klu); }),
-                                 message([&] { Chain c({1.0}, {0.5}, 3); StaticSolver i(c, statics_klu); })};
+  const std::string refused[] = {message([&] {
+                                   Chain c({1.0}, {0.5}, 3);
+                                   IdaIntegrator i(c, klu_metis);
+                                 }),
+                                 message([&] {
+                                   Chain c({1.0}, {0.5}, 3);
+                                   BackwardEuler i(c, be_klu);
+                                 }),
+                                 message([&] {
+                                   Chain c({1.0}, {0.5}, 3);
+                                   StaticSolver i(c, statics_klu);
+                                 })};
   for (const std::string& m : refused) {
-    EXPECT_NE(m.find("orders the dofs by groups of dofs_per_group() = 3, but the system has 2 dofs"), std::string::npos) << m;
+    EXPECT_NE(m.find("orders the dofs by groups of dofs_per_group() = 3, but the system has 2 dofs"), std::string::npos)
+        << m;
   }
   EXPECT_NE(refused[0].find("METIS"), std::string::npos) << refused[0];
   EXPECT_NE(refused[1].find("KKT"), std::string::npos) << refused[1];
@@ -197,7 +210,8 @@ TEST(Integrators, DofsNotAMultipleOfTheGroupSizeAreRejectedWhereGroupsOrderTheSo
     Chain c({1.0}, {0.5}, group);
     auto integ = make(c);
     VectorXd last;
-    integ->run(times, [&](int, double, const VectorXd& q, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) { last = q; });
+    integ->run(times, [&](int, double, const VectorXd& q, const VectorXd&, const VectorXd&,
+                          const RunStats::FrameSample&) { last = q; });
     return last;
   };
   for (LinearSolverKind ls : {LinearSolverKind::klu, LinearSolverKind::reduced, LinearSolverKind::krylov}) {
@@ -256,10 +270,11 @@ TEST(Integrators, StaticsFindsTheHangingDoublePendulumAndItsTensions) {
     o.linear_solver = ls;
     StaticSolver s(c, o);
     VectorXd q, lambda;
-    s.run({0.0}, [&](int, double, const VectorXd& qq, const VectorXd&, const VectorXd& l, const RunStats::FrameSample&) {
-      q = qq;
-      lambda = l;
-    });
+    s.run({0.0},
+          [&](int, double, const VectorXd& qq, const VectorXd&, const VectorXd& l, const RunStats::FrameSample&) {
+            q = qq;
+            lambda = l;
+          });
     ASSERT_EQ(q.size(), 4);
     EXPECT_NEAR(q[0], 0.0, 1e-9) << to_string(ls);
     EXPECT_NEAR(q[1], -kDoubleL[0], 1e-9);
@@ -287,7 +302,8 @@ TEST(Integrators, BackwardEulerConvergesAtFirstOrderWithEveryLinearSolver) {
       BackwardEuler be(c, o);
       errors.push_back(worst_error(be, times, ref));
     }
-    std::printf("backward Euler %s: errors %.3e %.3e %.3e %.3e\n", to_string(ls), errors[0], errors[1], errors[2], errors[3]);
+    std::printf("backward Euler %s: errors %.3e %.3e %.3e %.3e\n", to_string(ls), errors[0], errors[1], errors[2],
+                errors[3]);
     for (std::size_t i = 1; i < errors.size(); ++i) {
       const double ratio = errors[i - 1] / errors[i];
       EXPECT_GT(ratio, 7.0) << to_string(ls) << " h = " << std::pow(10.0, -1.0 - i);
@@ -303,6 +319,7 @@ TEST(Integrators, BackwardEulerStepsEndOnMultiplesOfTheStep) {
   BackwardEulerOptions o;
   o.dt = 1e-5;
   BackwardEuler be(c, o);
-  const RunStats s = be.run({0.0, 1.0}, [](int, double, const VectorXd&, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {});
+  const RunStats s = be.run(
+      {0.0, 1.0}, [](int, double, const VectorXd&, const VectorXd&, const VectorXd&, const RunStats::FrameSample&) {});
   EXPECT_EQ(s.steps, 100000);
 }

@@ -136,10 +136,10 @@ TEST(Penalty, ClosedFormsOfTheCnhPaper) {
     for (double J : {-0.5, 0.0, 0.3, 1.0, 1.7}) {
       const Penalty u = penalty_U(J, beta);
       const double d = J - 1;
-      EXPECT_NEAR(u.U, d * d * (beta * d * d + 6) / 12, 1e-15);                 // (13)
-      EXPECT_NEAR(u.dU, d * (beta * d * d + 3) / 3, 1e-15);                     // (14)
-      EXPECT_NEAR(u.d2U, beta * d * d + 1, 1e-15);                              // (15)
-      const double h = 1e-5;  // and they are derivatives of each other
+      EXPECT_NEAR(u.U, d * d * (beta * d * d + 6) / 12, 1e-15);  // (13)
+      EXPECT_NEAR(u.dU, d * (beta * d * d + 3) / 3, 1e-15);      // (14)
+      EXPECT_NEAR(u.d2U, beta * d * d + 1, 1e-15);               // (15)
+      const double h = 1e-5;                                     // and they are derivatives of each other
       EXPECT_NEAR((penalty_U(J + h, beta).U - penalty_U(J - h, beta).U) / (2 * h), u.dU, 1e-8);
       EXPECT_NEAR((penalty_U(J + h, beta).dU - penalty_U(J - h, beta).dU) / (2 * h), u.d2U, 1e-8);
       if (beta == 0.0) {

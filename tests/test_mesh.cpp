@@ -74,8 +74,7 @@ TEST(Mesh, ReversedTetIsReorderedAndFlatTetRejected) {
   EXPECT_EQ(m.reoriented_tets(), 1);
   EXPECT_NEAR(m.rest_volumes()[0], 1.0 / 6.0, 1e-15);
   EXPECT_NEAR(m.rest_volumes()[1], 1.0 / 3.0, 1e-15);
-  for (const Tet& t : m.tets())
-    EXPECT_GT(tet_signed_volume(x.col(t[0]), x.col(t[1]), x.col(t[2]), x.col(t[3])), 0.0);
+  for (const Tet& t : m.tets()) EXPECT_GT(tet_signed_volume(x.col(t[0]), x.col(t[1]), x.col(t[2]), x.col(t[3])), 0.0);
   expect_closed_outward(m);
 
   Points y = x;
@@ -113,7 +112,8 @@ static double min_face_angle(const Points& x, const Tet& t) {
   double smallest = 180;
   for (const auto& f : kFaces)
     for (int c = 0; c < 3; ++c) {
-      const Eigen::Vector3d a = x.col(t[f[(c + 1) % 3]]) - x.col(t[f[c]]), b = x.col(t[f[(c + 2) % 3]]) - x.col(t[f[c]]);
+      const Eigen::Vector3d a = x.col(t[f[(c + 1) % 3]]) - x.col(t[f[c]]),
+                            b = x.col(t[f[(c + 2) % 3]]) - x.col(t[f[c]]);
       smallest = std::min(smallest, std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / M_PI);
     }
   return smallest;

@@ -161,7 +161,9 @@ TEST(MeshFiles, InwardObjIsFlippedAndStlReadsTheSame) {
   read_obj_surface(test::write_file(d / "c.obj", kCubeObj), x, tris);
   for (const Tri& t : tris) {
     ascii += " facet normal 0 0 0\n  outer loop\n";
-    for (int k : t) ascii += "   vertex " + std::to_string(x(0, k)) + " " + std::to_string(x(1, k)) + " " + std::to_string(x(2, k)) + "\n";
+    for (int k : t)
+      ascii +=
+          "   vertex " + std::to_string(x(0, k)) + " " + std::to_string(x(1, k)) + " " + std::to_string(x(2, k)) + "\n";
     ascii += "  endloop\n endfacet\n";
   }
   ascii += "endsolid cube\n";

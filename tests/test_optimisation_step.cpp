@@ -1,4 +1,4 @@
-// Backward Euler as an optimisation (issue 20): the line search on the l1 merit of the
+// Backward Euler as an optimisation: the line search on the l1 merit of the
 // incremental potential, per-element Hessians projected to be positive semi-definite, and steps
 // halved after a failure. The scene is the collapsing cube of demos/cube_collapse.toml (10 cm,
 // mu = 100 Pa, rho g H = 10 mu) at 2^3 and 3^3 cells, where a 33 ms step takes the cube from rest
@@ -24,12 +24,16 @@ std::string cube_toml(int cells, double size, double damping_beta = 0.0) {
   const std::string a = std::to_string(size), c = std::to_string(size / 2);
   return R"(
 [damping]
-beta = )" + std::to_string(damping_beta) + R"(
+beta = )" +
+         std::to_string(damping_beta) + R"(
 [mesh]
 shape = "box"
-size = [)" + a + ", " + a + ", " + a + R"(]
-cells = )" + std::to_string(cells) + R"(
-center = [0.0, 0.0, )" + c + R"(]
+size = [)" +
+         a + ", " + a + ", " + a + R"(]
+cells = )" +
+         std::to_string(cells) + R"(
+center = [0.0, 0.0, )" +
+         c + R"(]
 [material]
 model = "cnh"
 density = 1000.0
@@ -51,7 +55,7 @@ struct Outcome {
   bool ok = true;
   std::string reason;
   RunStats stats;
-  std::vector<VectorXd> q;         // per frame
+  std::vector<VectorXd> q;           // per frame
   std::vector<double> volume_error;  // per frame, |V - V0| / V0 of the cube
 };
 
@@ -64,12 +68,12 @@ Outcome run(const Scene& sc, BackwardEulerOptions o, double duration, double fra
   for (int k = 0; k * df <= duration + 1e-12; ++k) times.push_back(k * df);
   BackwardEuler be(sys, o);
   try {
-    out.stats = be.run(times, [&](int, double t, const VectorXd& q, const VectorXd& v, const VectorXd&,
-                                  const RunStats::FrameSample&) {
-      sys.set_state(t, q, v);
-      out.q.push_back(q);
-      out.volume_error.push_back(std::abs(sys.volumes()[0] - V0) / V0);
-    });
+    out.stats = be.run(
+        times, [&](int, double t, const VectorXd& q, const VectorXd& v, const VectorXd&, const RunStats::FrameSample&) {
+          sys.set_state(t, q, v);
+          out.q.push_back(q);
+          out.volume_error.push_back(std::abs(sys.volumes()[0] - V0) / V0);
+        });
   } catch (const IntegrationError& e) {
     out.ok = false;
     out.reason = e.what();

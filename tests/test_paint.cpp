@@ -34,8 +34,9 @@ Eigen::Vector3d centroid(const Mesh& m, int e) {
   return c;
 }
 
-const char* kBox = "[mesh]\nshape = \"box\"\nsize = [1.0, 1.0, 1.0]\ncenter = [0.5, 0.5, 0.5]\ncells = %d\n"
-                   "[material]\nmu = 1.0\nlambda = 1.0\n";
+const char* kBox =
+    "[mesh]\nshape = \"box\"\nsize = [1.0, 1.0, 1.0]\ncenter = [0.5, 0.5, 0.5]\ncells = %d\n"
+    "[material]\nmu = 1.0\nlambda = 1.0\n";
 
 std::string box(int cells) {
   char b[256];
@@ -93,8 +94,8 @@ TEST(Paint, ABoxPaintedInTwoHalvesGivesEachTetItsSide) {
     }
     test::write_file(dir / "weights.csv", csv.str());
     const Scene s = parse_scene(SceneFile::parse(
-        box(4) + "[[zones.paint]]\nfile = \"weights.csv\"\nweights = { left = \"w_left\", right = \"w_right\" }\n", "weights.toml",
-        {}, dir.string()));
+        box(4) + "[[zones.paint]]\nfile = \"weights.csv\"\nweights = { left = \"w_left\", right = \"w_right\" }\n",
+        "weights.toml", {}, dir.string()));
     expect_halves(s);
   }
   // By colours, from an OBJ with vertex colours (red left, blue right).
@@ -129,8 +130,8 @@ TEST(Paint, HemispheresPaintedOnASphereHaveHalfItsVolume) {
     const double golden = M_PI * (3 - std::sqrt(5.0));
     for (int i = 0; i < n; ++i) {  // a Fibonacci sphere of radius 0.1
       const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z);
-      const float p[3] = {static_cast<float>(0.1 * r * std::cos(golden * i)), static_cast<float>(0.1 * r * std::sin(golden * i)),
-                          static_cast<float>(0.1 * z)};
+      const float p[3] = {static_cast<float>(0.1 * r * std::cos(golden * i)),
+                          static_cast<float>(0.1 * r * std::sin(golden * i)), static_cast<float>(0.1 * z)};
       const unsigned char label = z >= 0 ? 1 : 2;
       ply.write(reinterpret_cast<const char*>(p), sizeof p);
       ply.write(reinterpret_cast<const char*>(&label), 1);
@@ -138,11 +139,12 @@ TEST(Paint, HemispheresPaintedOnASphereHaveHalfItsVolume) {
   }
   double coarsest = 1;
   for (int tets : {1000, 5000, 20000}) {
-    const Scene s = parse_scene(SceneFile::parse(
-        "[mesh]\nshape = \"sphere\"\nradius = 0.1\ntarget_tets = " + std::to_string(tets) +
-            "\n[material]\nmu = 1.0\nlambda = 1.0\n[zones]\nglobal = false\n[[zones.paint]]\nfile = \"hemispheres.ply\"\n"
-            "labels = { top = 1, bottom = 2 }\n",
-        "sphere.toml", {}, dir.string()));
+    const Scene s =
+        parse_scene(SceneFile::parse("[mesh]\nshape = \"sphere\"\nradius = 0.1\ntarget_tets = " + std::to_string(tets) +
+                                         "\n[material]\nmu = 1.0\nlambda = 1.0\n[zones]\nglobal = "
+                                         "false\n[[zones.paint]]\nfile = \"hemispheres.ply\"\n"
+                                         "labels = { top = 1, bottom = 2 }\n",
+                                     "sphere.toml", {}, dir.string()));
     const double half = 0.5 * s.mesh.rest_volume();
     const double top = volume(s, zone(s, "top")), bottom = volume(s, zone(s, "bottom"));
     EXPECT_NEAR(top + bottom, s.mesh.rest_volume(), 1e-12 * half);  // every tet in one of them
@@ -152,15 +154,17 @@ TEST(Paint, HemispheresPaintedOnASphereHaveHalfItsVolume) {
     if (tets == 20000) {
       EXPECT_LT(error, 0.5 * coarsest);  // converging: the border's error shrinks with h
     }
-    std::printf("hemispheres at %d tets: top %.4f, bottom %.4f of half the volume\n", s.mesh.num_tets(), top / half, bottom / half);
+    std::printf("hemispheres at %d tets: top %.4f, bottom %.4f of half the volume\n", s.mesh.num_tets(), top / half,
+                bottom / half);
   }
 }
 
 TEST(Paint, PaintThatDoesNotFitStopsWithAMessage) {
   const auto dir = test::temp_dir();
   // A 3 m bar whose two ends are painted with one label; the middle unpainted.
-  const std::string bar = "[mesh]\nshape = \"box\"\nsize = [3.0, 1.0, 1.0]\ncenter = [1.5, 0.5, 0.5]\ncells = [12, 4, 4]\n"
-                          "[material]\nmu = 1.0\nlambda = 1.0\n";
+  const std::string bar =
+      "[mesh]\nshape = \"box\"\nsize = [3.0, 1.0, 1.0]\ncenter = [1.5, 0.5, 0.5]\ncells = [12, 4, 4]\n"
+      "[material]\nmu = 1.0\nlambda = 1.0\n";
   const Scene probe = parse_scene(SceneFile::parse(bar, "probe.toml"));
   std::ostringstream csv;
   csv << "node,label\n";
@@ -170,27 +174,32 @@ TEST(Paint, PaintThatDoesNotFitStopsWithAMessage) {
   }
   test::write_file(dir / "ends.csv", csv.str());
   auto err = [&](const std::string& paint) {
-    return test::error_of([&] {
-      parse_scene(SceneFile::parse(bar + "[[zones.paint]]\n" + paint, "paint.toml", {}, dir.string()));
-    });
+    return test::error_of(
+        [&] { parse_scene(SceneFile::parse(bar + "[[zones.paint]]\n" + paint, "paint.toml", {}, dir.string())); });
   };
   EXPECT_NE(err("file = \"ends.csv\"\nlabels = { ends = 7 }\n")
                 .find("zones.paint[0].labels.ends: zone \"ends\" is painted in 2 disconnected pieces"),
             std::string::npos);
-  EXPECT_NE(err("file = \"ends.csv\"\nlabels = { belly = 3 }\n").find("zones.paint[0].labels.belly: no tet is painted belly"),
+  EXPECT_NE(
+      err("file = \"ends.csv\"\nlabels = { belly = 3 }\n").find("zones.paint[0].labels.belly: no tet is painted belly"),
+      std::string::npos);
+  EXPECT_NE(err("file = \"ends.csv\"\nproperty = \"zone\"\nlabels = { ends = 7 }\n")
+                .find("no vertex property \"zone\" (it has: node, label)"),
             std::string::npos);
-  EXPECT_NE(err("file = \"ends.csv\"\nproperty = \"zone\"\nlabels = { ends = 7 }\n").find("no vertex property \"zone\" (it has: node, label)"),
-            std::string::npos);
-  EXPECT_NE(err("file = \"ends.csv\"\nlabels = { ends = 7 }\nweights = { x = \"label\" }\n").find("expected exactly one of labels, colors or weights"),
+  EXPECT_NE(err("file = \"ends.csv\"\nlabels = { ends = 7 }\nweights = { x = \"label\" }\n")
+                .find("expected exactly one of labels, colors or weights"),
             std::string::npos);
   EXPECT_NE(err("file = \"missing.ply\"\nlabels = { a = 1 }\n").find("zones.paint[0].file: "), std::string::npos);
   // Malformed PLY: a vertex that is not a number, a list whose count is not a count.
-  test::write_file(dir / "nan.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
-                                    "property int label\nend_header\n0 0 0 1\nnan 0 0 1\n");
+  test::write_file(dir / "nan.ply",
+                   "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                   "property int label\nend_header\n0 0 0 1\nnan 0 0 1\n");
   EXPECT_NE(err("file = \"nan.ply\"\nlabels = { a = 1 }\n").find("vertex 1 has a position that is not a finite number"),
             std::string::npos);
-  test::write_file(dir / "list.ply", "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\n"
-                                     "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\nnan 1 2 3\n0 0 0\n");
+  test::write_file(
+      dir / "list.ply",
+      "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\n"
+      "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\nnan 1 2 3\n0 0 0\n");
   EXPECT_NE(err("file = \"list.ply\"\nlabels = { a = 1 }\n").find("a PLY list of nan items"), std::string::npos);
   // The paint of another surface: the box's nodes moved by 0.5 m.
   std::ostringstream far;
@@ -200,16 +209,18 @@ TEST(Paint, PaintThatDoesNotFitStopsWithAMessage) {
     far << p.x() + 0.5 << "," << p.y() << "," << p.z() << ",1\n";
   }
   test::write_file(dir / "far.csv", far.str());
-  EXPECT_NE(err("file = \"far.csv\"\nlabels = { a = 1 }\n").find("m from the nearest painted vertex"), std::string::npos);
+  EXPECT_NE(err("file = \"far.csv\"\nlabels = { a = 1 }\n").find("m from the nearest painted vertex"),
+            std::string::npos);
   // Split: the two ends as two zones.
-  const Scene s = parse_scene(SceneFile::parse(
-      bar + "[zones]\nglobal = false\n[[zones.paint]]\nfile = \"ends.csv\"\nlabels = { ends = 7 }\ndisconnected = \"split\"\n",
-      "split.toml", {}, dir.string()));
+  const Scene s = parse_scene(SceneFile::parse(bar + "[zones]\nglobal = false\n[[zones.paint]]\nfile = "
+                                                     "\"ends.csv\"\nlabels = { ends = 7 }\ndisconnected = \"split\"\n",
+                                               "split.toml", {}, dir.string()));
   ASSERT_EQ(s.zones.size(), 2u);
   EXPECT_EQ(s.zones[0].first, "ends_1");
   EXPECT_EQ(s.zones[1].first, "ends_2");
   for (const auto& [name, tets] : s.zones)
-    for (int e : tets) EXPECT_EQ(centroid(s.mesh, e).x() < 1.5, centroid(s.mesh, tets[0]).x() < 1.5) << name;  // one end each
+    for (int e : tets)
+      EXPECT_EQ(centroid(s.mesh, e).x() < 1.5, centroid(s.mesh, tets[0]).x() < 1.5) << name;  // one end each
   EXPECT_NE(centroid(s.mesh, s.zones[0].second[0]).x() < 1.5, centroid(s.mesh, s.zones[1].second[0]).x() < 1.5);
 }
 
@@ -225,7 +236,8 @@ TEST(Paint, AGmshSurfaceGroupPaintsTheTetsNearestIt) {
   const std::string cmd = "gmsh -3 -v 0 " + std::string(ISOCHOR_SOURCE_DIR) + "/tests/data/two_boxes.geo -clmax " +
                           std::to_string(h) + " -o " + msh;
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  const std::string scene = "[mesh]\nfile = \"" + msh + "\"\n[material]\nmu = 1.0\nlambda = 1.0\n[zones]\nglobal = false\n";
+  const std::string scene =
+      "[mesh]\nfile = \"" + msh + "\"\n[material]\nmu = 1.0\nlambda = 1.0\n[zones]\nglobal = false\n";
   const Scene sc = parse_scene(SceneFile::parse(scene + "[[zones.paint]]\ngroups = [\"bottom\"]\n", "slab.toml"));
   ASSERT_EQ(sc.zones.size(), 1u);
   EXPECT_EQ(sc.zones[0].first, "bottom");
@@ -245,6 +257,8 @@ TEST(Paint, AGmshSurfaceGroupPaintsTheTetsNearestIt) {
     }
   }
   EXPECT_GT(decided, sc.mesh.num_tets() / 2);
-  const std::string err = test::error_of([&] { parse_scene(SceneFile::parse(scene + "[[zones.paint]]\ngroups = [\"belly\"]\n", "slab.toml")); });
-  EXPECT_NE(err.find("zones.paint[0].groups: the mesh has no group \"belly\" (its groups: bottom"), std::string::npos) << err;
+  const std::string err = test::error_of(
+      [&] { parse_scene(SceneFile::parse(scene + "[[zones.paint]]\ngroups = [\"belly\"]\n", "slab.toml")); });
+  EXPECT_NE(err.find("zones.paint[0].groups: the mesh has no group \"belly\" (its groups: bottom"), std::string::npos)
+      << err;
 }

@@ -1,4 +1,4 @@
-// Runs that survive (issue 16): resuming an interrupted or killed run, interrupts at step
+// Runs that survive: resuming an interrupted or killed run, interrupts at step
 // boundaries, outputs that are never clobbered, and a full file system that keeps every frame.
 #include <gtest/gtest.h>
 #include <hdf5.h>
@@ -103,8 +103,8 @@ TEST(Resume, AnInterruptedIdaRunMatchesTheUninterruptedOne) {
                res = frames_of(path);
   ASSERT_EQ(res.x.size(), ref.x.size());
   const double own_error = max_difference(ref.x, tight.x), resume_error = max_difference(res.x, ref.x);
-  std::printf("uninterrupted run against a 100x tighter one: %.3e m; resumed against uninterrupted: %.3e m\n", own_error,
-              resume_error);
+  std::printf("uninterrupted run against a 100x tighter one: %.3e m; resumed against uninterrupted: %.3e m\n",
+              own_error, resume_error);
   EXPECT_TRUE(std::isfinite(resume_error));
   EXPECT_EQ(max_difference({res.x.begin(), res.x.begin() + 9}, {ref.x.begin(), ref.x.begin() + 9}), 0.0);
   EXPECT_GT(max_difference(ref.x, std::vector<Points>(ref.x.size(), ref.x[0])), 100 * own_error);  // it moves
@@ -139,9 +139,10 @@ TEST(Resume, AnInterruptedBackwardEulerRunRepeatsTheSameSteps) {
 // steps): a run resumed after its 6th frame starts on PCG again and switches again, and its frames
 // are the uninterrupted run's to the Newton tolerance (1e-6 of each step's few-mm displacement).
 TEST(Resume, AnAutomaticSolverChoosesAgainAfterAResume) {
-  const Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/cube_gravity.toml",
-                              {"mesh.cells=8", "frames.duration=0.1", "integrator.kind=backward_euler",
-                               "integrator.dt=0.008", "material.model=unh", "material.lambda=9900", "zones.global=false"});
+  const Scene sc =
+      load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/cube_gravity.toml",
+                 {"mesh.cells=8", "frames.duration=0.1", "integrator.kind=backward_euler", "integrator.dt=0.008",
+                  "material.model=unh", "material.lambda=9900", "zones.global=false"});
   const auto [ref, res] = straight_and_resumed(sc, 6);
   ASSERT_EQ(res.x.size(), 13u);
   ASSERT_EQ(ref.x.size(), 13u);
@@ -239,7 +240,9 @@ TEST(Resume, OnlyTheSceneTheFileWasWrittenWith) {
   EXPECT_NE(msg.find(path + ": was written from a different scene"), std::string::npos) << msg;
   EXPECT_EQ(RunFile(path).num_frames(), 4);  // untouched
   const std::string none = (dir / "none.h5").string();
-  EXPECT_NE(test::error_of([&] { run_scene(scene(kSwing), options(none, OutputWriter::Mode::resume)); }).find("no such file to resume"),
+  EXPECT_NE(test::error_of([&] {
+              run_scene(scene(kSwing), options(none, OutputWriter::Mode::resume));
+            }).find("no such file to resume"),
             std::string::npos);
   // A finished run resumed does nothing.
   run_scene(scene(kSwing), options(path, OutputWriter::Mode::resume));
@@ -266,7 +269,9 @@ TEST(Outputs, AnExistingOutputIsKeptUnlessOverwriteIsAsked) {
   // Its sidecar counts as the output too.
   const std::string other = (dir / "other.h5").string();
   { std::ofstream((dir / "other.xdmf").string()) << "x"; }
-  EXPECT_NE(test::error_of([&] { OutputWriter w(other, m, {}, {"", "", "run", {}}, false); }).find("other.xdmf: exists"),
+  EXPECT_NE(test::error_of([&] {
+              OutputWriter w(other, m, {}, {"", "", "run", {}}, false);
+            }).find("other.xdmf: exists"),
             std::string::npos);
   OutputWriter w(path, m, {}, {"", "", "run", {}}, false, OutputWriter::Mode::overwrite);
   EXPECT_EQ(w.frames_written(), 0);
@@ -286,8 +291,9 @@ TEST(Outputs, ASecondWriterFailsAtStartAndLeavesTheFirstIntact) {
   const Mesh m = small_mesh();
   OutputWriter first(path, m, {}, {"", "", "run", {}}, false);
   EXPECT_TRUE(output_is_being_written(path));
-  const std::string msg = test::error_of(
-      [&] { OutputWriter second(path, m, {}, {"", "", "run", {}}, false, OutputWriter::Mode::overwrite); });
+  const std::string msg = test::error_of([&] {
+    OutputWriter second(path, m, {}, {"", "", "run", {}}, false, OutputWriter::Mode::overwrite);
+  });
   EXPECT_NE(msg.find(path + ": another process is writing it"), std::string::npos) << msg;
   Frame f;
   f.positions = &m.rest_positions();
@@ -335,8 +341,9 @@ TEST(Outputs, AFullFileSystemStopsTheRunWithEveryFrameBeforeItIntact) {
   std::printf("%d frames, then: %s\n", written, msg.c_str());
   EXPECT_GT(written, 10);
   EXPECT_LT(written, 1000);
-  EXPECT_NE(msg.find(path + ": the file size limit (ulimit -f: 2048 KB) is reached at frame " + std::to_string(written)),
-            std::string::npos);
+  EXPECT_NE(
+      msg.find(path + ": the file size limit (ulimit -f: 2048 KB) is reached at frame " + std::to_string(written)),
+      std::string::npos);
   EXPECT_NE(msg.find("frames 0-" + std::to_string(written - 1) + " are intact"), std::string::npos);
   RunFile f(path);
   ASSERT_EQ(f.num_frames(), written);
@@ -347,8 +354,9 @@ TEST(Outputs, AFullFileSystemStopsTheRunWithEveryFrameBeforeItIntact) {
 // system's reason.
 TEST(Outputs, AWriteErrorNamesTheFileAndTheReason) {
   if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
-  const std::string msg =
-      test::error_of([&] { OutputWriter w("/dev/full", small_mesh(), {}, {"", "", "run", {}}, false, OutputWriter::Mode::overwrite); });
+  const std::string msg = test::error_of([&] {
+    OutputWriter w("/dev/full", small_mesh(), {}, {"", "", "run", {}}, false, OutputWriter::Mode::overwrite);
+  });
   EXPECT_NE(msg.find("/dev/full: "), std::string::npos) << msg;
   EXPECT_NE(msg.find("No space left on device"), std::string::npos) << msg;
 }

@@ -105,7 +105,8 @@ TEST(Run, UndampedOscillationConservesEnergy) {
   Scene sc = scene(std::string(kBox) + R"(
 [[boundary]]
 select = { kind = "set", name = "zmax" }
-)", {"initial.velocity=[0.0, 0.0, 0.0]", "frames.duration=1.0", "material.E=4640.0"});
+)",
+                   {"initial.velocity=[0.0, 0.0, 0.0]", "frames.duration=1.0", "material.E=4640.0"});
   RunSummary r = run_scene(sc, (dir / "osc.h5").string(), false);
   RunFile f(r.output);
   ASSERT_GT(f.num_frames(), 90);
@@ -170,7 +171,8 @@ TEST(Run, AutoLinearSolverIsKrylovForAFewZonesAndKluForMany) {
   Scene one = scene(kBox, {"frames.duration=0.02"});
   RunFile f(run_scene(one, (dir / "zone.h5").string(), false).output);
   const auto totals = f.stat_totals();
-  std::printf("one zone: CG iterations %.0f, factor entries %.0f\n", totals.at("linear_iterations"), totals.at("factor_nnz"));
+  std::printf("one zone: CG iterations %.0f, factor entries %.0f\n", totals.at("linear_iterations"),
+              totals.at("factor_nnz"));
   EXPECT_GT(totals.at("linear_iterations"), 0.0);
   EXPECT_EQ(totals.at("factor_nnz"), 0.0);
 
@@ -230,7 +232,7 @@ static void ball_keeps_its_volume(const std::vector<std::string>& overrides, int
   std::printf("coarse ball, cnh: worst volume error %.3e over %d frames, lowest point z = %.4f m\n", worst,
               f.num_frames(), lowest_z);
   EXPECT_LT(lowest_z, 0.002);  // it did reach the ground (contact layer 2 mm)
-  EXPECT_LT(worst, 1e-10);  // every frame projected onto the zone's volume (issue 15)
+  EXPECT_LT(worst, 1e-10);     // every frame projected onto the zone's volume
 }
 TEST(BallDropLong, CnhKeepsTheVolumeAtEveryFrame) { ball_keeps_its_volume({"frames.duration=0.1"}, 4000, 101); }
 TEST(BallDrop, CoarseCnhKeepsTheVolumeAtEveryFrame) {
@@ -329,8 +331,9 @@ TEST(IdaRun, FixedBottomCubeStartsAtTightTolerances) {
   // and the run failed at t = 0 (IDA_CONV_FAIL) on 8^3 cells; with the first step set from the
   // position tolerance it runs, and the global volume holds at every frame.
   const auto dir = test::temp_dir();
-  Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/cube_collapse.toml",
-                        {"mesh.cells=8", "frames.duration=0.01", "frames.rate=500.0", "integrator.rtol=1e-7", "integrator.atol=1e-10"});
+  Scene sc = load_scene(
+      std::string(ISOCHOR_SOURCE_DIR) + "/demos/cube_collapse.toml",
+      {"mesh.cells=8", "frames.duration=0.01", "frames.rate=500.0", "integrator.rtol=1e-7", "integrator.atol=1e-10"});
   const RunSummary r = run_scene(sc, (dir / "cube.h5").string(), false);
   EXPECT_EQ(r.frames, 6);
   const RunFile f(r.output);
@@ -370,7 +373,8 @@ TEST(IdaRun, BallDropFramesAgreeAcrossLinearSolvers) {
   const double tol = 50 * (1e-6 * 0.5 + 1e-8);
   for (int s = 1; s < R; ++s)
     for (int k = 0; k < 11; ++k)
-      EXPECT_LT((frames[s][k] - frames[0][k]).cwiseAbs().maxCoeff(), tol) << solvers[s] << " run " << s << " frame " << k;
+      EXPECT_LT((frames[s][k] - frames[0][k]).cwiseAbs().maxCoeff(), tol)
+          << solvers[s] << " run " << s << " frame " << k;
   // Through the impact: the ball has moved and deformed.
   EXPECT_GT((frames[0][10] - frames[0][0]).cwiseAbs().maxCoeff(), 0.3);
   // Reuse replaced assemblies: fewer Jacobians assembled than setups.
@@ -386,7 +390,8 @@ TEST(IdaRun, BallDropFramesAgreeAcrossLinearSolvers) {
   EXPECT_GT(totals[2].at("retargets"), 0.0);
   EXPECT_EQ(totals[1].at("retargets"), 0.0);
   const auto per_step = [&](int s) { return totals[s].at("newton_iterations") / totals[s].at("steps"); };
-  std::printf("Newton iterations per step: klu %.3f, reduced %.3f, krylov %.3f\n", per_step(0), per_step(1), per_step(2));
+  std::printf("Newton iterations per step: klu %.3f, reduced %.3f, krylov %.3f\n", per_step(0), per_step(1),
+              per_step(2));
   EXPECT_LT(per_step(2), per_step(1));
 }
 
@@ -416,9 +421,10 @@ TEST(BackwardEulerRun, PcgStoppedEarlyKeepsTheSteps) {
   DemoRun r[4];
   std::map<std::string, double> totals[4];
   for (int s = 0; s < 4; ++s) {
-    r[s] = run_demo(dir, std::to_string(s), "pinned_cube.toml",
-                    {"mesh.cells=8", "frames.duration=1.0", std::string("integrator.linear_solver=") + solvers[s],
-                     std::string("integrator.linear_tol=") + tols[s], std::string("integrator.newton_tol=") + newton[s]});
+    r[s] =
+        run_demo(dir, std::to_string(s), "pinned_cube.toml",
+                 {"mesh.cells=8", "frames.duration=1.0", std::string("integrator.linear_solver=") + solvers[s],
+                  std::string("integrator.linear_tol=") + tols[s], std::string("integrator.newton_tol=") + newton[s]});
     ASSERT_EQ(r[s].frames.size(), 61u);
     totals[s] = r[s].totals;
   }
@@ -447,7 +453,9 @@ TEST(BackwardEulerRun, AutomaticSolverFollowsTheMeshSize) {
   const auto cg_iterations = [&](std::vector<std::string> sets) {
     sets.push_back("frames.duration=0.1");
     Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/pinned_cube.toml", sets);
-    return RunFile(run_scene(sc, (dir / (std::to_string(++runs) + ".h5")).string(), false).output).stat_totals().at("linear_iterations");
+    return RunFile(run_scene(sc, (dir / (std::to_string(++runs) + ".h5")).string(), false).output)
+        .stat_totals()
+        .at("linear_iterations");
   };
   EXPECT_EQ(cg_iterations({"mesh.cells=6"}), 0.0);
   EXPECT_GT(cg_iterations({"mesh.cells=8"}), 0.0);
@@ -516,8 +524,9 @@ TEST(Statics, TheSameEquilibriaWithEveryLinearSolver) {
   std::map<std::string, double> totals[3];
   const char* solvers[3] = {"klu", "reduced", "krylov"};
   for (int s = 0; s < 3; ++s) {
-    Scene sc = load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/cantilever_zones.toml",
-                          {"zones.global=false", "zones.patches=2", std::string("integrator.linear_solver=") + solvers[s]});
+    Scene sc =
+        load_scene(std::string(ISOCHOR_SOURCE_DIR) + "/demos/cantilever_zones.toml",
+                   {"zones.global=false", "zones.patches=2", std::string("integrator.linear_solver=") + solvers[s]});
     const RunFile f(run_scene(sc, (dir / (std::string(solvers[s]) + ".h5")).string(), false).output);
     ASSERT_EQ(f.num_frames(), 11);
     for (int k = 0; k < f.num_frames(); ++k) frames[s].push_back(f.positions(k));
@@ -537,7 +546,8 @@ TEST(Statics, TheSameEquilibriaWithEveryLinearSolver) {
 // expansions, a newline, the empty word), and words the shell takes literally stay unquoted
 // (the resume command that isochor prints stays readable).
 TEST(ShellQuoting, WordsComeBackFromTheShellUnchanged) {
-  const std::vector<std::string> words = {"it's", "a b", "$HOME", "`id`", "\\", "a\nb", "", "*", "'", "''x'", "out/run.h5"};
+  const std::vector<std::string> words = {"it's", "a b", "$HOME", "`id`", "\\",        "a\nb",
+                                          "",     "*",   "'",     "''x'", "out/run.h5"};
   for (const std::string& w : words) {
     const std::string cmd = "printf %s " + shell_quoted(w);
     FILE* p = popen(cmd.c_str(), "r");

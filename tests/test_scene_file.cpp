@@ -20,10 +20,14 @@ TEST(SceneFile, TypedKeysRangesAndMessages) {
   EXPECT_EQ(a.string("s", ""), "box");
   EXPECT_EQ(a.vec3("v", {}), Eigen::Vector3d(1, 2, 3));
   EXPECT_TRUE(a.boolean("b", false));
-  EXPECT_EQ(test::error_of([&] { a.integer("y", 0, 0, 10); }), "s.toml:3: a.y: expected an integer in [0, 10], got a number");
-  EXPECT_EQ(test::error_of([&] { a.number("y", 0, Range::closed(2, 3)); }), "s.toml:3: a.y: expected a number in [2, 3], got 1.5");
-  EXPECT_EQ(test::error_of([&] { a.number("s", 0, Range::positive()); }), "s.toml:4: a.s: expected a number > 0, got a string");
-  EXPECT_EQ(test::error_of([&] { a.string("s", "", {"sphere"}); }), "s.toml:4: a.s: expected one of \"sphere\", got \"box\"");
+  EXPECT_EQ(test::error_of([&] { a.integer("y", 0, 0, 10); }),
+            "s.toml:3: a.y: expected an integer in [0, 10], got a number");
+  EXPECT_EQ(test::error_of([&] { a.number("y", 0, Range::closed(2, 3)); }),
+            "s.toml:3: a.y: expected a number in [2, 3], got 1.5");
+  EXPECT_EQ(test::error_of([&] { a.number("s", 0, Range::positive()); }),
+            "s.toml:4: a.s: expected a number > 0, got a string");
+  EXPECT_EQ(test::error_of([&] { a.string("s", "", {"sphere"}); }),
+            "s.toml:4: a.s: expected one of \"sphere\", got \"box\"");
   EXPECT_EQ(test::error_of([&] { f.check_unknown_keys(); }), "");
 }
 
@@ -36,27 +40,33 @@ TEST(SceneFile, UnknownKeysAreReportedInFileOrder) {
 }
 
 TEST(SceneFile, OverridesReplaceAddAndQuote) {
-  SceneFile f = SceneFile::parse("[integrator]\nrtol = 1e-6\n", "o.toml",
-                                 {"integrator.rtol=1e-9", "integrator.kind=backward_euler", "mesh.cells=[2, 3, 4]",
-                                  "output.path=\"x y.h5\""});
+  SceneFile f = SceneFile::parse(
+      "[integrator]\nrtol = 1e-6\n", "o.toml",
+      {"integrator.rtol=1e-9", "integrator.kind=backward_euler", "mesh.cells=[2, 3, 4]", "output.path=\"x y.h5\""});
   Section in = f.root().table("integrator");
   EXPECT_EQ(in.number("rtol", 0), 1e-9);
   EXPECT_EQ(in.string("kind", ""), "backward_euler");
   auto cells = f.root().table("mesh").int3("cells", {0, 0, 0}, 1, 10);
   EXPECT_EQ(cells, (std::array<long, 3>{2, 3, 4}));
   EXPECT_EQ(f.root().table("output").string("path", ""), "x y.h5");
-  EXPECT_EQ(test::error_of([&] { in.number("kind", 0); }), "--set integrator.kind: expected a finite number, got a string");
-  EXPECT_NE(test::error_of([&] { SceneFile::parse("a = 1\n", "o.toml", {"a.b=2"}); }).find("a is an integer in o.toml, expected a table"),
+  EXPECT_EQ(test::error_of([&] { in.number("kind", 0); }),
+            "--set integrator.kind: expected a finite number, got a string");
+  EXPECT_NE(test::error_of([&] {
+              SceneFile::parse("a = 1\n", "o.toml", {"a.b=2"});
+            }).find("a is an integer in o.toml, expected a table"),
             std::string::npos);
-  EXPECT_NE(test::error_of([&] { SceneFile::parse("", "o.toml", {"novalue"}); }).find("expected key=value"), std::string::npos);
+  EXPECT_NE(test::error_of([&] { SceneFile::parse("", "o.toml", {"novalue"}); }).find("expected key=value"),
+            std::string::npos);
 }
 
 TEST(SceneFile, MissingAndUnreadableFiles) {
   fs::path d = test::temp_dir();
-  EXPECT_NE(test::error_of([&] { SceneFile::load((d / "no.toml").string()); }).find("no.toml: no such file"), std::string::npos);
+  EXPECT_NE(test::error_of([&] { SceneFile::load((d / "no.toml").string()); }).find("no.toml: no such file"),
+            std::string::npos);
   EXPECT_NE(test::error_of([&] { SceneFile::load(d.string()); }).find("is a directory"), std::string::npos);
   test::write_file(d / "bin.toml", std::string("\x00\x01\x02 = [", 6));
-  EXPECT_NE(test::error_of([&] { SceneFile::load((d / "bin.toml").string()); }).find("expected valid TOML"), std::string::npos);
+  EXPECT_NE(test::error_of([&] { SceneFile::load((d / "bin.toml").string()); }).find("expected valid TOML"),
+            std::string::npos);
 }
 
 TEST(Scene, LameFromYoungMatchesTheDefinitions) {
@@ -90,7 +100,8 @@ duration = 0.5
   EXPECT_EQ(sc.frames.times().size(), 6u);
   EXPECT_DOUBLE_EQ(sc.frames.times().back(), 0.5);
   EXPECT_EQ(sc.output.path, "out/z.h5");
-  std::string bad = test::write_file(d / "bad.toml", "[mesh]\nshape = \"box\"\n[[zones.zone]]\nname = \"a\"\nselect = { kind = \"all\", node = 3 }\n");
+  std::string bad = test::write_file(
+      d / "bad.toml", "[mesh]\nshape = \"box\"\n[[zones.zone]]\nname = \"a\"\nselect = { kind = \"all\", node = 3 }\n");
   EXPECT_EQ(test::error_of([&] { load_scene(bad); }),
             bad + ":5: zones.zone[0].select.node: unknown key (expected one of: kind)");
 }
@@ -147,8 +158,10 @@ TEST(Scene, EveryKeyReadByTheDemosIsDocumented) {
   std::vector<std::string> named;  // rows like `zones.paint.labels.<zone>`: any one name after the prefix
   for (auto it = std::sregex_iterator(text.begin(), text.end(), row); it != std::sregex_iterator(); ++it) {
     const std::string k = (*it)[1];
-    if (k.find('<') != std::string::npos) named.push_back(k.substr(0, k.find('<')));
-    else documented.insert(k);
+    if (k.find('<') != std::string::npos)
+      named.push_back(k.substr(0, k.find('<')));
+    else
+      documented.insert(k);
   }
   auto is_documented = [&](const std::string& k) {
     if (documented.count(k)) return true;
@@ -168,7 +181,8 @@ TEST(Scene, EveryKeyReadByTheDemosIsDocumented) {
 }
 
 TEST(Scene, RingZonesOnePerNode) {
-  Scene sc = parse_scene(SceneFile::parse("[mesh]\nshape = \"box\"\ncells = 2\n[zones]\nglobal = false\nrings = 1\n", "r.toml"));
+  Scene sc = parse_scene(
+      SceneFile::parse("[mesh]\nshape = \"box\"\ncells = 2\n[zones]\nglobal = false\nrings = 1\n", "r.toml"));
   ASSERT_EQ(sc.zones.size(), 27u);
   // The centre node of a 2x2x2 Kuhn box is interior: its 1-ring holds 24 tets.
   EXPECT_EQ(sc.zones[13].first, "ring1_13");

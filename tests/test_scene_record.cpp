@@ -14,9 +14,12 @@ using namespace isochor;
 
 namespace {
 
-const std::string kBox = "[mesh]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = 1\n[material]\nmu = 1.0\nlambda = 1.0\n";
+const std::string kBox =
+    "[mesh]\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = 1\n[material]\nmu = 1.0\nlambda = 1.0\n";
 
-SceneRecord record_of(const std::string& rest) { return scene_record(parse_scene(SceneFile::parse(kBox + rest, "r.toml"))); }
+SceneRecord record_of(const std::string& rest) {
+  return scene_record(parse_scene(SceneFile::parse(kBox + rest, "r.toml")));
+}
 
 void expect_up(const SceneRecord& r, double x, double y, double z, const std::string& source) {
   EXPECT_NEAR(r.up[0], x, 1e-15);
@@ -36,8 +39,9 @@ double dimension(const ColliderRecord& c, const std::string& name) {
 
 TEST(SceneRecord, UpIsTheGroundsNormalThenAgainstGravityThenZ) {
   // The ground's normal, normalised, even when gravity points elsewhere.
-  expect_up(record_of("[forces]\ngravity = [-9.81, 0.0, 0.0]\n[contact]\nground = true\npoint = [0.0, -1.0, 0.0]\nnormal = [0.0, 2.0, 0.0]\n"), 0, 1, 0,
-            "the ground's normal");
+  expect_up(record_of("[forces]\ngravity = [-9.81, 0.0, 0.0]\n[contact]\nground = true\npoint = [0.0, -1.0, "
+                      "0.0]\nnormal = [0.0, 2.0, 0.0]\n"),
+            0, 1, 0, "the ground's normal");
   expect_up(record_of("[forces]\ngravity = [0.0, -9.81, 0.0]\n"), 0, 1, 0, "against gravity");
   expect_up(record_of("[forces]\ngravity = [3.0, 0.0, -4.0]\n"), -0.6, 0, 0.8, "against gravity");
   expect_up(record_of(""), 0, 0, 1, "against gravity");  // the default gravity is along -z
@@ -48,7 +52,8 @@ TEST(SceneRecord, CollidersKeepTheSceneFilesShapesAndPoses) {
   const SceneRecord r = record_of(
       "[contact]\nground = true\npoint = [0.0, 0.0, -1.0]\n"
       "[[contact.plane]]\npoint = [0.5, 0.0, 0.0]\nnormal = [-1.0, 0.0, 0.0]\n"
-      "[[collider]]\nshape = \"capsule\"\nradius = 0.1\nlength = 0.4\ncenter = [1.0, 2.0, 3.0]\naxis = [1.0, 0.0, 0.0]\n"
+      "[[collider]]\nshape = \"capsule\"\nradius = 0.1\nlength = 0.4\ncenter = [1.0, 2.0, 3.0]\naxis = [1.0, 0.0, "
+      "0.0]\n"
       "[[collider]]\nshape = \"box\"\nsize = [0.2, 0.4, 0.6]\ncenter = [0.0, 0.0, 2.0]\n"
       "[[collider]]\nshape = \"cylinder\"\nradius = 0.3\nwall = 0.02\nlength = 0.05\n");
   ASSERT_EQ(r.colliders.size(), 5u);
@@ -82,7 +87,8 @@ TEST(SceneRecord, AMeshColliderKeepsItsScaledSurface) {
   const std::string file = (dir / "tetra.obj").string();
   std::ofstream(file) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
   const Scene s = parse_scene(SceneFile::parse(
-      kBox + "[[collider]]\nshape = \"mesh\"\nfile = \"" + file + "\"\nscale = 2.0\ncenter = [0.0, 0.0, 5.0]\n", "m.toml"));
+      kBox + "[[collider]]\nshape = \"mesh\"\nfile = \"" + file + "\"\nscale = 2.0\ncenter = [0.0, 0.0, 5.0]\n",
+      "m.toml"));
   Points x;
   std::vector<Tri> tris;
   read_surface(file, x, tris);

@@ -1,4 +1,4 @@
-// The scrambled starts of issue 20 (the XPBD paper's crazy cube): initial.flatten puts every node
+// The scrambled starts (the XPBD paper's crazy cube): initial.flatten puts every node
 // into one plane at a seeded random point, and zones.restore_time lets the zone constraints start
 // from the volume that start has and reach the rest volume along a C^2 ramp.
 #include <gtest/gtest.h>
@@ -36,7 +36,9 @@ rate = 10.0
 duration = 1.0
 )";
 
-Scene scene(std::vector<std::string> set = {}) { return parse_scene(SceneFile::parse(kScene, "scramble.toml", std::move(set))); }
+Scene scene(std::vector<std::string> set = {}) {
+  return parse_scene(SceneFile::parse(kScene, "scramble.toml", std::move(set)));
+}
 }  // namespace
 
 TEST(Scramble, FlattenPutsEveryNodeInThePlaneInsideTheBoxAndIsSeeded) {
@@ -54,7 +56,7 @@ TEST(Scramble, FlattenPutsEveryNodeInThePlaneInsideTheBoxAndIsSeeded) {
   }
   // Random, not a squashed copy of the mesh: the in-plane points are far from the rest ones.
   EXPECT_GT((P.topRows(2) - X.topRows(2)).cwiseAbs().maxCoeff(), 0.05);
-  EXPECT_EQ((scene().initial_positions - P).norm(), 0.0);                  // same seed: same start
+  EXPECT_EQ((scene().initial_positions - P).norm(), 0.0);                     // same seed: same start
   EXPECT_GT((scene({"initial.seed=8"}).initial_positions - P).norm(), 0.01);  // another seed: another
   EXPECT_EQ(scene({"initial.flatten=none"}).initial_positions.cols(), 0);
   EXPECT_THROW(scene({"initial.flatten=w"}), Error);

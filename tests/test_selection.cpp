@@ -38,10 +38,16 @@ TEST(Selection, CylinderAndDisc) {
   // Radius 0.36 adds the 4 diagonal nodes (distance 0.354).
   EXPECT_EQ(select_nodes(m, parse("{ kind = \"cylinder\", center = [0.5, 0.5, 0], radius = 0.36 }")).size(), 45u);
   // length = 0: the disc in the plane z = 1 only.
-  EXPECT_EQ(select_nodes(m, parse("{ kind = \"cylinder\", center = [0.5, 0.5, 1], radius = 0.25, length = 0 }")).size(), 5u);
+  EXPECT_EQ(select_nodes(m, parse("{ kind = \"cylinder\", center = [0.5, 0.5, 1], radius = 0.25, length = 0 }")).size(),
+            5u);
   // Along x, length 0.5 about x = 0.5: the layers x = 0.25, 0.5, 0.75 of the line y = z = 0.5.
-  EXPECT_EQ(select_nodes(m, parse("{ kind = \"cylinder\", center = [0.5, 0.5, 0.5], axis = [2, 0, 0], radius = 0.1, length = 0.5 }")).size(), 3u);
-  EXPECT_NE(test::error_of([&] { parse("{ kind = \"cylinder\", center = [0, 0, 0] }"); }).find("radius: missing"), std::string::npos);
+  EXPECT_EQ(
+      select_nodes(
+          m, parse("{ kind = \"cylinder\", center = [0.5, 0.5, 0.5], axis = [2, 0, 0], radius = 0.1, length = 0.5 }"))
+          .size(),
+      3u);
+  EXPECT_NE(test::error_of([&] { parse("{ kind = \"cylinder\", center = [0, 0, 0] }"); }).find("radius: missing"),
+            std::string::npos);
 }
 
 TEST(Selection, TetsByEachKind) {
@@ -64,7 +70,8 @@ TEST(Selection, TetsByEachKind) {
 
 TEST(Selection, ErrorsNameTheSelection) {
   Mesh m = make_box(Eigen::Vector3d::Ones(), {2, 2, 2}, Eigen::Vector3d::Zero(), 6);
-  std::string msg = test::error_of([&] { select_nodes(m, parse("{ kind = \"box\", min = [5, 5, 5], max = [6, 6, 6] }")); });
+  std::string msg =
+      test::error_of([&] { select_nodes(m, parse("{ kind = \"box\", min = [5, 5, 5], max = [6, 6, 6] }")); });
   EXPECT_NE(msg.find("sel.toml:1: select.kind: the selection contains no nodes"), std::string::npos) << msg;
   msg = test::error_of([&] { select_nodes(m, parse("{ kind = \"indices\", indices = [27] }")); });
   EXPECT_NE(msg.find("node index 27 is out of range (expected 0..26)"), std::string::npos) << msg;

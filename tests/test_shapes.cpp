@@ -17,12 +17,15 @@ TEST(Shapes, SphereVolumeWithinTwoPercentAndConverging) {
     Mesh m = make_sphere(r, 0.0, target, Eigen::Vector3d(0, 0, 0.2));
     expect_closed_outward(m);
     const double err = std::abs(m.rest_volume() - exact) / exact;
-    if (target == 5000) { EXPECT_LT(err, 0.02); }  // the default resolution
+    if (target == 5000) {
+      EXPECT_LT(err, 0.02);
+    }  // the default resolution
     EXPECT_LT(err, previous);
     previous = err;
     errors.push_back(err);
     // An inscribed polyhedron: every node within the ball, surface nodes on the sphere.
-    for (int v : m.surface_nodes()) EXPECT_NEAR((m.rest_positions().col(v) - Eigen::Vector3d(0, 0, 0.2)).norm(), r, 1e-9);
+    for (int v : m.surface_nodes())
+      EXPECT_NEAR((m.rest_positions().col(v) - Eigen::Vector3d(0, 0, 0.2)).norm(), r, 1e-9);
     // The target count is met within 15%.
     EXPECT_NEAR(m.num_tets() / static_cast<double>(target), 1.0, 0.15) << target;
   }
@@ -38,9 +41,13 @@ TEST(Shapes, CylinderVolumeWithinTwoPercentAndConverging) {
     Mesh m = make_cylinder(r, h, res, Eigen::Vector3d::Zero());
     expect_closed_outward(m);
     const double err = std::abs(m.rest_volume() - exact) / exact;
-    if (res == 24) { EXPECT_LT(err, 0.02); }
+    if (res == 24) {
+      EXPECT_LT(err, 0.02);
+    }
     EXPECT_LT(err, previous);
-    if (res == 48) { EXPECT_LT(err, previous / 3.0); }  // second order: halving h quarters the error
+    if (res == 48) {
+      EXPECT_LT(err, previous / 3.0);
+    }  // second order: halving h quarters the error
     previous = err;
     EXPECT_FALSE(m.node_sets.at("bottom").empty());
     for (int v : m.node_sets.at("top")) EXPECT_NEAR(m.rest_positions()(2, v), 0.5, 1e-12);

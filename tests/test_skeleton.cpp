@@ -60,7 +60,8 @@ double velocity_error(const Scene& s, double t) {
   drive(s, t + h, xp, w);
   drive(s, t - h, xm, w);
   double worst = 0;
-  for (int n : s.driven_nodes()) worst = std::max(worst, (v.segment<3>(3 * n) - (xp.col(n) - xm.col(n)) / (2 * h)).norm());
+  for (int n : s.driven_nodes())
+    worst = std::max(worst, (v.segment<3>(3 * n) - (xp.col(n) - xm.col(n)) / (2 * h)).norm());
   return worst;
 }
 
@@ -114,7 +115,8 @@ TEST(Skeleton, PinChainFollowsTheClosedFormRotations) {
     double worst = 0;
     for (int n : bones[0].nodes) worst = std::max(worst, (x.col(n) - X.col(n)).norm());
     for (int n : bones[1].nodes) worst = std::max(worst, (x.col(n) - (o1 + R1 * (X.col(n) - o1))).norm());
-    for (int n : bones[2].nodes) worst = std::max(worst, (x.col(n) - (o1 + R1 * (o2 - o1) + R1 * R2 * (X.col(n) - o2))).norm());
+    for (int n : bones[2].nodes)
+      worst = std::max(worst, (x.col(n) - (o1 + R1 * (o2 - o1) + R1 * R2 * (X.col(n) - o2))).norm());
     EXPECT_LT(worst, 1e-12) << "t = " << t;
     EXPECT_LT(velocity_error(s, t), 1e-6) << "t = " << t;
   }
@@ -160,7 +162,8 @@ select = { kind = "box", min = [0.7, -0.1, -0.1], max = [1.1, 1.1, 1.1] }
     const Eigen::Matrix3d Ru = rot({1, 0, 0}, 30 * kDeg * t) * rot({0, 1, 0}, 60 * kDeg * t);
     // Two keyframes with zero end tangents: the cubic Hermite is the smoothstep 3t^2 - 2t^3.
     const double f = 3 * t * t - 2 * t * t * t;
-    const Eigen::Matrix3d Rb = rot({0, 0, 1}, 90 * kDeg * f) * rot({1, 0, 0}, 30 * kDeg * f) * rot({0, 1, 0}, -45 * kDeg * f);
+    const Eigen::Matrix3d Rb =
+        rot({0, 0, 1}, 90 * kDeg * f) * rot({1, 0, 0}, 30 * kDeg * f) * rot({0, 1, 0}, -45 * kDeg * f);
     Points x;
     Eigen::VectorXd v;
     drive(s, t, x, v);
@@ -278,13 +281,16 @@ select = { kind = "box", min = [0.7, -0.1, -0.1], max = [1.1, 1.1, 1.1] }
   EXPECT_LT(velocity_error(s, 0.7), 1e-6);
   // Errors name the file, line and what was expected.
   test::write_file(dir / "bad.bvh", "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 1 Wrotation\n}\n");
-  EXPECT_NE(test::error_of([&] { read_bvh((dir / "bad.bvh").string()); }).find("bad.bvh:5: expected a channel"), std::string::npos);
-  test::write_file(dir / "short.bvh", "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n}\n"
-                                      "MOTION\nFrames: 2\nFrame Time: 0.1\n1 2 3\n4 5\n");
+  EXPECT_NE(test::error_of([&] { read_bvh((dir / "bad.bvh").string()); }).find("bad.bvh:5: expected a channel"),
+            std::string::npos);
+  test::write_file(dir / "short.bvh",
+                   "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n}\n"
+                   "MOTION\nFrames: 2\nFrame Time: 0.1\n1 2 3\n4 5\n");
   EXPECT_NE(test::error_of([&] { read_bvh((dir / "short.bvh").string()); }).find("frame 1 has 2 values, expected 3"),
             std::string::npos);
-  EXPECT_NE(test::error_of([&] { load_scene(path, {"skeleton.bone=[{name=\"x\", joint=\"ball\", motion=\"bvh\", bvh_joint=\"Knee\"}]"}); })
-                .find("\"Knee\" is not a joint of the BVH file"),
+  EXPECT_NE(test::error_of([&] {
+              load_scene(path, {"skeleton.bone=[{name=\"x\", joint=\"ball\", motion=\"bvh\", bvh_joint=\"Knee\"}]"});
+            }).find("\"Knee\" is not a joint of the BVH file"),
             std::string::npos);
 }
 
@@ -311,20 +317,24 @@ TEST(Skeleton, ZoneConstraintTimeDerivativeFollowsTheBones) {
 
 TEST(Skeleton, BadInputNamesTheBoneAndWhatWasExpected) {
   auto err = [&](const std::string& text) { return test::error_of([&] { scene(text); }); };
-  EXPECT_NE(err("[skeleton]\n[[skeleton.bone]]\nname = \"a\"\nparent = \"b\"\n").find("skeleton.bone[0].parent: \"b\" is not a bone defined above"),
+  EXPECT_NE(err("[skeleton]\n[[skeleton.bone]]\nname = \"a\"\nparent = \"b\"\n")
+                .find("skeleton.bone[0].parent: \"b\" is not a bone defined above"),
             std::string::npos);
   EXPECT_NE(err("[skeleton]\n[[skeleton.bone]]\nname = \"a\"\norigin = [5.0, 5.0, 5.0]\nradius = 0.1\n")
                 .find("skeleton.bone[0].radius: bone \"a\" binds no mesh node"),
             std::string::npos);
-  EXPECT_NE(err("[skeleton]\n[[skeleton.bone]]\nname = \"a\"\nmotion = \"sinusoid\"\n").find("a weld joint does not move"),
-            std::string::npos);
-  EXPECT_NE(err("[skeleton]\n[[skeleton.bone]]\nname = \"a\"\njoint = \"pin\"\nmotion = \"keyframes\"\ntimes = [0.0, 1.0]\nangles = [1.0]\n")
+  EXPECT_NE(
+      err("[skeleton]\n[[skeleton.bone]]\nname = \"a\"\nmotion = \"sinusoid\"\n").find("a weld joint does not move"),
+      std::string::npos);
+  EXPECT_NE(err("[skeleton]\n[[skeleton.bone]]\nname = \"a\"\njoint = \"pin\"\nmotion = \"keyframes\"\ntimes = [0.0, "
+                "1.0]\nangles = [1.0]\n")
                 .find("skeleton.bone[0].angles: expected 1 angle (degrees) per keyframe time, 2 numbers in all, got 1"),
             std::string::npos);
-  EXPECT_NE(err("[[boundary]]\nselect = { kind = \"set\", name = \"xmin\" }\n[skeleton]\n[[skeleton.bone]]\nname = \"a\"\n"
-                "select = { kind = \"set\", name = \"xmin\" }\n")
-                .find("is already driven by boundary[0]"),
-            std::string::npos);
+  EXPECT_NE(
+      err("[[boundary]]\nselect = { kind = \"set\", name = \"xmin\" }\n[skeleton]\n[[skeleton.bone]]\nname = \"a\"\n"
+          "select = { kind = \"set\", name = \"xmin\" }\n")
+          .find("is already driven by boundary[0]"),
+      std::string::npos);
   EXPECT_NE(err("[skeleton]\n").find("a [skeleton] needs at least one [[skeleton.bone]]"), std::string::npos);
 }
 
@@ -396,7 +406,8 @@ double forearm_in_upper_arm(const Mesh& mesh, const RunFile& f, int k) {
     if (!inside) continue;
     double d = std::numeric_limits<double>::infinity();
     for (const Tri& t : f.surface())
-      if (upper(t)) d = std::min(d, (x.col(p) - closest_on_triangle(x.col(p), x.col(t[0]), x.col(t[1]), x.col(t[2]))).norm());
+      if (upper(t))
+        d = std::min(d, (x.col(p) - closest_on_triangle(x.col(p), x.col(t[0]), x.col(t[1]), x.col(t[2]))).norm());
     deepest = std::max(deepest, d);
   }
   return deepest;
@@ -424,7 +435,8 @@ TEST(SkeletonLong, ArmFlexWithContactBetweenPartsKeepsTheForearmOut) {
   }
   EXPECT_GT(through, 0.02);  // centimetres through without contact
   EXPECT_LE(on, 0.005);      // within the contact thickness with it
-  std::printf("forearm into upper arm, deepest over the flexion: %.1f mm with contact, %.1f mm without\n", 1e3 * on, 1e3 * through);
+  std::printf("forearm into upper arm, deepest over the flexion: %.1f mm with contact, %.1f mm without\n", 1e3 * on,
+              1e3 * through);
 }
 
 // The material's own bulge, without contact between parts (with it the forearm presses on the
@@ -432,14 +444,15 @@ TEST(SkeletonLong, ArmFlexWithContactBetweenPartsKeepsTheForearmOut) {
 TEST(SkeletonLong, ArmFlexKeepsZoneVolumesAndBulgesWithCnh) {
   const auto dir = test::temp_dir();
   const ArmResult cnh = run_arm({"contact.self.enabled=false"}, (dir / "cnh.h5").string());
-  const ArmResult unh = run_arm({"contact.self.enabled=false", "material.model=unh", "material.lambda=27000", "zones.keep=false"},
-                                (dir / "unh.h5").string());
+  const ArmResult unh =
+      run_arm({"contact.self.enabled=false", "material.model=unh", "material.lambda=27000", "zones.keep=false"},
+              (dir / "unh.h5").string());
   EXPECT_LT(cnh.worst_drift, 1e-8);
   EXPECT_GT(unh.worst_drift, 1e-3);  // nu = 0.45 loses volume where the elbow squeezes it
   EXPECT_GT(cnh.bulge, unh.bulge);
   EXPECT_GT(cnh.bulge, 0.0);
-  std::printf("arm to full flexion: CNH drift %.2e bulge %.4f m; UNH drift %.2e bulge %.4f m\n", cnh.worst_drift, cnh.bulge,
-              unh.worst_drift, unh.bulge);
+  std::printf("arm to full flexion: CNH drift %.2e bulge %.4f m; UNH drift %.2e bulge %.4f m\n", cnh.worst_drift,
+              cnh.bulge, unh.worst_drift, unh.bulge);
 }
 
 TEST(Skeleton, ArmStartingToFlexKeepsZoneVolumesWithCnh) {

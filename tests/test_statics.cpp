@@ -59,10 +59,12 @@ TEST(Statics, CantileverZonesOrderTheTipDeflection) {
   auto locked = run(scene, {"material.model=unh", "material.lambda=4.99e8"}, (dir / "f.h5").string());  // nu = 0.499
   const double a = tip_deflection(global.file), b = tip_deflection(patches2.file), c = tip_deflection(patches1.file),
                d = tip_deflection(ring1.file), e = tip_deflection(penalty.file), f = tip_deflection(locked.file);
-  std::printf("cantilever tip deflection (m): global %.4f, 2-ring patches %.4f, 1-ring patches %.4f, 1-rings %.4f, "
-              "global+penalty %.4f, unh nu=0.499 %.4f\n", a, b, c, d, e, f);
-  std::printf("cantilever wall seconds: 1-ring %.2f, global+penalty %.2f (ratio %.1f)\n", ring1.seconds, penalty.seconds,
-              ring1.seconds / penalty.seconds);
+  std::printf(
+      "cantilever tip deflection (m): global %.4f, 2-ring patches %.4f, 1-ring patches %.4f, 1-rings %.4f, "
+      "global+penalty %.4f, unh nu=0.499 %.4f\n",
+      a, b, c, d, e, f);
+  std::printf("cantilever wall seconds: 1-ring %.2f, global+penalty %.2f (ratio %.1f)\n", ring1.seconds,
+              penalty.seconds, ring1.seconds / penalty.seconds);
   EXPECT_GT(a, b);
   EXPECT_GT(b, c);
   EXPECT_GT(c, d);
@@ -114,8 +116,9 @@ TEST(Statics, PressureCubeIsSmoothestWithCnh) {
     c.overrides.push_back("frames.count=2");
     auto r = run(scene, c.overrides, (dir / (std::string(c.name) + ".h5")).string());
     std::tie(c.rms, c.slope) = pressure_roughness(r.file, sc.mesh, &c.range);
-    std::printf("pressure cube %-9s: rms deviation %.3f Pa = %.3f rho g H = %.4f of its range %.2f Pa; slope %.2f Pa/m\n",
-                c.name, c.rms, c.rms / rho_g_h, c.rms / c.range, c.range, c.slope);
+    std::printf(
+        "pressure cube %-9s: rms deviation %.3f Pa = %.3f rho g H = %.4f of its range %.2f Pa; slope %.2f Pa/m\n",
+        c.name, c.rms, c.rms / rho_g_h, c.rms / c.range, c.range, c.slope);
   }
   // Smallest for CNH, whether measured against the hydrostatic pressure difference or against
   // each field's own range.
@@ -182,8 +185,8 @@ TEST(Statics, PuckUnhLosesLessVolumeAsNuGrows) {
 // tip deflection at pseudo-time t is t times the final one; frame 0 carries no load at all.
 TEST(Statics, GravityRampAppliesTheLoadInIncrements) {
   const auto dir = test::temp_dir();
-  auto r = run("cantilever_zones.toml", {"material.model=unh", "material.lambda=4e6", "forces.gravity=[0, 0, -0.01]",
-                                         "frames.count=5"},
+  auto r = run("cantilever_zones.toml",
+               {"material.model=unh", "material.lambda=4e6", "forces.gravity=[0, 0, -0.01]", "frames.count=5"},
                (dir / "ramp.h5").string());
   std::vector<double> tip;
   const Points X = r.file.rest_positions();
@@ -228,13 +231,13 @@ gravity = [0.0, 0.0, 0.0]
 kind = "static"
 )";
   auto scene = [&](const std::string& extra) { return parse_scene(SceneFile::parse(text + extra, "stretch.toml")); };
-  const std::string err = test::error_of([&] {
-    run_scene(scene("substeps_on_failure = 0\n[frames]\ncount = 2\n"), (dir / "whole.h5").string(), false);
-  });
+  const std::string err = test::error_of(
+      [&] { run_scene(scene("substeps_on_failure = 0\n[frames]\ncount = 2\n"), (dir / "whole.h5").string(), false); });
   EXPECT_NE(err.find("integration failed at t = 1"), std::string::npos) << err;
   const RunSummary halved = run_scene(scene("[frames]\ncount = 2\n"), (dir / "halved.h5").string(), false);
   EXPECT_GT(halved.stats.step_halvings, 0);
-  const RunFile h(halved.output), f(run_scene(scene("[frames]\ncount = 21\n"), (dir / "fine.h5").string(), false).output);
+  const RunFile h(halved.output),
+      f(run_scene(scene("[frames]\ncount = 21\n"), (dir / "fine.h5").string(), false).output);
   ASSERT_EQ(h.num_frames(), 2);
   EXPECT_LT((h.positions(1) - f.positions(20)).cwiseAbs().maxCoeff(), 1e-8);
   EXPECT_NEAR(h.positions(1).row(2).maxCoeff(), 3.0, 1e-12);  // the top face, driven to z = 3

@@ -23,7 +23,8 @@ struct Frames {
   std::vector<double> t;
   std::vector<VectorXd> q, v, lambda;
   FrameCallback callback() {
-    return [this](int k, double tf, const VectorXd& qf, const VectorXd& vf, const VectorXd& lf, const RunStats::FrameSample&) {
+    return [this](int k, double tf, const VectorXd& qf, const VectorXd& vf, const VectorXd& lf,
+                  const RunStats::FrameSample&) {
       index.push_back(k);
       t.push_back(tf);
       q.push_back(qf);

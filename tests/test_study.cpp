@@ -26,11 +26,13 @@ std::vector<std::map<std::string, std::string>> read_csv(const std::string& path
     std::string cur;
     bool quoted = false;
     for (char c : line) {
-      if (c == '"') quoted = !quoted;
+      if (c == '"')
+        quoted = !quoted;
       else if (c == ',' && !quoted) {
         fields.push_back(cur);
         cur.clear();
-      } else cur += c;
+      } else
+        cur += c;
     }
     fields.push_back(cur);
     if (header.empty()) {
@@ -78,8 +80,9 @@ sweeps = { "integrator.dt" = [1] }
 
 TEST(Study, QuickStudyRunsEveryCaseAndCharts) {
   const auto dir = test::temp_dir() / "quick";
-  const std::string cmd = std::string(ISOCHOR_BINARY) + " study " + ISOCHOR_SOURCE_DIR + "/studies/quick.toml --set study.output='\"" +
-                          dir.string() + "\"' > " + (dir.parent_path() / "log.txt").string() + " 2>&1";
+  const std::string cmd = std::string(ISOCHOR_BINARY) + " study " + ISOCHOR_SOURCE_DIR +
+                          "/studies/quick.toml --set study.output='\"" + dir.string() + "\"' > " +
+                          (dir.parent_path() / "log.txt").string() + " 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const auto rows = read_csv((dir / "results.csv").string());
   ASSERT_EQ(rows.size(), 13u);
@@ -103,7 +106,8 @@ TEST(Study, QuickStudyRunsEveryCaseAndCharts) {
   for (double v : vol["cnh_ida"]) EXPECT_LT(v, 1e-8);
   for (double v : vol["cnh_backward_euler"]) EXPECT_LT(v, 1e-12);
   for (std::size_t i = 1; i < vol["xpbd"].size(); ++i) EXPECT_LT(vol["xpbd"][i], vol["xpbd"][i - 1]);
-  for (const char* f : {"results.h5", "work_precision.png", "work_precision.svg", "volume_error.png", "energy.png", "report.md"})
+  for (const char* f :
+       {"results.h5", "work_precision.png", "work_precision.svg", "volume_error.png", "energy.png", "report.md"})
     EXPECT_GT(std::filesystem::exists(dir / f) ? std::filesystem::file_size(dir / f) : 0u, 1000u) << f;
   std::ifstream report(dir / "report.md");
   std::stringstream text;
@@ -126,7 +130,8 @@ TEST(Study, EveryStudyFileLoads) {
       for (const auto& [key, value] : c.sweep) {
         bool found = false;
         for (const std::string& o : c.overrides)
-          if (o.rfind(key + "=", 0) == 0 && std::abs(std::stod(o.substr(key.size() + 1)) - value) <= 1e-12 * std::abs(value))
+          if (o.rfind(key + "=", 0) == 0 &&
+              std::abs(std::stod(o.substr(key.size() + 1)) - value) <= 1e-12 * std::abs(value))
             found = true;
         EXPECT_TRUE(found) << e.path() << ": case " << c.label << " lacks " << key;
       }
@@ -139,19 +144,28 @@ TEST(Study, EveryStudyFileLoads) {
 TEST(Render, DrawsAFrameAndNamesMissingPressure) {
   const auto dir = test::temp_dir();
   const std::string bin = ISOCHOR_BINARY, h5 = (dir / "tt.h5").string(), png = (dir / "last.png").string();
-  ASSERT_EQ(std::system((bin + " run -q " + ISOCHOR_SOURCE_DIR + "/demos/two_tets.toml -o " + h5 + " > /dev/null 2>&1").c_str()), 0);
+  ASSERT_EQ(
+      std::system(
+          (bin + " run -q " + ISOCHOR_SOURCE_DIR + "/demos/two_tets.toml -o " + h5 + " > /dev/null 2>&1").c_str()),
+      0);
   ASSERT_EQ(std::system((bin + " render " + h5 + " --frames -1 --out " + png + " > /dev/null 2>&1").c_str()), 0);
   // A picture, not a blank canvas: matplotlib reads it back, and its pixels are not all one colour.
-  const std::string check = std::string(ISOCHOR_PYTHON) +
-                            " -c \"import sys, matplotlib.image as m; a = m.imread(sys.argv[1]); "
-                            "sys.exit(0 if a.ndim == 3 and min(a.shape[:2]) >= 200 and a[..., :3].std() > 0.01 else 1)\" " + png;
+  const std::string check =
+      std::string(ISOCHOR_PYTHON) +
+      " -c \"import sys, matplotlib.image as m; a = m.imread(sys.argv[1]); "
+      "sys.exit(0 if a.ndim == 3 and min(a.shape[:2]) >= 200 and a[..., :3].std() > 0.01 else 1)\" " +
+      png;
   EXPECT_EQ(std::system(check.c_str()), 0) << png;
   const std::string log = (dir / "err.txt").string();
-  EXPECT_NE(std::system((bin + " render " + h5 + " --color pressure --out " + (dir / "p").string() + " > " + log + " 2>&1").c_str()), 0);
+  EXPECT_NE(
+      std::system(
+          (bin + " render " + h5 + " --color pressure --out " + (dir / "p").string() + " > " + log + " 2>&1").c_str()),
+      0);
   std::ifstream in(log);
   std::stringstream text;
   text << in.rdbuf();
-  EXPECT_NE(text.str().find("no /frames/pressure (run the scene with output.pressure = true)"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("no /frames/pressure (run the scene with output.pressure = true)"), std::string::npos)
+      << text.str();
 }
 
 TEST(Study, AMethodMayNameItsOwnScene) {

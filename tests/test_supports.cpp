@@ -37,7 +37,7 @@ void run_frames(const Scene& sc, F&& f) {
   auto sys = make_scene_system(sc);
   auto integrator = make_integrator(sc, *sys);
   integrator->run(sc.frames.times(), [&](int, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
-                                          const RunStats::FrameSample&) {
+                                         const RunStats::FrameSample&) {
     sys->set_state(t, q, v);
     f(t, *sys, q, lambda);
   });
@@ -170,7 +170,8 @@ components = ["x"]
 kind = "ramp"
 t0 = 0.0
 t1 = 1.0
-displacement = [)" + std::to_string(final_stretch - 1.0) + ", 0.0, 0.0]\n");
+displacement = [)" + std::to_string(final_stretch - 1.0) +
+                           ", 0.0, 0.0]\n");
     const std::vector<int>& end = sc.mesh.node_sets.at("xmax");
     const std::vector<int>& side = sc.mesh.node_sets.at("ymax");
     double worst_stress = 0, worst_lateral = 0;
@@ -223,14 +224,17 @@ ramp = 1.0
 }
 
 TEST(Supports, BadComponentsAndOverlapsAreErrors) {
-  EXPECT_NE(test::error_of([&] { scene(replaced(kFalling, "[\"x\"]", "[\"w\"]")); })
-                .find("boundary[0].components: unknown component \"w\" (expected \"x\", \"y\" or \"z\")"),
+  EXPECT_NE(test::error_of([&] {
+              scene(replaced(kFalling, "[\"x\"]", "[\"w\"]"));
+            }).find("boundary[0].components: unknown component \"w\" (expected \"x\", \"y\" or \"z\")"),
             std::string::npos);
-  EXPECT_NE(test::error_of([&] { scene(replaced(kFalling, "components = [\"x\"]", "components = [\"x\"]\nnormal = [0.0, 0.0, 1.0]")); })
-                .find("either components or normal"),
+  EXPECT_NE(test::error_of([&] {
+              scene(replaced(kFalling, "components = [\"x\"]", "components = [\"x\"]\nnormal = [0.0, 0.0, 1.0]"));
+            }).find("either components or normal"),
             std::string::npos);
   // Two supports may share a node only along independent directions.
-  const std::string twice = std::string(kFalling) + "[[boundary]]\nselect = { kind = \"set\", name = \"ymin\" }\nnormal = [1.0, 0.0, 0.0]\n";
+  const std::string twice =
+      std::string(kFalling) + "[[boundary]]\nselect = { kind = \"set\", name = \"ymin\" }\nnormal = [1.0, 0.0, 0.0]\n";
   EXPECT_NE(test::error_of([&] { make_scene_system(scene(twice)); }).find("already holds"), std::string::npos);
 }
 
@@ -288,7 +292,10 @@ ramp = 0.5
   for (int f = 0; f < sys->dofs().num_free(); ++f) total += (f0 - f1).segment<3>(3 * f);
   EXPECT_LT((total - 0.6 * Eigen::Vector3d(3.0, -2.0, 1.0)).norm(), 1e-12);  // split over the nodes, 60% of the ramp
   for (int node : loaded)
-    EXPECT_LT(((f0 - f1).segment<3>(3 * sys->dofs().free_index[node]) - 0.6 * Eigen::Vector3d(3.0, -2.0, 1.0) / loaded.size()).norm(), 1e-12);
+    EXPECT_LT(
+        ((f0 - f1).segment<3>(3 * sys->dofs().free_index[node]) - 0.6 * Eigen::Vector3d(3.0, -2.0, 1.0) / loaded.size())
+            .norm(),
+        1e-12);
 }
 
 // The pressure load's Jacobian (a follower load, not symmetric on an open face) against finite
@@ -332,12 +339,13 @@ TEST(Supports, HydrostaticPressureIsCarriedByTheZone) {
 select = { kind = "all" }
 kind = "pressure"
 pressure = 2500.0
-)", {"frames.count=2"});
+)",
+                         {"frames.count=2"});
   double moved = 0, worst = 0;
   auto sys = make_scene_system(sc);
   auto integrator = make_integrator(sc, *sys);
   integrator->run(sc.frames.times(), [&](int, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
-                                          const RunStats::FrameSample&) {
+                                         const RunStats::FrameSample&) {
     sys->set_state(t, q, v);
     moved = std::max(moved, (sys->positions() - sc.mesh.rest_positions()).cwiseAbs().maxCoeff());
     std::vector<double> p;
@@ -394,14 +402,15 @@ double cantilever_tip(const std::vector<std::string>& overrides) {
     tip = 0;
     int count = 0;
     for (int n = 0; n < sc.mesh.num_nodes(); ++n)
-      if (sc.mesh.rest_positions()(0, n) > 1 - 1e-9) tip -= sys.positions()(2, n) - sc.mesh.rest_positions()(2, n), ++count;
+      if (sc.mesh.rest_positions()(0, n) > 1 - 1e-9)
+        tip -= sys.positions()(2, n) - sc.mesh.rest_positions()(2, n), ++count;
     tip /= count;
   });
   return tip;
 }
 }  // namespace
 
-// Locking (issue 22, the figure in docs/results/cantilever_locking): at nu = 0.499 the displacement
+// Locking (the figure in docs/results/cantilever_locking): at nu = 0.499 the displacement
 // formulation (UNH) locks, its tip an order of magnitude short of the same mesh's with 1-ring
 // zones (CNH, exactly incompressible), which converges toward beam theory as the mesh is refined,
 // as the compressible UNH at nu = 0.45 does.
@@ -415,7 +424,8 @@ TEST(Supports, CantileverLocksAtNu0499ButNotWithRingZones) {
       return cantilever_tip(o);
     };
     const double r = with(rings), l = with(locked);
-    std::printf("%s: tip %.4f mm with 1-ring zones, %.4f mm UNH nu = 0.499 (beam theory 1.009 mm)\n", cells, 1e3 * r, 1e3 * l);
+    std::printf("%s: tip %.4f mm with 1-ring zones, %.4f mm UNH nu = 0.499 (beam theory 1.009 mm)\n", cells, 1e3 * r,
+                1e3 * l);
     EXPECT_LT(l, 0.1 * r);
     EXPECT_GT(r, last);  // refined, the unlocked beam softens toward beam theory
     last = r;
@@ -475,7 +485,8 @@ ramp = 1.0
 kind = "static"
 [frames]
 count = 6
-)", tets, poles.c_str(), seam.c_str(), k, t.x(), t.z(), p);
+)",
+                tets, poles.c_str(), seam.c_str(), k, t.x(), t.z(), p);
   const Scene sc = scene(text);
   double a = 0;
   run_frames(sc, [&](double, SceneSystem& sys, const VectorXd&, const VectorXd&) {
@@ -509,8 +520,8 @@ TEST(SupportsLong, ThickWalledSphereConvergesToTheClosedForm) {
                 thick_sphere_pressure(a, 0.05, 0.1, 1e4), p);
   }
   const double h_ratio = std::cbrt(static_cast<double>(sizes[1]) / sizes[0]);
-  std::printf("error %.3f -> %.3f: ratio %.2f (first order %.2f, second %.2f)\n", error[0], error[1], error[0] / error[1],
-              h_ratio, h_ratio * h_ratio);
+  std::printf("error %.3f -> %.3f: ratio %.2f (first order %.2f, second %.2f)\n", error[0], error[1],
+              error[0] / error[1], h_ratio, h_ratio * h_ratio);
   EXPECT_GT(error[0] / error[1], 0.5 * (h_ratio + h_ratio * h_ratio));  // nearer second order than first
 }
 
@@ -525,7 +536,8 @@ times = [0.1, 0.3, 0.6]
 factors = [0.0, 1.0, -0.5]
 )");
   const LoadHistory& h = sc.loads.at(0).history;
-  for (const auto& [t, expected] : std::vector<std::pair<double, double>>{{0.0, 0.0}, {0.2, 0.5}, {0.3, 1.0}, {0.45, 0.25}, {0.9, -0.5}})
+  for (const auto& [t, expected] :
+       std::vector<std::pair<double, double>>{{0.0, 0.0}, {0.2, 0.5}, {0.3, 1.0}, {0.45, 0.25}, {0.9, -0.5}})
     EXPECT_NEAR(h.factor(t), expected, 1e-15) << t;
   const std::vector<double> expected_breaks{0.1, 0.3, 0.6};
   EXPECT_EQ(sc.breakpoints(), expected_breaks);
@@ -536,8 +548,11 @@ factors = [0.0, 1.0, -0.5]
   double fx = 0;
   for (int f3 = 0; f3 < sys->dofs().num_free(); ++f3) fx += f[3 * f3];
   EXPECT_NEAR(fx, 0.25 * 4.0, 1e-12);
-  EXPECT_NE(test::error_of([&] { scene(std::string(kBar) + "[[load]]\nselect = { kind = \"set\", name = \"xmax\" }\nforce = [1.0, 0.0, 0.0]\ntimes = [0.0, 1.0]\nfactors = [1.0]\n"); })
-                .find("expected one factor per time (2), got 1"),
+  EXPECT_NE(test::error_of([&] {
+              scene(std::string(kBar) +
+                    "[[load]]\nselect = { kind = \"set\", name = \"xmax\" }\nforce = [1.0, 0.0, 0.0]\ntimes = [0.0, "
+                    "1.0]\nfactors = [1.0]\n");
+            }).find("expected one factor per time (2), got 1"),
             std::string::npos);
 }
 
@@ -560,7 +575,8 @@ TEST(Supports, XpbdHoldsTheComponentsByProjection) {
     const Eigen::Vector2d fall = -0.5 * h2 * steps * (steps + 1) * Eigen::Vector2d(4.0, 9.81);
     worst_yz = std::max(worst_yz, (c.tail<2>() - c0.tail<2>() - fall).norm());
   });
-  std::printf("xpbd: held x %.2e m off, centre of mass %.2e m from the discrete free fall, sag %.2e m\n", worst_x, worst_yz, sag);
+  std::printf("xpbd: held x %.2e m off, centre of mass %.2e m from the discrete free fall, sag %.2e m\n", worst_x,
+              worst_yz, sag);
   EXPECT_LT(worst_x, 1e-14);
   // Rounding only: 2,000 substeps, each with sweeps over every tet, each move ~1e-16 of a 0.2 m
   // fall; an error of the scheme (a lost substep, momentum from the supports) is ~1e-5 m.
@@ -602,9 +618,9 @@ components = ["z"]
 )";
   const Scene sc = parse_scene(SceneFile::parse(
       text.str(), "ball_drop.toml",
-      {"material.model=mass_spring", "zones.global=false", "integrator.kind=mass_spring", "material.spring_stiffness=300",
-       "material.spring_damping=0.2", "mesh.target_tets=600", "contact.ground=false", "damping.beta=0",
-       "forces.gravity=[2.0, 0.0, -9.81]", "initial.velocity=[0.0, 0.0, 0.0]", "integrator.dt=1e-4",
+      {"material.model=mass_spring", "zones.global=false", "integrator.kind=mass_spring",
+       "material.spring_stiffness=300", "material.spring_damping=0.2", "mesh.target_tets=600", "contact.ground=false",
+       "damping.beta=0", "forces.gravity=[2.0, 0.0, -9.81]", "initial.velocity=[0.0, 0.0, 0.0]", "integrator.dt=1e-4",
        "frames.duration=0.05", "frames.rate=100"}));
   ASSERT_FALSE(sc.boundary.back().nodes.empty());
   const Points X = sc.mesh.rest_positions();
@@ -612,7 +628,7 @@ components = ["z"]
   auto sys = make_scene_system(sc);
   auto integrator = make_integrator(sc, *sys);
   integrator->run(sc.frames.times(), [&](int, double t, const VectorXd& q, const VectorXd& v, const VectorXd&,
-                                          const RunStats::FrameSample&) {
+                                         const RunStats::FrameSample&) {
     sys->set_state(t, q, v);
     for (int n : sc.boundary.back().nodes) worst_z = std::max(worst_z, std::abs(sys->positions()(2, n) - X(2, n)));
     const VectorXd& m = sys->mass();
@@ -629,7 +645,7 @@ components = ["z"]
   EXPECT_LT(worst_x, 1e-10);  // rounding over 500 steps of a 2.5 mm slide
 }
 
-// The cantilever against beam theory (issue 22): Timoshenko's d = P L^3 / (3 E I) + P L / (k mu A)
+// The cantilever against beam theory: Timoshenko's d = P L^3 / (3 E I) + P L / (k mu A)
 // with E = 3 mu (incompressible), I = h^4 / 12, k = 5/6, P = 0.75 Pa * h^2; 1.009 mm for the demo's
 // 1 m x 0.1 m x 0.1 m beam at mu = 100 kPa. With 2-ring volume patches the incompressible beam is
 // neither locked nor a mechanism, and at 80 x 8 x 8 cells (30,720 tets) its tip is within 1% of it.

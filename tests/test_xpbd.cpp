@@ -47,7 +47,8 @@ nu = 0.45
 global = false
 [integrator]
 kind = "xpbd"
-)", "xpbd.toml"));
+)",
+                                          "xpbd.toml"));
   XpbdMeshSystem s(sc);
   Eigen::VectorXd x, v;
   s.initial_state(0, x, v);
@@ -80,12 +81,14 @@ kind = "xpbd"
 TEST(Xpbd, ApproachesTheIdaReferenceAsSubstepsGrow) {
   const auto dir = test::temp_dir();
   const std::string scene = demo("stretch.toml");
-  RunFile ref = run(scene, {"integrator.kind=ida", "frames.duration=0.25", "integrator.rtol=1e-8", "integrator.atol=1e-11"},
-                    (dir / "ref.h5").string());
+  RunFile ref =
+      run(scene, {"integrator.kind=ida", "frames.duration=0.25", "integrator.rtol=1e-8", "integrator.atol=1e-11"},
+          (dir / "ref.h5").string());
   double previous = 1;
   for (int n : {8, 16, 32, 64, 128}) {
-    RunFile r = run(scene, {"frames.duration=0.25", "integrator.iterations=1", "integrator.substeps=" + std::to_string(n)},
-                    (dir / ("xpbd" + std::to_string(n) + ".h5")).string());
+    RunFile r =
+        run(scene, {"frames.duration=0.25", "integrator.iterations=1", "integrator.substeps=" + std::to_string(n)},
+            (dir / ("xpbd" + std::to_string(n) + ".h5")).string());
     const double e = relative_l2(r, ref);
     std::printf("stretch, xpbd %3d substeps: relative L2 error %.3e\n", n, e);
     EXPECT_LT(e, previous);
@@ -105,8 +108,9 @@ TEST(Xpbd, IncompressibleStretchKeepsTheVolume) {
   RunFile z = run(demo("stretch.toml"), {"zones.global=true"}, (dir / "zone.h5").string());
   for (const auto& v : z.volumes()) EXPECT_NEAR(v[1] / z.volumes()[0][1], 1.0, 1e-10);
   // nu = 0.5 is refused by the other integrators.
-  EXPECT_NE(test::error_of([&] { load_scene(demo("stretch.toml"), {"material.nu=0.5", "integrator.kind=ida"}); })
-                .find("material.nu: nu = 0.5 (incompressible) needs integrator.kind = \"xpbd\""),
+  EXPECT_NE(test::error_of([&] {
+              load_scene(demo("stretch.toml"), {"material.nu=0.5", "integrator.kind=ida"});
+            }).find("material.nu: nu = 0.5 (incompressible) needs integrator.kind = \"xpbd\""),
             std::string::npos);
 }
 
@@ -114,16 +118,17 @@ TEST(Xpbd, IncompressibleStretchKeepsTheVolume) {
 // centre of mass so that the total volume is exactly the rest volume.
 TEST(NaiveRescaling, KeepsTheGlobalVolumeExactly) {
   const auto dir = test::temp_dir();
-  RunFile r = run(demo("cube_collapse.toml"),
-                  {"integrator.kind=semi_implicit", "integrator.rescale_volume=true", "integrator.dt=0.008",
-                   "material.model=unh", "material.mu=2000", "material.lambda=2000", "zones.global=false", "frames.duration=0.4", "mesh.cells=8"},
-                  (dir / "rescale.h5").string());
+  RunFile r = run(
+      demo("cube_collapse.toml"),
+      {"integrator.kind=semi_implicit", "integrator.rescale_volume=true", "integrator.dt=0.008", "material.model=unh",
+       "material.mu=2000", "material.lambda=2000", "zones.global=false", "frames.duration=0.4", "mesh.cells=8"},
+      (dir / "rescale.h5").string());
   const double V0 = r.volumes()[0][0];
   for (const auto& v : r.volumes()) EXPECT_NEAR(v[0] / V0, 1.0, 1e-12);
   // Without it the same run loses volume (UNH with lambda = mu: 6% at 0.4 s).
   RunFile plain = run(demo("cube_collapse.toml"),
-                      {"integrator.kind=semi_implicit", "integrator.dt=0.008", "material.model=unh", "material.mu=2000", "material.lambda=2000",
-                       "zones.global=false", "frames.duration=0.4", "mesh.cells=8"},
+                      {"integrator.kind=semi_implicit", "integrator.dt=0.008", "material.model=unh", "material.mu=2000",
+                       "material.lambda=2000", "zones.global=false", "frames.duration=0.4", "mesh.cells=8"},
                       (dir / "plain.h5").string());
   EXPECT_LT(plain.volumes().back()[0] / V0, 0.999);
   EXPECT_EQ(r.energies().size(), r.volumes().size());  // the energy history the stability study plots
@@ -258,9 +263,12 @@ TEST(MassSpring, HongWeightsFollowTheirFormulaAndSumToN) {
   for (int f = 0; f < n; ++f) {
     const double d = (sc.mesh.rest_positions().col(sys.dofs().free_nodes[f]) - c).norm();
     const double raw = d < 0.15 ? 0.5 * (std::cos(M_PI * d / 0.15) + 1) : 0.0;
-    if (raw == 0) EXPECT_EQ(w[f], 0.0);
-    else if (scale == 0) scale = w[f] / raw;
-    else EXPECT_NEAR(w[f], scale * raw, 1e-12 * scale);
+    if (raw == 0)
+      EXPECT_EQ(w[f], 0.0);
+    else if (scale == 0)
+      scale = w[f] / raw;
+    else
+      EXPECT_NEAR(w[f], scale * raw, 1e-12 * scale);
   }
 }
 
@@ -276,17 +284,20 @@ TEST(MassSpringLong, SqueezedBallKeepsItsVolumeWithTheConstraint) {
   double worst = 0, lost = 0;
   for (const auto& v : hong.volumes()) worst = std::max(worst, std::abs(v[0] / hong.volumes()[0][0] - 1));
   for (const auto& v : free.volumes()) lost = std::max(lost, 1 - v[0] / free.volumes()[0][0]);
-  std::printf("squeezed ball: Hong's step worst volume error %.2e; without the constraint %.1f%% lost\n", worst, 100 * lost);
+  std::printf("squeezed ball: Hong's step worst volume error %.2e; without the constraint %.1f%% lost\n", worst,
+              100 * lost);
   EXPECT_LT(worst, 1e-4);
   EXPECT_GT(lost, 0.05);
   // Hong's step converges to IDA's solution of the same DAE (rtol 1e-7) as its step falls, at
   // least at first order: each halving of h divides the difference by more than 1.6 (measured
   // 2.6 and 3.7: the constraint's 1/h^2 stabilisation term makes it better than first order here).
-  RunFile ida = run(scene, {"frames.duration=0.2", "integrator.kind=ida", "integrator.rtol=1e-7", "integrator.atol=1e-8"},
-                    (dir / "ida.h5").string());
+  RunFile ida =
+      run(scene, {"frames.duration=0.2", "integrator.kind=ida", "integrator.rtol=1e-7", "integrator.atol=1e-8"},
+          (dir / "ida.h5").string());
   double previous = 0;
   for (const char* h : {"1e-4", "5e-5", "2.5e-5"}) {
-    RunFile r = run(scene, {"frames.duration=0.2", std::string("integrator.dt=") + h}, (dir / (std::string(h) + ".h5")).string());
+    RunFile r = run(scene, {"frames.duration=0.2", std::string("integrator.dt=") + h},
+                    (dir / (std::string(h) + ".h5")).string());
     const double e = relative_l2(r, ida);
     std::printf("squeezed ball, first 0.2 s, Hong's step h = %s against IDA: relative L2 %.3e\n", h, e);
     if (previous > 0) {

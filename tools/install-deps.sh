@@ -5,7 +5,7 @@
 # a second run installs nothing.
 set -euo pipefail
 packages=(
-  build-essential cmake git pkg-config universal-ctags
+  build-essential cmake git pkg-config universal-ctags clang-format
   libeigen3-dev libhdf5-dev libgmsh-dev gmsh libtomlplusplus-dev libcli11-dev libnanoflann-dev libcgal-dev
   libsundials-dev libsuitesparse-dev libmetis-dev libsimbody-dev
   libopenblas0-pthread

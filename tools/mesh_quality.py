@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Quality of a run's mesh (issue 20: how bad is the bad cube?): per tet, its smallest face angle
+"""Quality of a run's mesh (how bad is the bad cube?): per tet, its smallest face angle
 (the smallest interior angle of its four triangles, degrees) and its edge ratio (longest over
 shortest edge). Prints the histograms and the extremes; draws both with -o.
 

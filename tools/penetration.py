@@ -9,9 +9,8 @@ neighbourhood). Its depth is then its distance to the nearest surface triangle o
 (corners all farther than --exclude at rest). Prints the deepest per frame (m), the node, and how
 many nodes are inside. --region keeps only nodes whose rest x lies in the range (e.g. the
 forearm's tissue), --into only tets and triangles whose corners' rest x all lie in it (e.g. the
-upper arm's). (Before issue 17's mesh colliders this tool tested the sign against the
-nearest far triangle's plane; that counted nodes near a triangle several cm away, on another
-side of the limb, as inside.)
+upper arm's). (The sign is not taken from the nearest far triangle's plane: that counts nodes
+near a triangle several cm away, on another side of the limb, as inside.)
 """
 import argparse
 

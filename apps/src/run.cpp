@@ -63,8 +63,9 @@ void write_totals(OutputWriter& w, const RunStats& s) {
 // Each frame of the integrator, measured by the scene system and written with its statistics.
 // The per-frame series that count from the start of the run: a resumed run adds the values they
 // had at the frame it continues from.
-const char* const kCumulative[] = {"steps", "newton_iterations", "jacobian_evaluations", "rejected_steps_error_test",
-                                   "rejected_steps_newton", "wall_seconds"};
+const char* const kCumulative[] = {
+    "steps",       "newton_iterations", "jacobian_evaluations", "rejected_steps_error_test", "rejected_steps_newton",
+    "wall_seconds"};
 
 // Each frame of the integrator, measured by the scene system and written with its statistics. A
 // resumed run's integrator starts at the file's last frame (first = its index), which is not
@@ -74,11 +75,10 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
                            const std::function<bool(int, const Frame&)>& on_frame) {
   const auto start = std::chrono::steady_clock::now();
   const bool tets = sys.has_tets();
-  return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), contact = Points(), poses = std::vector<double>(), scales = std::vector<double>(),
-          velocities = Points(),
-          multipliers = std::vector<double>()](
-             int j, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
-             const RunStats::FrameSample& s) mutable {
+  return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), contact = Points(),
+          poses = std::vector<double>(), scales = std::vector<double>(), velocities = Points(),
+          multipliers = std::vector<double>()](int j, double t, const VectorXd& q, const VectorXd& v,
+                                               const VectorXd& lambda, const RunStats::FrameSample& s) mutable {
     if (first >= 0 && j == 0) return;
     const int k = std::max(first, 0) + j;
     sys.set_state(t, q, v);
@@ -147,7 +147,8 @@ void add_offsets(RunStats& s, const std::map<std::string, double>& off) {
 // The frame times from the one a resumed run continues at (index `first`, time `t`).
 std::vector<double> times_from(const std::vector<double>& times, int first, double t, const std::string& path) {
   if (first < 0) return times;
-  if (first >= static_cast<int>(times.size()) || std::abs(times[static_cast<std::size_t>(first)] - t) > 1e-9 * (1 + std::abs(t)))
+  if (first >= static_cast<int>(times.size()) ||
+      std::abs(times[static_cast<std::size_t>(first)] - t) > 1e-9 * (1 + std::abs(t)))
     throw Error(path + ": its frame " + std::to_string(first) + " at t = " + std::to_string(t) +
                 " s is not a frame of the scene (cannot be resumed)");
   return {times.begin() + first, times.end()};
@@ -199,6 +200,28 @@ void check_output_room(const Scene& sc, const SceneSystem& sys, const std::strin
   throw Error(buf);
 }
 
+// A resumed run: the summary says where it continues, the system starts from the file's last
+// complete frame, and the cumulative statistics go on from their values there. False when the
+// run had finished (nothing to do).
+bool resume_from(const ResumePoint& rp, SceneSystem& sys, OutputWriter& w, RunSummary& summary, StartState& start,
+                 std::map<std::string, double>& offsets) {
+  summary.frames = rp.frame + 1;
+  summary.resumed_from = rp.frame;
+  summary.resumed_time = rp.time;
+  if (rp.status == "finished") {
+    summary.already_finished = true;
+    return false;
+  }
+  start =
+      StartState{rp.positions, rp.velocities,
+                 Eigen::Map<const VectorXd>(rp.multipliers.data(), static_cast<Eigen::Index>(rp.multipliers.size()))};
+  sys.set_start(&start);
+  for (const char* name : kCumulative)
+    if (auto it = rp.stats.find(name); it != rp.stats.end() && std::isfinite(it->second)) offsets[name] = it->second;
+  w.set_status("running");
+  return true;
+}
+
 }  // namespace
 
 RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
@@ -217,21 +240,7 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   const ResumePoint& rp = w.resume_point();
   std::map<std::string, double> offsets;
   StartState start;
-  if (resume) {
-    summary.frames = rp.frame + 1;
-    summary.resumed_from = rp.frame;
-    summary.resumed_time = rp.time;
-    if (rp.status == "finished") {
-      summary.already_finished = true;
-      return summary;
-    }
-    start = StartState{rp.positions, rp.velocities,
-                       Eigen::Map<const VectorXd>(rp.multipliers.data(), static_cast<Eigen::Index>(rp.multipliers.size()))};
-    sys->set_start(&start);
-    for (const char* name : kCumulative)
-      if (auto it = rp.stats.find(name); it != rp.stats.end() && std::isfinite(it->second)) offsets[name] = it->second;
-    w.set_status("running");
-  }
+  if (resume && !resume_from(rp, *sys, w, summary, start, offsets)) return summary;
   const std::vector<double> all_times = sc.frames.times();
   const std::vector<double> times = times_from(all_times, resume ? rp.frame : -1, rp.time, summary.output);
   Progress bar(sc.file.name(), static_cast<int>(all_times.size()) - 1, times.front(), times.back(),
@@ -248,7 +257,8 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
     }
   };
   try {
-    summary.stats = integrator->run(times, frame_writer(sc, *sys, w, bar, summary, opt.progress, resume ? rp.frame : -1, offsets, opt.on_frame));
+    summary.stats = integrator->run(
+        times, frame_writer(sc, *sys, w, bar, summary, opt.progress, resume ? rp.frame : -1, offsets, opt.on_frame));
   } catch (const Interrupted& e) {
     add_offsets(summary.stats, offsets);
     finish_failed("interrupted", {{"interrupted_at", e.time}, {"signal", static_cast<double>(e.signal)}}, "");
@@ -281,6 +291,5 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   bar.finish();
   return summary;
 }
-
 
 }  // namespace isochor

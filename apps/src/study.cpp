@@ -117,7 +117,13 @@ struct Outcome {
 Outcome run_case(const Study& s, const StudyCase& c, const std::string& exe) {
   const auto dir = s.output / "cases";
   // The study owns its directory: a case run again replaces its file.
-  std::vector<std::string> args{exe, "run", (c.scene.empty() ? s.scene : c.scene).string(), "-q", "--overwrite", "-o", (dir / (c.label + ".h5")).string()};
+  std::vector<std::string> args{exe,
+                                "run",
+                                (c.scene.empty() ? s.scene : c.scene).string(),
+                                "-q",
+                                "--overwrite",
+                                "-o",
+                                (dir / (c.label + ".h5")).string()};
   for (const std::string& o : c.overrides) {
     args.push_back("--set");
     args.push_back(o);
@@ -177,8 +183,8 @@ std::string csv_field(std::string s) {
 
 // Runs the cases `which` (indices into s.cases), `jobs` at a time; with `resume`, a case that
 // finished before (its .cpu file is there) is not run again. Returns how many of them failed.
-int run_cases(const Study& s, const std::vector<std::size_t>& which, const std::string& exe, bool resume,
-              bool progress, int jobs) {
+int run_cases(const Study& s, const std::vector<std::size_t>& which, const std::string& exe, bool resume, bool progress,
+              int jobs) {
   std::filesystem::create_directories(s.output / "cases");
   std::atomic<std::size_t> next{0};
   std::atomic<int> done{0}, failed{0};
@@ -281,7 +287,8 @@ Study load_case_list(const std::filesystem::path& dir) {
     std::stringstream items(sweep);
     for (std::string item; std::getline(items, item, ';');) {
       const auto eq = item.find('=');
-      if (eq == std::string::npos) throw Error(path.string() + ":" + std::to_string(row) + ": sweep " + item + ": expected key=value");
+      if (eq == std::string::npos)
+        throw Error(path.string() + ":" + std::to_string(row) + ": sweep " + item + ": expected key=value");
       c.sweep.emplace_back(item.substr(0, eq), std::strtod(item.c_str() + eq + 1, nullptr));
     }
     s.cases.push_back(c);
@@ -290,29 +297,84 @@ Study load_case_list(const std::filesystem::path& dir) {
   return s;
 }
 
+namespace {
 
-void write_study_results(const Study& s) {
-  const auto dir = s.output / "cases";
-  const auto ref_path = dir / "reference.h5";
-  std::unique_ptr<RunFile> ref;
-  std::vector<Points> ref_x;
-  std::vector<Eigen::Vector3d> ref_c;  // centroid of the nodes per frame
-  double ref_den = 0, ref_cden = 0;
+// The reference run's frames, and the norms its errors are measured against (the displacement
+// from rest summed over frames; the centroid's path from its start).
+struct Reference {
+  std::unique_ptr<RunFile> file;
+  std::vector<Points> x;
+  std::vector<Eigen::Vector3d> centroid;  // of the nodes, per frame
+  double den = 0, centroid_den = 0;
+};
+
+Reference load_reference(const std::filesystem::path& path) {
+  Reference r;
   try {
-    ref = std::make_unique<RunFile>(ref_path.string());
-    const Points X = ref->rest_positions();
-    for (int k = 0; k < ref->num_frames(); ++k) {
-      ref_x.push_back(ref->positions(k));
-      ref_den += (ref_x.back() - X).squaredNorm();
-      ref_c.push_back(ref_x.back().rowwise().mean());
-      ref_cden += (ref_c.back() - ref_c.front()).squaredNorm();
+    r.file = std::make_unique<RunFile>(path.string());
+    const Points X = r.file->rest_positions();
+    for (int k = 0; k < r.file->num_frames(); ++k) {
+      r.x.push_back(r.file->positions(k));
+      r.den += (r.x.back() - X).squaredNorm();
+      r.centroid.push_back(r.x.back().rowwise().mean());
+      r.centroid_den += (r.centroid.back() - r.centroid.front()).squaredNorm();
     }
   } catch (const Error& e) {
     // No usable reference (failed, or not run): every case's error is left blank, and said so.
     std::fprintf(stderr, "isochor study: no reference to measure errors against (%s)\n", e.what());
-    ref.reset();
-    ref_x.clear();
+    return Reference{};
   }
+  return r;
+}
+
+// The worst relative zone-volume error over the frames; a start away from the rest volume
+// (initial.flatten: volume 0) has no first frame to measure against: its last frame's total
+// volume against the rest volume.
+double worst_volume_error(const RunFile& f) {
+  const auto v = f.volumes();
+  const double rest = surface_volume(f.rest_positions(), f.surface());
+  if (!v.empty() && std::abs(v[0][0] / rest - 1) > 1e-6) return std::abs(v.back()[0] / rest - 1);
+  double vol = 0;
+  for (const auto& row : v)
+    for (std::size_t z = 0; z < row.size(); ++z) vol = std::max(vol, std::abs(row[z] / v[0][z] - 1));
+  return vol;
+}
+
+// What results.csv says of one case's run.
+struct CaseMeasures {
+  int frames = 0;
+  double wall = NAN, steps = NAN, err = NAN, vol = NAN, cerr = NAN, shape = NAN, inverted = NAN;
+};
+
+// Filled as far as the file can be read (a half-written file keeps what was measured before).
+void measure_case(const std::filesystem::path& path, const Reference& ref, CaseMeasures& m) {
+  RunFile f(path.string());
+  m.frames = f.num_frames();
+  const auto totals = f.stat_totals();
+  if (totals.count("wall_seconds")) m.wall = totals.at("wall_seconds");
+  if (totals.count("steps")) m.steps = totals.at("steps");
+  if (m.frames > 0) m.shape = rest_shape_error(f.rest_positions(), f.positions(m.frames - 1));
+  const auto series = f.stat_series();
+  if (auto it = series.find("inverted_tets"); it != series.end() && !it->second.empty()) m.inverted = it->second.back();
+  m.vol = worst_volume_error(f);
+  if (!ref.file || ref.den <= 0 || m.frames == 0 || f.num_nodes() != ref.file->num_nodes()) return;  // not another mesh
+  double num = 0, cnum = 0;
+  const int n = std::min(m.frames, static_cast<int>(ref.x.size()));
+  for (int k = 0; k < n; ++k) {
+    const Points x = f.positions(k);
+    num += (x - ref.x[k]).squaredNorm();
+    cnum += (Eigen::Vector3d(x.rowwise().mean()) - ref.centroid[k]).squaredNorm();
+  }
+  m.err = std::sqrt(num / ref.den);
+  if (ref.centroid_den > 0) m.cerr = std::sqrt(cnum / ref.centroid_den);
+  return;
+}
+
+}  // namespace
+
+void write_study_results(const Study& s) {
+  const auto dir = s.output / "cases";
+  const Reference ref = load_reference(dir / "reference.h5");
   std::ofstream csv(s.output / "results.csv");
   csv << "method,label,sweep,status,reason,frames,frames_expected,cpu_seconds,wall_seconds,steps,error_l2,"
          "volume_error,error_centroid,shape_error,inverted_tets\n";
@@ -327,47 +389,17 @@ void write_study_results(const Study& s) {
     std::string sweep;
     for (const auto& [key, value] : c.sweep) sweep += (sweep.empty() ? "" : ";") + key + "=" + number_text(value);
     std::string reason = !ran ? "not run yet" : status == 0 ? "" : last_line(dir / (c.label + ".log"));
-    int frames = 0;
-    double wall = NAN, steps = NAN, err = NAN, vol = NAN, cerr = NAN, shape = NAN, inverted = NAN;
+    CaseMeasures m;
     try {
-      RunFile f((dir / (c.label + ".h5")).string());
-      frames = f.num_frames();
-      const auto totals = f.stat_totals();
-      if (totals.count("wall_seconds")) wall = totals.at("wall_seconds");
-      if (totals.count("steps")) steps = totals.at("steps");
-      if (frames > 0) shape = rest_shape_error(f.rest_positions(), f.positions(frames - 1));
-      const auto series = f.stat_series();
-      if (auto it = series.find("inverted_tets"); it != series.end() && !it->second.empty()) inverted = it->second.back();
-      const auto v = f.volumes();
-      vol = 0;
-      const double rest = surface_volume(f.rest_positions(), f.surface());
-      if (!v.empty() && std::abs(v[0][0] / rest - 1) > 1e-6) {
-        // A start away from the rest volume (initial.flatten: volume 0) has no first frame to
-        // measure against: its last frame's total volume against the rest volume.
-        vol = std::abs(v.back()[0] / rest - 1);
-      } else {
-        for (const auto& row : v)
-          for (std::size_t z = 0; z < row.size(); ++z) vol = std::max(vol, std::abs(row[z] / v[0][z] - 1));
-      }
-      if (ref && ref_den > 0 && frames > 0 && f.num_nodes() == ref->num_nodes()) {  // not another mesh
-        double num = 0;
-        const int n = std::min(frames, static_cast<int>(ref_x.size()));
-        double cnum = 0;
-        for (int k = 0; k < n; ++k) {
-          const Points x = f.positions(k);
-          num += (x - ref_x[k]).squaredNorm();
-          cnum += (Eigen::Vector3d(x.rowwise().mean()) - ref_c[k]).squaredNorm();
-        }
-        err = std::sqrt(num / ref_den);
-        if (ref_cden > 0) cerr = std::sqrt(cnum / ref_cden);
-      }
+      measure_case(dir / (c.label + ".h5"), ref, m);
     } catch (const Error& e) {
       if (reason.empty()) reason = e.what();
     }
-    csv << c.method << "," << c.label << "," << csv_field(sweep) << "," << (!ran ? "missing" : status == 0 ? "ok" : "failed") << ","
-        << csv_field(reason) << "," << frames << "," << (ref ? ref->num_frames() : 0) << "," << number_text(cpu) << ","
-        << number_text(wall) << "," << number_text(steps) << "," << number_text(err) << "," << number_text(vol) << ","
-        << number_text(cerr) << "," << number_text(shape) << "," << number_text(inverted) << "\n";
+    const char* state = !ran ? "missing" : status == 0 ? "ok" : "failed";
+    csv << c.method << "," << c.label << "," << csv_field(sweep) << "," << state << "," << csv_field(reason) << ","
+        << m.frames << "," << (ref.file ? ref.file->num_frames() : 0) << "," << number_text(cpu) << ","
+        << number_text(m.wall) << "," << number_text(m.steps) << "," << number_text(m.err) << "," << number_text(m.vol)
+        << "," << number_text(m.cerr) << "," << number_text(m.shape) << "," << number_text(m.inverted) << "\n";
   }
 }
 

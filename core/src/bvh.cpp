@@ -131,7 +131,8 @@ Bvh parse_bvh(const std::string& text, const std::string& name) {
   tk.expect("MOTION");
   tk.expect("Frames:");
   const double frames = tk.number("the number of frames");
-  if (frames < 1 || frames != static_cast<long>(frames)) tk.fail_at_previous("expected a positive whole number of frames");
+  if (frames < 1 || frames != static_cast<long>(frames))
+    tk.fail_at_previous("expected a positive whole number of frames");
   tk.expect("Frame");
   tk.expect("Time:");
   b.frame_time = tk.number("the frame time (s)");
@@ -140,11 +141,13 @@ Bvh parse_bvh(const std::string& text, const std::string& name) {
   for (Eigen::Index f = 0; f < b.motion.rows(); ++f)
     for (int c = 0; c < columns; ++c) {
       if (tk.done())
-        tk.fail("frame " + std::to_string(f) + " has " + std::to_string(c) + " values, expected " + std::to_string(columns) +
-                " (one per channel)");
+        tk.fail("frame " + std::to_string(f) + " has " + std::to_string(c) + " values, expected " +
+                std::to_string(columns) + " (one per channel)");
       b.motion(f, c) = tk.number("a channel value");
     }
-  if (!tk.done()) tk.fail("more values than " + std::to_string(b.motion.rows()) + " frames x " + std::to_string(columns) + " channels");
+  if (!tk.done())
+    tk.fail("more values than " + std::to_string(b.motion.rows()) + " frames x " + std::to_string(columns) +
+            " channels");
   return b;
 }
 

@@ -30,7 +30,9 @@ class GmshSession {
   explicit GmshSession(const std::string& model) : lock_(mutex()), exceptions_(std::uncaught_exceptions()) {
     static bool initialised = false;
     if (broken())
-      throw Error("Gmsh cannot be used again in this process: an earlier file or mesh failed inside it (expected a new process)");
+      throw Error(
+          "Gmsh cannot be used again in this process: an earlier file or mesh failed inside it (expected a new "
+          "process)");
     if (!initialised) {
       gmsh::initialize(0, nullptr, false);
       gmsh::option::setNumber("General.Terminal", 0);
@@ -113,8 +115,7 @@ Extracted extract_tets(const std::string& what) {
       int dim, order, nn, np;
       std::vector<double> lc;
       gmsh::model::mesh::getElementProperties(t, name, dim, order, nn, lc, np);
-      throw Error(what + ": contains 3-D elements of type \"" + name +
-                  "\", expected only linear 4-node tetrahedra");
+      throw Error(what + ": contains 3-D elements of type \"" + name + "\", expected only linear 4-node tetrahedra");
     }
   std::vector<std::size_t> etags, enodes;
   gmsh::model::mesh::getElementsByType(4, etags, enodes);
@@ -382,7 +383,8 @@ Mesh make_capsule(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double rad
   const Eigen::Vector3d d = b - a;
   std::vector<std::pair<int, int>> parts = {{3, gmsh::model::occ::addSphere(a.x(), a.y(), a.z(), radius)},
                                             {3, gmsh::model::occ::addSphere(b.x(), b.y(), b.z(), radius)}};
-  std::vector<std::pair<int, int>> tool = {{3, gmsh::model::occ::addCylinder(a.x(), a.y(), a.z(), d.x(), d.y(), d.z(), radius)}};
+  std::vector<std::pair<int, int>> tool = {
+      {3, gmsh::model::occ::addCylinder(a.x(), a.y(), a.z(), d.x(), d.y(), d.z(), radius)}};
   std::vector<std::pair<int, int>> out;
   std::vector<std::vector<std::pair<int, int>>> map;
   gmsh::model::occ::fuse(parts, tool, out, map);
@@ -404,41 +406,42 @@ Mesh read_msh(const std::string& path) {
     std::string first;
     std::getline(in, first);
     if (first.rfind("$MeshFormat", 0) != 0)
-      throw Error(path + ": is not a readable Gmsh mesh (expected a .msh file, version 2 or 4, starting with $MeshFormat)");
+      throw Error(path +
+                  ": is not a readable Gmsh mesh (expected a .msh file, version 2 or 4, starting with $MeshFormat)");
   }
   const std::string expected = "is not a readable Gmsh mesh (expected a .msh file, version 2 or 4)";
   RawMesh raw = in_child(path, expected, [&] {
-  GmshSession session("file");
-  return guarded(path, expected, [&] {
-  gmsh::open(path);
-  std::string err = GmshSession::first_error();
-  if (!err.empty()) throw Error(path + ": is not a readable Gmsh mesh: " + err);
-  Extracted e = extract_tets(path);
-  std::map<std::string, std::vector<int>> zones, sets;
-  gmsh::vectorpair groups;
-  gmsh::model::getPhysicalGroups(groups, -1);
-  for (const auto& [dim, tag] : groups) {
-    std::string name;
-    gmsh::model::getPhysicalName(dim, tag, name);
-    if (name.empty()) name = "physical_" + std::to_string(dim) + "d_" + std::to_string(tag);
-    std::vector<std::size_t> ntags;
-    std::vector<double> coord;
-    gmsh::model::mesh::getNodesForPhysicalGroup(dim, tag, ntags, coord);
-    auto& set = sets[name];
-    for (std::size_t t : ntags) set.push_back(e.node_index.at(t));
-    if (dim == 3) {
-      std::vector<int> entities;
-      gmsh::model::getEntitiesForPhysicalGroup(dim, tag, entities);
-      auto& zone = zones[name];
-      for (int ent : entities) {
-        std::vector<std::size_t> etags, enodes;
-        gmsh::model::mesh::getElementsByType(4, etags, enodes, ent);
-        for (std::size_t t : etags) zone.push_back(e.tet_index.at(t));
+    GmshSession session("file");
+    return guarded(path, expected, [&] {
+      gmsh::open(path);
+      std::string err = GmshSession::first_error();
+      if (!err.empty()) throw Error(path + ": is not a readable Gmsh mesh: " + err);
+      Extracted e = extract_tets(path);
+      std::map<std::string, std::vector<int>> zones, sets;
+      gmsh::vectorpair groups;
+      gmsh::model::getPhysicalGroups(groups, -1);
+      for (const auto& [dim, tag] : groups) {
+        std::string name;
+        gmsh::model::getPhysicalName(dim, tag, name);
+        if (name.empty()) name = "physical_" + std::to_string(dim) + "d_" + std::to_string(tag);
+        std::vector<std::size_t> ntags;
+        std::vector<double> coord;
+        gmsh::model::mesh::getNodesForPhysicalGroup(dim, tag, ntags, coord);
+        auto& set = sets[name];
+        for (std::size_t t : ntags) set.push_back(e.node_index.at(t));
+        if (dim == 3) {
+          std::vector<int> entities;
+          gmsh::model::getEntitiesForPhysicalGroup(dim, tag, entities);
+          auto& zone = zones[name];
+          for (int ent : entities) {
+            std::vector<std::size_t> etags, enodes;
+            gmsh::model::mesh::getElementsByType(4, etags, enodes, ent);
+            for (std::size_t t : etags) zone.push_back(e.tet_index.at(t));
+          }
+        }
       }
-    }
-  }
-  return RawMesh{std::move(e), std::move(zones), std::move(sets)};
-  });
+      return RawMesh{std::move(e), std::move(zones), std::move(sets)};
+    });
   });
   return finish(std::move(raw.e), path, std::move(raw.zones), std::move(raw.sets));
 }
@@ -463,36 +466,36 @@ Mesh mesh_closed_surface(const std::string& path, double edge_length) {
     for (Tri& t : tris) std::swap(t[1], t[2]);
   }
   RawMesh raw = in_child(path, "Gmsh could not tetrahedralise the surface", [&] {
-  GmshSession session("surface");
-  const int s = gmsh::model::addDiscreteEntity(2);
-  std::vector<std::size_t> ntags(x.cols());
-  std::vector<double> coords(3 * x.cols());
-  for (int i = 0; i < x.cols(); ++i) {
-    ntags[i] = static_cast<std::size_t>(i + 1);
-    for (int k = 0; k < 3; ++k) coords[3 * i + k] = x(k, i);
-  }
-  gmsh::model::mesh::addNodes(2, s, ntags, coords);
-  std::vector<std::size_t> etags(tris.size()), enodes(3 * tris.size());
-  for (std::size_t f = 0; f < tris.size(); ++f) {
-    etags[f] = f + 1;
-    for (int k = 0; k < 3; ++k) enodes[3 * f + k] = static_cast<std::size_t>(tris[f][k] + 1);
-  }
-  gmsh::model::mesh::addElementsByType(s, 2, etags, enodes);
-  const int loop = gmsh::model::geo::addSurfaceLoop({s});
-  gmsh::model::geo::addVolume({loop});
-  gmsh::model::geo::synchronize();
-  return guarded(path, "Gmsh could not tetrahedralise the surface", [&] {
-    if (edge_length > 0) {
-      // Gmsh 4.8's Delaunay does not refine inside a discrete surface; HXT does, by the size
-      // bound. The surface triangles stay as they are.
-      gmsh::option::setNumber("Mesh.Algorithm3D", 10);
-      gmsh::option::setNumber("Mesh.MeshSizeMax", edge_length);
-      gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
-      gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
+    GmshSession session("surface");
+    const int s = gmsh::model::addDiscreteEntity(2);
+    std::vector<std::size_t> ntags(x.cols());
+    std::vector<double> coords(3 * x.cols());
+    for (int i = 0; i < x.cols(); ++i) {
+      ntags[i] = static_cast<std::size_t>(i + 1);
+      for (int k = 0; k < 3; ++k) coords[3 * i + k] = x(k, i);
     }
-    generate_3d(path);
-    return RawMesh{extract_tets(path), {}, {}};
-  });
+    gmsh::model::mesh::addNodes(2, s, ntags, coords);
+    std::vector<std::size_t> etags(tris.size()), enodes(3 * tris.size());
+    for (std::size_t f = 0; f < tris.size(); ++f) {
+      etags[f] = f + 1;
+      for (int k = 0; k < 3; ++k) enodes[3 * f + k] = static_cast<std::size_t>(tris[f][k] + 1);
+    }
+    gmsh::model::mesh::addElementsByType(s, 2, etags, enodes);
+    const int loop = gmsh::model::geo::addSurfaceLoop({s});
+    gmsh::model::geo::addVolume({loop});
+    gmsh::model::geo::synchronize();
+    return guarded(path, "Gmsh could not tetrahedralise the surface", [&] {
+      if (edge_length > 0) {
+        // Gmsh 4.8's Delaunay does not refine inside a discrete surface; HXT does, by the size
+        // bound. The surface triangles stay as they are.
+        gmsh::option::setNumber("Mesh.Algorithm3D", 10);
+        gmsh::option::setNumber("Mesh.MeshSizeMax", edge_length);
+        gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
+        gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
+      }
+      generate_3d(path);
+      return RawMesh{extract_tets(path), {}, {}};
+    });
   });
   return finish(std::move(raw.e), path, {}, {});
 }

@@ -9,8 +9,8 @@
 
 namespace isochor {
 
-double tet_signed_volume(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                         const Eigen::Vector3d& c, const Eigen::Vector3d& d) {
+double tet_signed_volume(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                         const Eigen::Vector3d& d) {
   return (b - a).dot((c - a).cross(d - a)) / 6.0;
 }
 
@@ -75,8 +75,8 @@ SurfaceCheck check_surface(const std::vector<Tri>& surface) {
   if (bad != ~std::uint64_t{0}) c.first_bad_edge = {static_cast<int>(bad >> 32), static_cast<int>(bad & 0xffffffffu)};
   c.closed = c.boundary_edges == 0 && c.nonmanifold_edges == 0;
   c.oriented = std::all_of(directed.begin(), directed.end(), [](const auto& kv) { return kv.second == 1; });
-  c.euler_characteristic = static_cast<int>(nodes.size()) - static_cast<int>(undirected.size()) +
-                           static_cast<int>(surface.size());
+  c.euler_characteristic =
+      static_cast<int>(nodes.size()) - static_cast<int>(undirected.size()) + static_cast<int>(surface.size());
   return c;
 }
 
@@ -86,7 +86,8 @@ std::vector<int> compact_unused_nodes(Points& x, std::vector<Tet>& tets,
   std::vector<int> remap(n, -1), kept;
   for (const Tet& t : tets)
     for (int v : t) {
-      if (v < 0 || v >= n) throw Error("tet refers to node " + std::to_string(v) + ", expected 0.." + std::to_string(n - 1));
+      if (v < 0 || v >= n)
+        throw Error("tet refers to node " + std::to_string(v) + ", expected 0.." + std::to_string(n - 1));
       remap[v] = 0;
     }
   for (int i = 0; i < n; ++i)
@@ -123,17 +124,16 @@ Mesh::Mesh(Points positions, std::vector<Tet> tets, const std::string& what)
     Tet& t = tets_[e];
     for (int v : t)
       if (v < 0 || v >= n)
-        throw Error(what + ": tet " + std::to_string(e) + " refers to node " + std::to_string(v) +
-                    ", expected 0.." + std::to_string(n - 1));
+        throw Error(what + ": tet " + std::to_string(e) + " refers to node " + std::to_string(v) + ", expected 0.." +
+                    std::to_string(n - 1));
     volume_[e] = tet_signed_volume(X_.col(t[0]), X_.col(t[1]), X_.col(t[2]), X_.col(t[3]));
     mean_abs += std::abs(volume_[e]);
   }
   mean_abs /= T;
   for (int e = 0; e < T; ++e) {
     if (!(std::abs(volume_[e]) >= 1e-12 * mean_abs))
-      throw Error(what + ": tet " + std::to_string(e) + " is degenerate (volume " +
-                  std::to_string(volume_[e]) + ", expected |V| above 1e-12 of the mean " +
-                  std::to_string(mean_abs) + ")");
+      throw Error(what + ": tet " + std::to_string(e) + " is degenerate (volume " + std::to_string(volume_[e]) +
+                  ", expected |V| above 1e-12 of the mean " + std::to_string(mean_abs) + ")");
     if (volume_[e] < 0) {
       std::swap(tets_[e][2], tets_[e][3]);
       volume_[e] = -volume_[e];
@@ -169,7 +169,8 @@ Mesh::Mesh(Points positions, std::vector<Tet> tets, const std::string& what)
 
 std::vector<int> Mesh::node_ring(int node, int k) const {
   if (node < 0 || node >= num_nodes())
-    throw Error("node " + std::to_string(node) + " is not in the mesh (expected 0.." + std::to_string(num_nodes() - 1) + ")");
+    throw Error("node " + std::to_string(node) + " is not in the mesh (expected 0.." + std::to_string(num_nodes() - 1) +
+                ")");
   std::vector<char> seen(num_nodes(), 0);
   std::vector<int> ring{node}, front{node};
   seen[node] = 1;

@@ -22,7 +22,8 @@ void check_tets(const Section& s, const std::string& key, double tets) {
   std::snprintf(buf, sizeof buf,
                 "makes about %.3g tets, which need at least %.3g GB of memory while running (%.0f KB per tet); this "
                 "machine has %.3g GB (expected at most about %.2g tets)",
-                tets, need / 1024, kMinBytesPerTet / 1024, ram / 1024, (ram - kBaselineMb) * 1024 * 1024 / kMinBytesPerTet);
+                tets, need / 1024, kMinBytesPerTet / 1024, ram / 1024,
+                (ram - kBaselineMb) * 1024 * 1024 / kMinBytesPerTet);
   s.fail(key, buf);
 }
 
@@ -30,10 +31,11 @@ void check_tets(const Section& s, const std::string& key, double tets) {
 void check_size(const Section& s, const std::string& key, double size) {
   if (size >= 1e-6) return;
   char buf[200];
-  std::snprintf(buf, sizeof buf,
-                "%g m is too small to mesh (Gmsh's geometric tolerance is 1e-8 m; expected at least 1e-6 m: sizes are in "
-                "metres)",
-                size);
+  std::snprintf(
+      buf, sizeof buf,
+      "%g m is too small to mesh (Gmsh's geometric tolerance is 1e-8 m; expected at least 1e-6 m: sizes are in "
+      "metres)",
+      size);
   s.fail(key, buf);
 }
 
@@ -45,7 +47,10 @@ double gmsh_tets(double volume, double h) { return kGmshTetsPerEdgeCube * volume
 Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
   const bool has_file = s.has("file"), has_shape = s.has("shape");
   if (has_file && has_shape) s.fail("file", "give either shape or file, not both");
-  if (!has_file && !has_shape) s.fail("shape", "missing, expected shape = \"box\" | \"capsule\" | \"cylinder\" | \"sphere\" | \"two_tets\" or file = \"...\"");
+  if (!has_file && !has_shape)
+    s.fail(
+        "shape",
+        "missing, expected shape = \"box\" | \"capsule\" | \"cylinder\" | \"sphere\" | \"two_tets\" or file = \"...\"");
   const Eigen::Vector3d center = s.vec3("center", Eigen::Vector3d::Zero());
   if (has_file) {
     const std::string name = s.string("file", "");
@@ -53,10 +58,14 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     std::string ext = std::filesystem::path(path).extension().string();
     for (char& c : ext) c = static_cast<char>(std::tolower(c));
     Mesh m;
-    if (ext == ".msh") m = read_msh(path);
-    else if (ext == ".node" || ext == ".ele") m = read_tetgen(path);
-    else if (ext == ".obj" || ext == ".stl") m = mesh_closed_surface(path, s.number("edge_length", 0.0, Range::non_negative()));
-    else s.fail("file", "\"" + name + "\" has an unknown extension, expected .msh, .node, .ele, .obj or .stl");
+    if (ext == ".msh")
+      m = read_msh(path);
+    else if (ext == ".node" || ext == ".ele")
+      m = read_tetgen(path);
+    else if (ext == ".obj" || ext == ".stl")
+      m = mesh_closed_surface(path, s.number("edge_length", 0.0, Range::non_negative()));
+    else
+      s.fail("file", "\"" + name + "\" has an unknown extension, expected .msh, .node, .ele, .obj or .stl");
     if (center != Eigen::Vector3d::Zero()) s.fail("center", "applies to shapes only, not to a mesh file");
     return m;
   }
@@ -64,7 +73,8 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
   if (shape == "box") {
     const auto cells = s.int3("cells", {4, 4, 4}, 1, 1000);
     const int split = static_cast<int>(s.integer("split", 6, 5, 6));
-    check_tets(s, "cells", static_cast<double>(cells[0]) * static_cast<double>(cells[1]) * static_cast<double>(cells[2]) * split);
+    check_tets(s, "cells",
+               static_cast<double>(cells[0]) * static_cast<double>(cells[1]) * static_cast<double>(cells[2]) * split);
     const double sliver = s.number("sliver_ratio", 1.0, {1.0, 1e6, false, false});
     return make_box(s.vec3("size", Eigen::Vector3d::Ones(), Range::positive()), cells, center, split, sliver);
   }
@@ -77,12 +87,15 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     return make_cylinder(r, height, resolution, center);
   }
   if (shape == "capsule") {
-    if (!s.has("from") || !s.has("to")) s.fail(s.has("from") ? "to" : "from", "missing, a capsule needs the ends of its axis, from = [x, y, z] and to = [x, y, z] (m)");
+    if (!s.has("from") || !s.has("to"))
+      s.fail(s.has("from") ? "to" : "from",
+             "missing, a capsule needs the ends of its axis, from = [x, y, z] and to = [x, y, z] (m)");
     const Eigen::Vector3d a = s.vec3("from", {}), b = s.vec3("to", {});
     if ((b - a).norm() == 0) s.fail("to", "expected a point other than `from`");
     const double r = s.number("radius", 0.5, Range::positive());
     const double h = s.number("edge_length", r / 3, Range::positive());
-    if (center != Eigen::Vector3d::Zero()) s.fail("center", "does not apply to a capsule (it lies between from and to)");
+    if (center != Eigen::Vector3d::Zero())
+      s.fail("center", "does not apply to a capsule (it lies between from and to)");
     check_size(s, "radius", r);
     check_size(s, "edge_length", h);
     check_tets(s, "edge_length", gmsh_tets(M_PI * r * r * (b - a).norm() + 4.0 / 3.0 * M_PI * r * r * r, h));
@@ -99,8 +112,10 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     if (inner > 0) check_size(s, "inner_radius", inner);
     if (h > 0) check_size(s, "edge_length", h);
     const double volume = 4.0 / 3.0 * M_PI * (r * r * r - inner * inner * inner);
-    if (h > 0) check_tets(s, "edge_length", gmsh_tets(volume, h));
-    else check_tets(s, "target_tets", static_cast<double>(target));
+    if (h > 0)
+      check_tets(s, "edge_length", gmsh_tets(volume, h));
+    else
+      check_tets(s, "target_tets", static_cast<double>(target));
     return make_sphere(r, h, target, center, inner);
   }
   Mesh m = make_two_tets(s.number("edge", 1.0, Range::positive()));

@@ -87,7 +87,8 @@ hid_t checked(hid_t id, const std::string& what) {
 }
 
 H group(hid_t loc, const std::string& name) {
-  return H(checked(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "create group " + name), H5Gclose);
+  return H(checked(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "create group " + name),
+           H5Gclose);
 }
 
 void write_array(hid_t loc, const std::string& name, hid_t type, const std::vector<hsize_t>& dims, const void* data) {
@@ -111,16 +112,18 @@ void string_attribute(hid_t loc, const std::string& name, const std::string& val
 void number_attribute(hid_t loc, const std::string& name, double value) {
   if (H5Aexists(loc, name.c_str()) > 0) H5Adelete(loc, name.c_str());
   H space(H5Screate(H5S_SCALAR), H5Sclose);
-  H attr(checked(H5Acreate2(loc, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT), "attribute " + name),
-         H5Aclose);
+  H attr(
+      checked(H5Acreate2(loc, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT), "attribute " + name),
+      H5Aclose);
   check(H5Awrite(attr, H5T_NATIVE_DOUBLE, &value), "write attribute " + name);
 }
 
 void vector_attribute(hid_t loc, const std::string& name, const double* values, hsize_t n) {
   if (H5Aexists(loc, name.c_str()) > 0) H5Adelete(loc, name.c_str());
   H space(H5Screate_simple(1, &n, nullptr), H5Sclose);
-  H attr(checked(H5Acreate2(loc, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT), "attribute " + name),
-         H5Aclose);
+  H attr(
+      checked(H5Acreate2(loc, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT), "attribute " + name),
+      H5Aclose);
   check(H5Awrite(attr, H5T_NATIVE_DOUBLE, values), "write attribute " + name);
 }
 
@@ -130,7 +133,8 @@ struct Series {
   std::vector<hsize_t> row;  // shape of one frame
   hid_t type = H5T_NATIVE_DOUBLE;
 
-  Series(hid_t loc, const std::string& name, std::vector<hsize_t> row_shape, hid_t t) : row(std::move(row_shape)), type(t) {
+  Series(hid_t loc, const std::string& name, std::vector<hsize_t> row_shape, hid_t t)
+      : row(std::move(row_shape)), type(t) {
     std::vector<hsize_t> dims{0}, maxdims{H5S_UNLIMITED}, chunk{1};
     for (hsize_t d : row) {
       dims.push_back(d);
@@ -142,7 +146,8 @@ struct Series {
     // Rows of scalars are chunked by many frames; bigger rows one frame per chunk.
     if (row.empty()) chunk[0] = 1024;
     H5Pset_chunk(dcpl, static_cast<int>(chunk.size()), chunk.data());
-    ds = H(checked(H5Dcreate2(loc, name.c_str(), type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT), "create " + name), H5Dclose);
+    ds = H(checked(H5Dcreate2(loc, name.c_str(), type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT), "create " + name),
+           H5Dclose);
   }
 
   // An existing series of the file (resume).
@@ -243,7 +248,8 @@ double free_bytes(const std::string& path) {
 }
 double file_size_limit() {
   struct rlimit lim {};
-  if (::getrlimit(RLIMIT_FSIZE, &lim) != 0 || lim.rlim_cur == RLIM_INFINITY) return std::numeric_limits<double>::infinity();
+  if (::getrlimit(RLIMIT_FSIZE, &lim) != 0 || lim.rlim_cur == RLIM_INFINITY)
+    return std::numeric_limits<double>::infinity();
   return static_cast<double>(lim.rlim_cur);
 }
 
@@ -268,13 +274,14 @@ struct OutputWriter::Impl {
   int nodes = 0, tets = 0, frames = 0;
   bool pressure = false;
   bool zone_index = false;  // /mesh/zone exists (a cell attribute "zone" in the sidecar)
-  std::unique_ptr<Series> time, positions, velocities, multipliers, volume, energy, pressure_series, collider_pose, collider_scale;
+  std::unique_ptr<Series> time, positions, velocities, multipliers, volume, energy, pressure_series, collider_pose,
+      collider_scale;
   // Per-node vectors of a frame, when the scene has them: "load" and "contact" (kNodeVectors).
   std::map<std::string, std::unique_ptr<Series>> node_series;
   std::map<std::string, std::unique_ptr<Series>> stats;
   H frames_group, xdmf_group, stats_group;
   int lock_fd = -1;
-  bool existed = false;  // the path existed before the writer (a failed create leaves it)
+  bool existed = false;    // the path existed before the writer (a failed create leaves it)
   double frame_bytes = 0;  // what a frame adds to the file: an estimate, then the largest measured
   off_t file_size = 0;     // after the last flush
   ResumePoint resume;
@@ -287,8 +294,9 @@ struct OutputWriter::Impl {
 
   // Every per-frame series of the file.
   std::vector<Series*> all_series() {
-    std::vector<Series*> all{time.get(), positions.get(), velocities.get(), multipliers.get(), volume.get(), energy.get(),
-                             pressure_series.get(), collider_pose.get(), collider_scale.get()};
+    std::vector<Series*> all{time.get(),          positions.get(), velocities.get(),      multipliers.get(),
+                             volume.get(),        energy.get(),    pressure_series.get(), collider_pose.get(),
+                             collider_scale.get()};
     for (auto& [name, series] : node_series) all.push_back(series.get());
     for (auto& [name, series] : stats) all.push_back(series.get());
     all.erase(std::remove(all.begin(), all.end(), nullptr), all.end());
@@ -323,8 +331,8 @@ struct OutputWriter::Impl {
       throw Error(path + ": the disk is full (" + kb(avail) + " free, frame " + std::to_string(k) + " needs about " +
                   kb(need) + "); " + kept);
     if (static_cast<double>(file_size) + need > limit)
-      throw Error(path + ": the file size limit (ulimit -f: " + kb(limit) + ") is reached at frame " + std::to_string(k) +
-                  "; " + kept);
+      throw Error(path + ": the file size limit (ulimit -f: " + kb(limit) + ") is reached at frame " +
+                  std::to_string(k) + "; " + kept);
   }
 
   void append_frame(const Frame& f, hsize_t k);
@@ -384,8 +392,8 @@ struct OutputWriter::Impl {
     x << "   <Grid Name=\"frame_" << f << "\" GridType=\"Uniform\">\n"
       << "    <Time Value=\"" << time << "\"/>\n"
       << "    <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" << tets << "\">\n"
-      << "     <DataItem Dimensions=\"" << tets << " 4\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
-      << h5_name << ":/mesh/tets</DataItem>\n    </Topology>\n"
+      << "     <DataItem Dimensions=\"" << tets << " 4\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" << h5_name
+      << ":/mesh/tets</DataItem>\n    </Topology>\n"
       << "    <Geometry GeometryType=\"XYZ\">\n"
       << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
       << h5_name << ":/frames/xdmf/position_" << f << "</DataItem>\n    </Geometry>\n"
@@ -402,8 +410,8 @@ struct OutputWriter::Impl {
         << ":/mesh/zone</DataItem>\n    </Attribute>\n";
     if (pressure)
       x << "    <Attribute Name=\"pressure\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
-        << "     <DataItem Dimensions=\"" << tets << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name
-        << ":/frames/xdmf/pressure_" << f << "</DataItem>\n    </Attribute>\n";
+        << "     <DataItem Dimensions=\"" << tets << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
+        << h5_name << ":/frames/xdmf/pressure_" << f << "</DataItem>\n    </Attribute>\n";
     x << "   </Grid>\n";
     return x.str();
   }
@@ -411,8 +419,9 @@ struct OutputWriter::Impl {
   // The header, the <Grid>s of the frames already in the file (`times`: a resumed run's) and the
   // tail, written to a temporary file and renamed over the sidecar.
   void start_xdmf(const std::vector<double>& times = {}) {
-    const std::string header = "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-                               "  <Grid Name=\"isochor\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    const std::string header =
+        "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+        "  <Grid Name=\"isochor\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     const std::string xp = xdmf_file(), tmp = xp + ".tmp";
     off_t size = static_cast<off_t>(header.size());
     {
@@ -460,7 +469,8 @@ struct OutputWriter::Impl {
   // interruption attributes removed, its sidecar rewritten for the frames kept.
   void open_for_resume(hid_t fapl, const RunInfo& info, std::size_t zones) {
     const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl);
-    if (f < 0) throw Error(path + ": cannot be opened to resume" + hdf5_reason() + " (expected an isochor output file)");
+    if (f < 0)
+      throw Error(path + ": cannot be opened to resume" + hdf5_reason() + " (expected an isochor output file)");
     file = H(f, H5Fclose);
     const std::string command = read_string_attribute(file, "command");
     if (command != info.command)
@@ -468,8 +478,10 @@ struct OutputWriter::Impl {
                   info.command + "` (cannot be resumed)");
     const std::string scene = read_string_attribute(file, "scene");
     if (scene != info.scene_text)
-      throw Error(path + ": was written from a different scene (line " + std::to_string(first_difference(scene, info.scene_text)) +
-                  " of the scene as run differs; expected the same scene file and --set options, or --overwrite to start over)");
+      throw Error(path + ": was written from a different scene (line " +
+                  std::to_string(first_difference(scene, info.scene_text)) +
+                  " of the scene as run differs; expected the same scene file and --set options, or --overwrite to "
+                  "start over)");
     frames_group = H(checked(H5Gopen2(file, "frames", H5P_DEFAULT), "open /frames"), H5Gclose);
     xdmf_group = H(checked(H5Gopen2(frames_group, "xdmf", H5P_DEFAULT), "open /frames/xdmf"), H5Gclose);
     stats_group = H(checked(H5Gopen2(file, "stats", H5P_DEFAULT), "open /stats"), H5Gclose);
@@ -500,7 +512,8 @@ struct OutputWriter::Impl {
     check(H5Gget_info(stats_group, &g), "list /stats");
     for (hsize_t i = 0; i < g.nlinks; ++i) {
       char name[256];
-      if (H5Lget_name_by_idx(stats_group, ".", H5_INDEX_NAME, H5_ITER_INC, i, name, sizeof name, H5P_DEFAULT) < 0) continue;
+      if (H5Lget_name_by_idx(stats_group, ".", H5_INDEX_NAME, H5_ITER_INC, i, name, sizeof name, H5P_DEFAULT) < 0)
+        continue;
       stats.emplace(name, std::make_unique<Series>(stats_group, name, H5T_NATIVE_DOUBLE));
     }
     hsize_t complete = time->rows();
@@ -542,7 +555,8 @@ void OutputWriter::Impl::lock_path(Mode mode, const RunInfo& info) {
   if (mode == Mode::create && (existed || std::filesystem::exists(xp, ec)))
     throw Error((existed ? path : xp) + ": exists (pass --overwrite to replace it" +
                 (existed && info.command == "run" ? ", or --resume to continue the run in it" : "") + ")");
-  if (mode == Mode::resume && !existed) throw Error(path + ": no such file to resume (expected the output of an earlier run)");
+  if (mode == Mode::resume && !existed)
+    throw Error(path + ": no such file to resume (expected the output of an earlier run)");
   auto dir = std::filesystem::path(path).parent_path();
   if (!dir.empty()) std::filesystem::create_directories(dir, ec);
   if (ec) throw Error(path + ": cannot create the directory " + dir.string() + " (" + ec.message() + ")");
@@ -657,7 +671,8 @@ void OutputWriter::Impl::create_series(const Zones& zones) {
     // unchanged), whose insertions stay as cheap at the 100,000th frame as at the 10th.
     H gcpl(H5Pcreate(H5P_GROUP_CREATE), H5Pclose);
     check(H5Pset_link_creation_order(gcpl, H5P_CRT_ORDER_TRACKED), "link creation order");
-    xdmf_group = H(checked(H5Gcreate2(frames_group, "xdmf", H5P_DEFAULT, gcpl, H5P_DEFAULT), "create group xdmf"), H5Gclose);
+    xdmf_group =
+        H(checked(H5Gcreate2(frames_group, "xdmf", H5P_DEFAULT, gcpl, H5P_DEFAULT), "create group xdmf"), H5Gclose);
   }
   stats_group = group(file, "stats");
   time = std::make_unique<Series>(frames_group, "time", std::vector<hsize_t>{}, H5T_NATIVE_DOUBLE);
@@ -672,8 +687,8 @@ void OutputWriter::Impl::create_series(const Zones& zones) {
   H en(H5Dopen2(frames_group, "energy", H5P_DEFAULT), H5Dclose);
   string_attribute(en, "columns", "kinetic,elastic,external");
   if (pressure)
-    pressure_series = std::make_unique<Series>(frames_group, "pressure", std::vector<hsize_t>{static_cast<hsize_t>(tets)},
-                                               H5T_NATIVE_DOUBLE);
+    pressure_series = std::make_unique<Series>(frames_group, "pressure",
+                                               std::vector<hsize_t>{static_cast<hsize_t>(tets)}, H5T_NATIVE_DOUBLE);
 }
 
 OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh, const Zones& zones, const RunInfo& info,
@@ -719,7 +734,8 @@ OutputWriter::~OutputWriter() {
 void OutputWriter::write_frame(const Frame& f) {
   Impl& m = *impl_;
   if (!m.file.valid()) throw Error(m.path + ": the output is closed");
-  if (!f.positions || f.positions->cols() != m.nodes) throw Error(m.path + ": a frame needs the positions of every node");
+  if (!f.positions || f.positions->cols() != m.nodes)
+    throw Error(m.path + ": a frame needs the positions of every node");
   if (f.velocities && f.velocities->cols() != m.nodes) throw Error(m.path + ": a frame's velocities need every node");
   const hsize_t k = static_cast<hsize_t>(m.frames);
   if (f.volumes.size() != m.volume->row[0])
@@ -735,8 +751,9 @@ void OutputWriter::write_frame(const Frame& f) {
     } catch (...) {
     }
     H5Eclear2(H5E_DEFAULT);
-    throw Error(m.path + ": frame " + std::to_string(k) + " (t = " + std::to_string(f.time) + " s) could not be written: " +
-                e.what() + (k > 0 ? "; frames 0-" + std::to_string(k - 1) + " are intact" : ""));
+    throw Error(m.path + ": frame " + std::to_string(k) + " (t = " + std::to_string(f.time) +
+                " s) could not be written: " + e.what() +
+                (k > 0 ? "; frames 0-" + std::to_string(k - 1) + " are intact" : ""));
   }
   m.frames++;
   m.measure_growth();
@@ -750,25 +767,27 @@ void OutputWriter::Impl::append_frame(const Frame& f, hsize_t k) {
   if (f.velocities) {
     if (!m.velocities) {
       if (k > 0) throw Error(m.path + ": velocities appeared after the first frame");
-      m.velocities = std::make_unique<Series>(m.frames_group, "velocities",
-                                              std::vector<hsize_t>{static_cast<hsize_t>(m.nodes), 3}, H5T_NATIVE_DOUBLE);
+      m.velocities = std::make_unique<Series>(
+          m.frames_group, "velocities", std::vector<hsize_t>{static_cast<hsize_t>(m.nodes), 3}, H5T_NATIVE_DOUBLE);
     }
     m.velocities->append(k, f.velocities->data());
   }
   if (f.multipliers && !f.multipliers->empty()) {
     if (!m.multipliers) {
       if (k > 0) throw Error(m.path + ": multipliers appeared after the first frame");
-      m.multipliers = std::make_unique<Series>(m.frames_group, "multipliers", std::vector<hsize_t>{f.multipliers->size()},
-                                               H5T_NATIVE_DOUBLE);
+      m.multipliers = std::make_unique<Series>(m.frames_group, "multipliers",
+                                               std::vector<hsize_t>{f.multipliers->size()}, H5T_NATIVE_DOUBLE);
     }
-    if (f.multipliers->size() != m.multipliers->row[0]) throw Error(m.path + ": a frame's multipliers changed in number");
+    if (f.multipliers->size() != m.multipliers->row[0])
+      throw Error(m.path + ": a frame's multipliers changed in number");
     m.multipliers->append(k, f.multipliers->data());
   }
   if (f.collider_poses && !f.collider_poses->empty()) {
     const hsize_t colliders = f.collider_poses->size() / 12;
     if (!m.collider_pose) {
       if (k > 0) throw Error(m.path + ": collider poses appeared after the first frame");
-      m.collider_pose = std::make_unique<Series>(m.frames_group, "collider_pose", std::vector<hsize_t>{colliders, 12}, H5T_NATIVE_DOUBLE);
+      m.collider_pose = std::make_unique<Series>(m.frames_group, "collider_pose", std::vector<hsize_t>{colliders, 12},
+                                                 H5T_NATIVE_DOUBLE);
     }
     if (colliders != m.collider_pose->row[0]) throw Error(m.path + ": a frame's colliders changed in number");
     m.collider_pose->append(k, f.collider_poses->data());
@@ -777,7 +796,8 @@ void OutputWriter::Impl::append_frame(const Frame& f, hsize_t k) {
     const hsize_t colliders = f.collider_scales->size();
     if (!m.collider_scale) {
       if (k > 0) throw Error(m.path + ": collider scales appeared after the first frame");
-      m.collider_scale = std::make_unique<Series>(m.frames_group, "collider_scale", std::vector<hsize_t>{colliders}, H5T_NATIVE_DOUBLE);
+      m.collider_scale = std::make_unique<Series>(m.frames_group, "collider_scale", std::vector<hsize_t>{colliders},
+                                                  H5T_NATIVE_DOUBLE);
     }
     if (colliders != m.collider_scale->row[0]) throw Error(m.path + ": a frame's colliders changed in number");
     m.collider_scale->append(k, f.collider_scales->data());
@@ -806,7 +826,9 @@ void OutputWriter::Impl::append_frame(const Frame& f, hsize_t k) {
   for (const auto& [name, value] : f.stats) {
     auto it = m.stats.find(name);
     if (it == m.stats.end()) {
-      it = m.stats.emplace(name, std::make_unique<Series>(m.stats_group, name, std::vector<hsize_t>{}, H5T_NATIVE_DOUBLE)).first;
+      it = m.stats
+               .emplace(name, std::make_unique<Series>(m.stats_group, name, std::vector<hsize_t>{}, H5T_NATIVE_DOUBLE))
+               .first;
       const double missing = std::numeric_limits<double>::quiet_NaN();  // frames before it appeared
       for (hsize_t j = 0; j < k; ++j) it->second->append(j, &missing);
     }
@@ -815,7 +837,9 @@ void OutputWriter::Impl::append_frame(const Frame& f, hsize_t k) {
   check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
 }
 
-void OutputWriter::set_stat(const std::string& name, double value) { number_attribute(impl_->stats_group, name, value); }
+void OutputWriter::set_stat(const std::string& name, double value) {
+  number_attribute(impl_->stats_group, name, value);
+}
 void OutputWriter::set_stat(const std::string& name, const std::string& value) {
   string_attribute(impl_->stats_group, name, value);
 }

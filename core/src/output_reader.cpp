@@ -149,30 +149,35 @@ void read_frame_row(hid_t file, const std::string& path, const char* name, int f
 }  // namespace
 
 Points RunFile::positions(int frame) const {
-  if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
+  if (frame < 0 || frame >= num_frames())
+    throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
   Points x(3, num_nodes());
   read_frame_row(impl_->file, impl_->path, "/frames/positions", frame, 3, static_cast<hsize_t>(num_nodes()), x.data());
   return x;
 }
 
 Points RunFile::velocities(int frame) const {
-  if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
+  if (frame < 0 || frame >= num_frames())
+    throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
   Points v(3, num_nodes());
   read_frame_row(impl_->file, impl_->path, "/frames/velocities", frame, 3, static_cast<hsize_t>(num_nodes()), v.data());
   return v;
 }
 
 std::vector<double> RunFile::pressures(int frame) const {
-  if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
+  if (frame < 0 || frame >= num_frames())
+    throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
   std::vector<double> p(num_tets());
   read_frame_row(impl_->file, impl_->path, "/frames/pressure", frame, 2, static_cast<hsize_t>(num_tets()), p.data());
   return p;
 }
 
 Points RunFile::node_vectors(const std::string& name, int frame) const {
-  if (frame < 0 || frame >= num_frames()) throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
+  if (frame < 0 || frame >= num_frames())
+    throw Error(impl_->path + ": frame " + std::to_string(frame) + " does not exist");
   Points f(3, num_nodes());
-  read_frame_row(impl_->file, impl_->path, ("/frames/" + name).c_str(), frame, 3, static_cast<hsize_t>(num_nodes()), f.data());
+  read_frame_row(impl_->file, impl_->path, ("/frames/" + name).c_str(), frame, 3, static_cast<hsize_t>(num_nodes()),
+                 f.data());
   return f;
 }
 
@@ -241,7 +246,8 @@ std::string describe_run(const std::string& path) {
     << " surface triangles\n";
   auto zones = r.zone_sizes();
   s << "  zones       " << zones.size();
-  for (const auto& [name, n] : zones) s << (name == zones.begin()->first ? ": " : ", ") << name << " (" << n << " tets)";
+  for (const auto& [name, n] : zones)
+    s << (name == zones.begin()->first ? ": " : ", ") << name << " (" << n << " tets)";
   s << "\n";
   auto t = r.times();
   s << "  frames      " << t.size();
@@ -264,11 +270,12 @@ std::string describe_run(const std::string& path) {
     else if (status == "interrupted")
       s << "interrupted at t = " << at("interrupted_at") << " s (signal " << at("signal") << ")" << resume;
     else if (status == "failed")
-      s << "failed" << (std::isfinite(at("failed_at_time")) ? " at t = " + std::to_string(at("failed_at_time")) + " s" : "")
-        << ": " << r.stat_text("failure") << resume;
+      s << "failed"
+        << (std::isfinite(at("failed_at_time")) ? " at t = " + std::to_string(at("failed_at_time")) + " s" : "") << ": "
+        << r.stat_text("failure") << resume;
     else if (status == "running")
-      s << "unfinished: its writer stopped without closing it (killed?) after t = " << (t.empty() ? 0.0 : t.back()) << " s"
-        << resume;
+      s << "unfinished: its writer stopped without closing it (killed?) after t = " << (t.empty() ? 0.0 : t.back())
+        << " s" << resume;
     else
       s << "not recorded (written before runs recorded it)";
     s << "\n";

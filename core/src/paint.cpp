@@ -159,7 +159,8 @@ std::vector<std::vector<double>> ply_columns(const PlyElement& e, PlyValues& val
         continue;
       }
       const double n = values.next(p.count_type);
-      if (!(n >= 0 && n <= 1e6) || n != std::floor(n)) throw Error(path + ": a PLY list of " + std::to_string(n) + " items");
+      if (!(n >= 0 && n <= 1e6) || n != std::floor(n))
+        throw Error(path + ": a PLY list of " + std::to_string(n) + " items");
       for (long j = 0; j < static_cast<long>(n); ++j) values.next(p.type);
     }
   return cols;
@@ -173,7 +174,8 @@ PaintedPoints read_ply(const std::string& path) {
   out.path = path;
   PlyValues values(in, h.format, path);
   // The elements before the vertices are read past; those after are not read.
-  auto vertex = std::find_if(h.elements.begin(), h.elements.end(), [](const PlyElement& e) { return e.name == "vertex"; });
+  auto vertex =
+      std::find_if(h.elements.begin(), h.elements.end(), [](const PlyElement& e) { return e.name == "vertex"; });
   if (vertex == h.elements.end()) throw Error(path + ": no vertex element in the PLY header");
   for (auto e = h.elements.begin(); e != vertex; ++e) ply_columns(*e, values, path);
   std::vector<std::vector<double>> cols = ply_columns(*vertex, values, path);
@@ -218,10 +220,12 @@ PaintedPoints read_obj_paint(const std::string& path) {
     double c[3];
     if (s >> c[0] >> c[1] >> c[2]) {
       if (rgb[0].size() + 1 != pts.size())
-        throw Error(path + ":" + std::to_string(line_no) + ": a vertex colour after vertices without one (expected every vertex coloured)");
+        throw Error(path + ":" + std::to_string(line_no) +
+                    ": a vertex colour after vertices without one (expected every vertex coloured)");
       for (int k = 0; k < 3; ++k) rgb[k].push_back(c[k]);
     } else if (!rgb[0].empty()) {
-      throw Error(path + ":" + std::to_string(line_no) + ": a vertex without a colour after coloured ones (expected v x y z r g b)");
+      throw Error(path + ":" + std::to_string(line_no) +
+                  ": a vertex without a colour after coloured ones (expected v x y z r g b)");
     }
   }
   out.x.resize(3, static_cast<Eigen::Index>(pts.size()));
@@ -262,8 +266,8 @@ PaintedPoints read_csv_paint(const std::string& path, const Points* nodes) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     const auto f = split_csv(line);
     if (f.size() != out.names.size())
-      throw Error(path + ":" + std::to_string(line_no) + ": expected " + std::to_string(out.names.size()) + " columns, got " +
-                  std::to_string(f.size()));
+      throw Error(path + ":" + std::to_string(line_no) + ": expected " + std::to_string(out.names.size()) +
+                  " columns, got " + std::to_string(f.size()));
     for (std::size_t k = 0; k < f.size(); ++k) {
       double v;
       try {
@@ -282,8 +286,8 @@ PaintedPoints read_csv_paint(const std::string& path, const Points* nodes) {
     if (by_node) {
       const double v = out.values[0][i];
       if (!nodes || v != std::floor(v) || v < 0 || v >= nodes->cols())
-        throw Error(path + ": row " + std::to_string(i + 2) + ": node " + std::to_string(v) + " is not a node of the mesh (expected 0.." +
-                    std::to_string(nodes ? nodes->cols() - 1 : -1) + ")");
+        throw Error(path + ": row " + std::to_string(i + 2) + ": node " + std::to_string(v) +
+                    " is not a node of the mesh (expected 0.." + std::to_string(nodes ? nodes->cols() - 1 : -1) + ")");
       out.x.col(i) = nodes->col(static_cast<Eigen::Index>(v));
     } else {
       out.x.col(i) = Eigen::Vector3d(out.values[0][i], out.values[1][i], out.values[2][i]);
@@ -307,13 +311,18 @@ PaintedPoints read_paint(const std::string& path, const Points* nodes) {
   std::string ext = dot == std::string::npos ? "" : path.substr(dot);
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   PaintedPoints p;
-  if (ext == ".ply") p = read_ply(path);
-  else if (ext == ".obj") p = read_obj_paint(path);
-  else if (ext == ".csv") p = read_csv_paint(path, nodes);
-  else throw Error(path + ": unknown paint file type (expected .ply, .obj or .csv)");
+  if (ext == ".ply")
+    p = read_ply(path);
+  else if (ext == ".obj")
+    p = read_obj_paint(path);
+  else if (ext == ".csv")
+    p = read_csv_paint(path, nodes);
+  else
+    throw Error(path + ": unknown paint file type (expected .ply, .obj or .csv)");
   if (p.x.cols() == 0) throw Error(path + ": no painted vertices");
   for (Eigen::Index i = 0; i < p.x.cols(); ++i)
-    if (!p.x.col(i).allFinite()) throw Error(path + ": vertex " + std::to_string(i) + " has a position that is not a finite number");
+    if (!p.x.col(i).allFinite())
+      throw Error(path + ": vertex " + std::to_string(i) + " has a position that is not a finite number");
   return p;
 }
 
@@ -466,8 +475,10 @@ std::vector<std::vector<int>> connected_pieces(const Mesh& mesh, const std::vect
   std::vector<int> node_owner(static_cast<std::size_t>(mesh.num_nodes()), -1);
   for (std::size_t k = 0; k < tets.size(); ++k)
     for (int v : mesh.tets()[tets[k]]) {
-      if (node_owner[v] < 0) node_owner[v] = static_cast<int>(k);
-      else parent[root(static_cast<int>(k))] = root(node_owner[v]);
+      if (node_owner[v] < 0)
+        node_owner[v] = static_cast<int>(k);
+      else
+        parent[root(static_cast<int>(k))] = root(node_owner[v]);
     }
   std::map<int, std::vector<int>> pieces;
   for (std::size_t k = 0; k < tets.size(); ++k) pieces[root(static_cast<int>(k))].push_back(tets[k]);

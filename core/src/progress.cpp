@@ -9,9 +9,12 @@ namespace isochor {
 namespace {
 std::string seconds(double s) {
   char buf[32];
-  if (s < 120) std::snprintf(buf, sizeof buf, "%.1fs", s);
-  else if (s < 7200) std::snprintf(buf, sizeof buf, "%dm%02ds", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
-  else std::snprintf(buf, sizeof buf, "%dh%02dm", static_cast<int>(s) / 3600, static_cast<int>(s) / 60 % 60);
+  if (s < 120)
+    std::snprintf(buf, sizeof buf, "%.1fs", s);
+  else if (s < 7200)
+    std::snprintf(buf, sizeof buf, "%dm%02ds", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
+  else
+    std::snprintf(buf, sizeof buf, "%dh%02dm", static_cast<int>(s) / 3600, static_cast<int>(s) / 60 % 60);
   return buf;
 }
 }  // namespace
@@ -45,9 +48,9 @@ Progress::~Progress() { finish(); }
 void Progress::print(double wall, const char* what, double sim_time) {
   last_ = std::chrono::steady_clock::now();
   const double rest = remaining_seconds(samples_, t_end_);
-  std::fprintf(out_, "%s%s: %s%d of %d, t = %.6g s, wall %s, %s%s", tty_ ? "\r" : "", label_.c_str(), what, done_, total_,
-               sim_time, seconds(wall).c_str(), rest < 0 ? "estimating" : ("about " + seconds(rest) + " left").c_str(),
-               tty_ ? "\033[K" : "\n");
+  std::fprintf(out_, "%s%s: %s%d of %d, t = %.6g s, wall %s, %s%s", tty_ ? "\r" : "", label_.c_str(), what, done_,
+               total_, sim_time, seconds(wall).c_str(),
+               rest < 0 ? "estimating" : ("about " + seconds(rest) + " left").c_str(), tty_ ? "\033[K" : "\n");
   std::fflush(out_);
   shown_ = true;
 }

@@ -31,13 +31,20 @@ std::string source_of(const toml::node* n, const std::string& fallback_file) {
 
 std::string type_name(const toml::node& n) {
   switch (n.type()) {
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "a list";
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a number";
-    case toml::node_type::boolean: return "a boolean";
-    default: return "a date or time";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::array:
+      return "a list";
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a number";
+    case toml::node_type::boolean:
+      return "a boolean";
+    default:
+      return "a date or time";
   }
 }
 
@@ -63,7 +70,8 @@ bool Range::contains(double v) const {
 
 std::string Range::describe() const {
   bool lo = std::isfinite(min), hi = std::isfinite(max);
-  if (lo && hi) return std::string("a number in ") + (min_open ? "(" : "[") + fmt(min) + ", " + fmt(max) + (max_open ? ")" : "]");
+  if (lo && hi)
+    return std::string("a number in ") + (min_open ? "(" : "[") + fmt(min) + ", " + fmt(max) + (max_open ? ")" : "]");
   if (lo) return std::string("a number ") + (min_open ? "> " : ">= ") + fmt(min);
   if (hi) return std::string("a number ") + (max_open ? "< " : "<= ") + fmt(max);
   return "a finite number";
@@ -96,17 +104,18 @@ std::string Section::where(std::string_view key) const {
   return source_of(n, file_->name_) + ": " + full(key);
 }
 
-void Section::fail(std::string_view key, const std::string& message) const {
-  throw Error(where(key) + ": " + message);
-}
+void Section::fail(std::string_view key, const std::string& message) const { throw Error(where(key) + ": " + message); }
 
 std::optional<double> Section::number_opt(std::string_view key, Range range) const {
   const toml::node* n = get(key);
   if (!n) return std::nullopt;
   double v;
-  if (auto i = n->as_integer()) v = static_cast<double>(i->get());
-  else if (auto f = n->as_floating_point()) v = f->get();
-  else fail(key, "expected " + range.describe() + ", got " + type_name(*n));
+  if (auto i = n->as_integer())
+    v = static_cast<double>(i->get());
+  else if (auto f = n->as_floating_point())
+    v = f->get();
+  else
+    fail(key, "expected " + range.describe() + ", got " + type_name(*n));
   if (!std::isfinite(v) || !range.contains(v)) fail(key, "expected " + range.describe() + ", got " + fmt(v));
   return v;
 }
@@ -138,8 +147,7 @@ bool Section::boolean(std::string_view key, bool fallback) const {
   return b->get();
 }
 
-std::optional<std::string> Section::string_opt(std::string_view key,
-                                               const std::vector<std::string>& choices) const {
+std::optional<std::string> Section::string_opt(std::string_view key, const std::vector<std::string>& choices) const {
   const toml::node* n = get(key);
   if (!n) return std::nullopt;
   std::string expect = "a string";
@@ -169,9 +177,12 @@ std::vector<double> Section::numbers(std::string_view key, Range range) const {
   std::vector<double> out;
   for (const toml::node& e : *a) {
     double v;
-    if (auto i = e.as_integer()) v = static_cast<double>(i->get());
-    else if (auto f = e.as_floating_point()) v = f->get();
-    else fail(key, "expected " + expect + ", got an element that is " + type_name(e));
+    if (auto i = e.as_integer())
+      v = static_cast<double>(i->get());
+    else if (auto f = e.as_floating_point())
+      v = f->get();
+    else
+      fail(key, "expected " + expect + ", got an element that is " + type_name(e));
     if (!std::isfinite(v) || !range.contains(v)) fail(key, "expected " + expect + ", got " + fmt(v));
     out.push_back(v);
   }
@@ -244,7 +255,8 @@ std::array<long, 3> Section::int3(std::string_view key, std::array<long, 3> fall
     fail(key, "expected an integer or a list of 3 integers in [" + std::to_string(min) + ", " + std::to_string(max) +
                   "], got " + type_name(*n));
   std::vector<long> v = integers(key, min, max);
-  if (v.size() != 3) fail(key, "expected an integer or a list of 3 integers, got a list of " + std::to_string(v.size()));
+  if (v.size() != 3)
+    fail(key, "expected an integer or a list of 3 integers, got a list of " + std::to_string(v.size()));
   return {v[0], v[1], v[2]};
 }
 
@@ -261,7 +273,8 @@ std::vector<Section> Section::tables(std::string_view key) const {
   std::vector<Section> out;
   if (!n) return out;
   auto a = n->as_array();
-  if (!a || !a->is_array_of_tables()) fail(key, "expected a list of tables ([[" + full(key) + "]]), got " + type_name(*n));
+  if (!a || !a->is_array_of_tables())
+    fail(key, "expected a list of tables ([[" + full(key) + "]]), got " + type_name(*n));
   for (std::size_t i = 0; i < a->size(); ++i) {
     const toml::table* t = (*a)[i].as_table();
     file_->read_.insert(t);
@@ -296,8 +309,8 @@ SceneFile SceneFile::load(const std::string& path, const std::vector<std::string
   return parse(buf.str(), path, overrides, std::filesystem::path(path).parent_path().string());
 }
 
-SceneFile SceneFile::parse(const std::string& text, const std::string& name,
-                           const std::vector<std::string>& overrides, const std::string& directory) {
+SceneFile SceneFile::parse(const std::string& text, const std::string& name, const std::vector<std::string>& overrides,
+                           const std::string& directory) {
   SceneFile f;
   f.name_ = name;
   f.directory_ = directory;

@@ -11,14 +11,18 @@ namespace isochor {
 Selection Selection::parse(const Section& s) {
   Selection sel;
   sel.where = s.where("kind");
-  const std::string kind = s.string("kind", "", {"all", "box", "half_space", "cylinder", "surface", "indices", "k_ring", "set"});
+  const std::string kind =
+      s.string("kind", "", {"all", "box", "half_space", "cylinder", "surface", "indices", "k_ring", "set"});
   if (kind.empty())
-    s.fail("kind", "missing, expected one of \"all\", \"box\", \"half_space\", \"cylinder\", \"surface\", \"indices\", \"k_ring\", \"set\"");
+    s.fail("kind",
+           "missing, expected one of \"all\", \"box\", \"half_space\", \"cylinder\", \"surface\", \"indices\", "
+           "\"k_ring\", \"set\"");
   if (kind == "all") sel.kind = Kind::all;
   if (kind == "surface") sel.kind = Kind::surface;
   if (kind == "box") {
     sel.kind = Kind::box;
-    if (!s.has("min") || !s.has("max")) s.fail(s.has("min") ? "max" : "min", "missing, a box selection needs min and max");
+    if (!s.has("min") || !s.has("max"))
+      s.fail(s.has("min") ? "max" : "min", "missing, a box selection needs min and max");
     sel.min = s.vec3("min", {});
     sel.max = s.vec3("max", {});
     for (int d = 0; d < 3; ++d)
@@ -75,13 +79,15 @@ bool contains(const Selection& s, const Eigen::Vector3d& p, double tol) {
   switch (s.kind) {
     case Selection::Kind::box:
       return (p.array() >= s.min.array() - tol).all() && (p.array() <= s.max.array() + tol).all();
-    case Selection::Kind::half_space: return (p - s.point).dot(s.normal) >= -tol;
+    case Selection::Kind::half_space:
+      return (p - s.point).dot(s.normal) >= -tol;
     case Selection::Kind::cylinder: {
       const double along = (p - s.point).dot(s.normal);
       const double across = (p - s.point - along * s.normal).norm();
       return across <= s.radius + tol && (s.length < 0 || std::abs(along) <= s.length / 2 + tol);
     }
-    default: return false;
+    default:
+      return false;
   }
 }
 
@@ -114,10 +120,15 @@ std::vector<int> select_nodes(const Mesh& mesh, const Selection& sel) {
       for (int i = 0; i < mesh.num_nodes(); ++i)
         if (contains(sel, X.col(i), tol)) out.push_back(i);
       break;
-    case Selection::Kind::surface: out = mesh.surface_nodes(); break;
-    case Selection::Kind::indices: out = checked_indices(sel, mesh.num_nodes(), "node"); break;
+    case Selection::Kind::surface:
+      out = mesh.surface_nodes();
+      break;
+    case Selection::Kind::indices:
+      out = checked_indices(sel, mesh.num_nodes(), "node");
+      break;
     case Selection::Kind::k_ring:
-      if (sel.node >= mesh.num_nodes()) throw Error(sel.where + ": node " + std::to_string(sel.node) + " is out of range");
+      if (sel.node >= mesh.num_nodes())
+        throw Error(sel.where + ": node " + std::to_string(sel.node) + " is out of range");
       out = mesh.node_ring(sel.node, sel.k);
       break;
     case Selection::Kind::set: {
@@ -155,12 +166,14 @@ std::vector<int> select_tets(const Mesh& mesh, const Selection& sel) {
         if (contains(sel, centroid(tets[e]), tol)) out.push_back(e);
       break;
     case Selection::Kind::surface:
-      for (int v : mesh.surface_nodes())
-        out.insert(out.end(), mesh.node_tets().begin(v), mesh.node_tets().end(v));
+      for (int v : mesh.surface_nodes()) out.insert(out.end(), mesh.node_tets().begin(v), mesh.node_tets().end(v));
       break;
-    case Selection::Kind::indices: out = checked_indices(sel, mesh.num_tets(), "tet"); break;
+    case Selection::Kind::indices:
+      out = checked_indices(sel, mesh.num_tets(), "tet");
+      break;
     case Selection::Kind::k_ring:
-      if (sel.node >= mesh.num_nodes()) throw Error(sel.where + ": node " + std::to_string(sel.node) + " is out of range");
+      if (sel.node >= mesh.num_nodes())
+        throw Error(sel.where + ": node " + std::to_string(sel.node) + " is out of range");
       out = mesh.tet_ring(sel.node, sel.k);
       break;
     case Selection::Kind::set: {

@@ -6,8 +6,8 @@
 
 namespace isochor {
 
-Mesh make_box(const Eigen::Vector3d& size, const std::array<long, 3>& cells, const Eigen::Vector3d& center,
-              int split, double sliver_ratio) {
+Mesh make_box(const Eigen::Vector3d& size, const std::array<long, 3>& cells, const Eigen::Vector3d& center, int split,
+              double sliver_ratio) {
   if (split != 5 && split != 6) throw Error("box: split = " + std::to_string(split) + ", expected 5 or 6");
   if (!(sliver_ratio >= 1.0)) throw Error("box: sliver_ratio = " + std::to_string(sliver_ratio) + ", expected >= 1");
   const long nx = cells[0], ny = cells[1], nz = cells[2];
@@ -45,7 +45,8 @@ Mesh make_box(const Eigen::Vector3d& size, const std::array<long, 3>& cells, con
         } else {
           // Central tet on the corners of one parity, four corner tets; parity alternates.
           static constexpr int kEven[5][4] = {{1, 2, 4, 7}, {0, 1, 2, 4}, {3, 2, 1, 7}, {5, 1, 4, 7}, {6, 4, 2, 7}};
-          static constexpr int kOdd[5][4] = {{0, 5, 3, 6}, {1, 3, 0, 5}, {2, 0, 3, 6}, {4, 5, 0, 6}, {7, 3, 5, 6}};  // all positive
+          static constexpr int kOdd[5][4] = {
+              {0, 5, 3, 6}, {1, 3, 0, 5}, {2, 0, 3, 6}, {4, 5, 0, 6}, {7, 3, 5, 6}};  // all positive
           const auto& t = ((i + j + k) % 2 == 0) ? kEven : kOdd;
           for (const auto& q : t) tets.push_back({c[q[0]], c[q[1]], c[q[2]], c[q[3]]});
         }
@@ -66,7 +67,7 @@ Mesh make_box(const Eigen::Vector3d& size, const std::array<long, 3>& cells, con
 }
 
 Mesh make_two_tets(double edge) {
-  const double r = edge / std::sqrt(3.0);  // circumradius of the shared face
+  const double r = edge / std::sqrt(3.0);        // circumradius of the shared face
   const double h = edge * std::sqrt(2.0 / 3.0);  // apex height of a regular tet
   Points x(3, 5);
   for (int i = 0; i < 3; ++i) {

@@ -104,9 +104,12 @@ void read_stl_surface(const std::string& path, Points& x, std::vector<Tri>& tris
 void read_surface(const std::string& path, Points& x, std::vector<Tri>& tris) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-  if (ext == ".obj") read_obj_surface(path, x, tris);
-  else if (ext == ".stl") read_stl_surface(path, x, tris);
-  else throw Error("\"" + path + "\" has an unknown extension, expected .obj or .stl");
+  if (ext == ".obj")
+    read_obj_surface(path, x, tris);
+  else if (ext == ".stl")
+    read_stl_surface(path, x, tris);
+  else
+    throw Error("\"" + path + "\" has an unknown extension, expected .obj or .stl");
 }
 
 }  // namespace isochor

@@ -38,7 +38,10 @@ struct BackwardEuler::Impl {
   std::vector<double> kv;
 
   Impl(ConstrainedSystem& s, BackwardEulerOptions o)
-      : sys(s), opt(o), n((check_system(s), s.num_dofs())), m(s.num_constraints()),
+      : sys(s),
+        opt(o),
+        n((check_system(s), s.num_dofs())),
+        m(s.num_constraints()),
         use_kkt(o.linear_solver == LinearSolverKind::klu || m > o.schur_max_constraints) {
     if (o.project_hessian && !s.set_hessian_projection(true))
       throw Error("integrator.hessian = \"projected\": this model has no element Hessians to project");
@@ -62,8 +65,9 @@ struct BackwardEuler::Impl {
   BorderedSolver& step_solver(LinearSolverKind kind) {  // made on first use
     std::unique_ptr<BorderedSolver>& b = solvers[kind == LinearSolverKind::reduced ? 0 : 1];
     if (!b) {
-      b = std::make_unique<BorderedSolver>(sys.pattern(), sys.constraint_rows(), symmetric_solver_of(kind),
-                                           opt.linear_tol > 0 ? opt.linear_tol : BackwardEulerOptions::kDefaultLinearTol);
+      b = std::make_unique<BorderedSolver>(
+          sys.pattern(), sys.constraint_rows(), symmetric_solver_of(kind),
+          opt.linear_tol > 0 ? opt.linear_tol : BackwardEulerOptions::kDefaultLinearTol);
       if (refuse_indefinite) b->refuse_indefinite();
     }
     return *b;
@@ -95,15 +99,17 @@ struct BackwardEuler::Impl {
   // (the symbolic analysis; above kAnalyseAnyMaxDofs, where it costs more than ~0.1 s, asked for
   // only once CG takes kAnalyseMinCg iterations per Newton iteration). The solver switches when
   // the other is estimated kSwitchGain times cheaper.
-  // Seconds per unit, measured on one core of the development machine (session 19): a CG
+  // Seconds per unit, measured on one core of the 2-core development machine: a CG
   // iteration per entry of the step matrix; a factorisation per flop and per entry of the factor;
   // a solve per entry of the factor.
-  static constexpr double kCgSecondsPerEntry = 0.3e-9, kFactorSecondsPerFlop = 0.05e-9,
-                          kFactorSecondsPerEntry = 2e-9, kSolveSecondsPerEntry = 1e-9;
+  static constexpr double kCgSecondsPerEntry = 0.3e-9, kFactorSecondsPerFlop = 0.05e-9, kFactorSecondsPerEntry = 2e-9,
+                          kSolveSecondsPerEntry = 1e-9;
   // Per Newton iteration: CG's iterations (the borders' solves included) or CHOLMOD's 1 + m solves;
   // per factorisation.
   double pcg_solve_cost(double cg) const { return cg * static_cast<double>(sys.pattern().nnz()) * kCgSecondsPerEntry; }
-  double cholmod_solve_cost(double entries) const { return static_cast<double>(1 + m) * entries * kSolveSecondsPerEntry; }
+  double cholmod_solve_cost(double entries) const {
+    return static_cast<double>(1 + m) * entries * kSolveSecondsPerEntry;
+  }
   static double cholmod_factor_cost(double flops, double entries) {
     return flops * kFactorSecondsPerFlop + entries * kFactorSecondsPerEntry;
   }
@@ -116,10 +122,13 @@ struct BackwardEuler::Impl {
   };
   std::vector<StepCounts> recent;  // per step since the solver last changed (the last kChooseWindow)
   double cg_per_newton = -1;       // PCG's CG iterations per Newton iteration over its last window
-  StepCounts counts() const { return {stats.newton_iterations, stats.fresh_factorisations, stats.linear_iterations, bought}; }
+  StepCounts counts() const {
+    return {stats.newton_iterations, stats.fresh_factorisations, stats.linear_iterations, bought};
+  }
   void after_step(const StepCounts& before) {
     const StepCounts now = counts();
-    recent.push_back({now.newton - before.newton, now.fresh - before.fresh, now.cg - before.cg, now.bought - before.bought});
+    recent.push_back(
+        {now.newton - before.newton, now.fresh - before.fresh, now.cg - before.cg, now.bought - before.bought});
     if (static_cast<int>(recent.size()) > kChooseWindow) recent.erase(recent.begin());
     if (static_cast<int>(recent.size()) < kChooseWindow) return;
     StepCounts w{0, 0, 0, 0};
@@ -130,7 +139,7 @@ struct BackwardEuler::Impl {
     // reuse rule buys more there, where a matrix costs only its assembly, than it would on CHOLMOD).
     const double fresh = static_cast<double>(on_pcg ? w.fresh - w.bought : w.fresh) / static_cast<double>(w.newton);
     if (on_pcg) cg_per_newton = static_cast<double>(w.cg) / static_cast<double>(w.newton);
-    if (cg_per_newton < 0) return;  // PCG never ran
+    if (cg_per_newton < 0) return;                                                  // PCG never ran
     if (on_pcg && cg_per_newton < kAnalyseMinCg && n > kAnalyseAnyMaxDofs) return;  // CG cheap, the analysis not
     double flops = 0, entries = 0;
     const auto ta = Clock::now();  // the first call orders and analyses: part of the factorisations' time
@@ -157,8 +166,8 @@ struct BackwardEuler::Impl {
   // afresh. Renting until the rent paid equals the price costs at most twice the better choice
   // in hindsight (the ski-rental rule). Counts only, no clock: a run repeats exactly. Not for
   // KLU's KKT matrix or AMG, which have no estimate.
-  // Seconds per entry of the step matrix, one core of the development machine (session 20,
-  // bench_assembly: the CNH ball's gradient pass 73 ns per tet, gradient and Hessian 586 ns, ~25
+  // Seconds per entry of the step matrix, one core of the 2-core development machine
+  // (bench_assembly: the CNH ball's gradient pass 73 ns per tet, gradient and Hessian 586 ns, ~25
   // entries per tet; the line search's energy adds to the former).
   static constexpr double kForcesSecondsPerEntry = 4e-9, kHessianSecondsPerEntry = 20e-9;
   int reference_iterations = 2;
@@ -174,8 +183,9 @@ struct BackwardEuler::Impl {
     const double entries_S = static_cast<double>(sys.pattern().nnz());
     double flops = 0, entries = 0;
     const bool direct = S->symmetric().factor_cost(flops, entries);
-    const double iteration = entries_S * kForcesSecondsPerEntry +
-                             (direct ? cholmod_solve_cost(entries) : pcg_solve_cost(static_cast<double>(cg) / iterations));
+    const double iteration =
+        entries_S * kForcesSecondsPerEntry +
+        (direct ? cholmod_solve_cost(entries) : pcg_solve_cost(static_cast<double>(cg) / iterations));
     const double price = entries_S * kHessianSecondsPerEntry + (direct ? cholmod_factor_cost(flops, entries) : 0.0);
     rent += extra * iteration;
     if (rent > price && !refresh) refresh = buying = true;
@@ -202,7 +212,7 @@ struct BackwardEuler::Impl {
   // stderr (docs/scenes.md, diagnosing a step that fails).
   const double trace_from = std::getenv("ISOCHOR_TRACE_NEWTON") ? std::atof(std::getenv("ISOCHOR_TRACE_NEWTON"))
                                                                 : std::numeric_limits<double>::infinity();
-  VectorXd nu;               // the l1 merit's weights, per constraint (grow within a step)
+  VectorXd nu;  // the l1 merit's weights, per constraint (grow within a step)
 
   // One step from (qn, vn) at t to t1: q, v, lambda on return. False with a reason on failure.
   // Newton with the step matrix factored only when needed: a factorisation is reused across
@@ -232,7 +242,9 @@ struct BackwardEuler::Impl {
     const VectorXd lambda0 = lambda;
     if (step(t, t1, qn, vn, q, v, lambda, reason)) return true;
     if (depth >= opt.substeps_on_failure) {
-      if (depth > 0) reason += " (also with the step halved " + (depth == 1 ? std::string("once") : std::to_string(depth) + " times") + ")";
+      if (depth > 0)
+        reason += " (also with the step halved " +
+                  (depth == 1 ? std::string("once") : std::to_string(depth) + " times") + ")";
       return false;
     }
     stats.step_halvings++;
@@ -304,12 +316,12 @@ struct BackwardEuler::Impl {
   enum class NewtonTest { go_on, done, check_residual, failed };
   // What one step's Newton iterations carry from one to the next.
   struct NewtonState {
-    double first = 0;              // |dq| of the first iteration since the last factorisation
-    int since = 0;                 // iterations since then
-    bool fresh_this_step = false;  // a factorisation of this step's matrix
-    int newton_since_fresh = 0;    // Newton iterations since this step's last factorisation
-    int whole_in_a_row = 0;        // updates taken whole in a row (hybrid)
-    bool exact_now = false;        // hybrid: switched to the exact Hessian
+    double first = 0;                                      // |dq| of the first iteration since the last factorisation
+    int since = 0;                                         // iterations since then
+    bool fresh_this_step = false;                          // a factorisation of this step's matrix
+    int newton_since_fresh = 0;                            // Newton iterations since this step's last factorisation
+    int whole_in_a_row = 0;                                // updates taken whole in a row (hybrid)
+    bool exact_now = false;                                // hybrid: switched to the exact Hessian
     double Vq = std::numeric_limits<double>::quiet_NaN();  // V(q), when known
   };
 
@@ -374,8 +386,8 @@ struct BackwardEuler::Impl {
       if (found == Search::retry_fresh) continue;
       if (found == Search::failed) return false;
       if (trace_from <= t1)
-        std::fprintf(stderr, "newton t=%.9g it=%d fresh=%d shift=%g |dq|=%.3e tol=%.3e alpha=%g slope=%.3e |R|=%.3e\n", t1,
-                     it, static_cast<int>(fresh), shift, size, tol, alpha, slope, w.R1.norm());
+        std::fprintf(stderr, "newton t=%.9g it=%d fresh=%d shift=%g |dq|=%.3e tol=%.3e alpha=%g slope=%.3e |R|=%.3e\n",
+                     t1, it, static_cast<int>(fresh), shift, size, tol, alpha, slope, w.R1.norm());
       if (!take_update(alpha, q, lambda, ns)) {
         reason = "Newton produced a non-finite state";
         return false;
@@ -408,8 +420,8 @@ struct BackwardEuler::Impl {
   // contraction rate of the current matrix (from its first update in this step on: slow, a fresh
   // matrix for the next step; a reused one that no longer contracts fails the attempt, and step()
   // redoes it with fresh ones) and Newton's test. A cut update is never the last.
-  NewtonTest after_update(bool fresh, int it, double alpha, double size, double tol, const VectorXd& lambda, NewtonState& ns,
-                          std::string& reason) {
+  NewtonTest after_update(bool fresh, int it, double alpha, double size, double tol, const VectorXd& lambda,
+                          NewtonState& ns, std::string& reason) {
     ns.whole_in_a_row = alpha < 1.0 ? 0 : ns.whole_in_a_row + 1;
     if (opt.exact_near_solution && line_search && ns.whole_in_a_row == 2 && !ns.exact_now) {
       sys.set_hessian_projection(false);  // near the solution: the exact Hessian from here on
@@ -417,7 +429,7 @@ struct BackwardEuler::Impl {
       refresh = true;
     }
     if (alpha < 1.0) return NewtonTest::go_on;  // the next iteration factors afresh
-    if (fresh || it == 0) {  // the rate is measured from the last factorisation on
+    if (fresh || it == 0) {                     // the rate is measured from the last factorisation on
       ns.first = size;
       ns.since = 0;
     } else {
@@ -455,8 +467,10 @@ struct BackwardEuler::Impl {
   // the extrapolated velocity can overshoot by far.
   void predict(double t1, double h, const VectorXd& qn, const VectorXd& vn, const VectorXd& qt, const VectorXd& lambda,
                VectorXd& q) {
-    if (have_previous && !opt.semi_implicit) q = qn + h * (2 * vn - v_previous);
-    else q = qt;
+    if (have_previous && !opt.semi_implicit)
+      q = qn + h * (2 * vn - v_previous);
+    else
+      q = qt;
     if (line_search && have_previous && !opt.semi_implicit) {
       const VectorXd w = 2.0 * lambda.cwiseAbs();
       double V;
@@ -498,8 +512,8 @@ struct BackwardEuler::Impl {
   // shifted by more inertia (shift M / h^2), and a reused matrix that gives no descent asks for a
   // fresh one (redo). slope: the l1 merit's slope along dq (line search only).
   enum class Direction { ok, redo, failed };
-  Direction newton_direction(bool fresh, double h, const VectorXd& lambda, double& shift, double& slope, NewtonState& ns,
-                             std::string& reason) {
+  Direction newton_direction(bool fresh, double h, const VectorXd& lambda, double& shift, double& slope,
+                             NewtonState& ns, std::string& reason) {
     Work& w = work;
     for (;;) {
       if (fresh) {
@@ -576,8 +590,8 @@ struct BackwardEuler::Impl {
   // fresh one (retry_fresh); a cut search asks for a fresh matrix at the next iteration. Vq: V(q)
   // when known, V at the point taken on return.
   enum class Search { taken, retry_fresh, failed };
-  Search search_along(double t1, double h, const VectorXd& q, const VectorXd& qn, const VectorXd& qt, bool fresh, double slope,
-                      double& Vq, double& alpha) {
+  Search search_along(double t1, double h, const VectorXd& q, const VectorXd& qn, const VectorXd& qt, bool fresh,
+                      double slope, double& Vq, double& alpha) {
     Work& w = work;
     if (!std::isfinite(Vq) && !sys.potential(t1, q, Vq)) Vq = std::numeric_limits<double>::infinity();
     const double phi_q = phi(h, Vq, q, qn, qt);
@@ -617,7 +631,8 @@ struct BackwardEuler::Impl {
       return Search::taken;
     }
     const Search found = search_along(t1, h, q, qn, qt, fresh, slope, ns.Vq, alpha);
-    if (found == Search::failed) reason = "the line search found no decrease of the merit function along Newton's direction";
+    if (found == Search::failed)
+      reason = "the line search found no decrease of the merit function along Newton's direction";
     return found;
   }
 
@@ -708,7 +723,8 @@ RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
     return true;
   };
   auto sample = [&]() {
-    return RunStats::FrameSample{s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 1, h};
+    return RunStats::FrameSample{
+        s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 1, h};
   };
   // Frames between steps: the interpolation projected back onto the constraints (as IDA's frames).
   FrameCorrection between;

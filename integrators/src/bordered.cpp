@@ -2,8 +2,8 @@
 
 namespace isochor {
 
-BorderedSolver::BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows, SymmetricSolverKind kind,
-                               double tol)
+BorderedSolver::BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows,
+                               SymmetricSolverKind kind, double tol)
     : rows_(rows), n_(A.n), m_(static_cast<Index>(rows.size())), A_(make_symmetric_solver(A, kind, tol)) {
   Gt_.setZero(n_, m_);
   Z_.setZero(n_, m_);

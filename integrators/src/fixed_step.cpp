@@ -26,7 +26,8 @@ void run_fixed_steps(const std::vector<double>& times, double h, long max_steps,
     const double t1 = t0 + static_cast<double>(stats.steps + 1) * h;
     if (!step(t, t1, q, v, q1, v1, l1, reason)) {
       stats.wall_seconds = seconds_since(wall0);
-      throw IntegrationError(t1, reason + " (step " + std::to_string(stats.steps + 1) + ", h = " + std::to_string(h) + " s)");
+      throw IntegrationError(
+          t1, reason + " (step " + std::to_string(stats.steps + 1) + ", h = " + std::to_string(h) + " s)");
     }
     if (++stats.steps > max_steps) throw IntegrationError(t1, "more than " + std::to_string(max_steps) + " steps");
     while (k < times.size() && times[k] <= t1 + 1e-9 * h) {

@@ -43,10 +43,12 @@ RunStats HongStep::run(const std::vector<double>& times, const FrameCallback& on
       sys_.constraint_jacobian(t, q, G, &gt);
       for (Index j = 0; j < m; ++j) {
         b[j] = g[j] / (h * h) + gt[j] / h;
-        for (std::size_t k = 0; k < rows[j].size(); ++k) b[j] += G[j][k] * (v[rows[j][k]] / h + f[rows[j][k]] / M[rows[j][k]]);
+        for (std::size_t k = 0; k < rows[j].size(); ++k)
+          b[j] += G[j][k] * (v[rows[j][k]] / h + f[rows[j][k]] / M[rows[j][k]]);
       }
       for (Index k = 0; k < m; ++k) {
-        for (std::size_t i = 0; i < rows[k].size(); ++i) c[rows[k][i]] = weight(k, rows[k][i]) * G[k][i] / M[rows[k][i]];
+        for (std::size_t i = 0; i < rows[k].size(); ++i)
+          c[rows[k][i]] = weight(k, rows[k][i]) * G[k][i] / M[rows[k][i]];
         for (Index j = 0; j < m; ++j) {
           double s = 0;
           for (std::size_t i = 0; i < rows[j].size(); ++i) s += G[j][i] * c[rows[j][i]];

@@ -80,7 +80,9 @@ struct IdaIntegrator::Impl {
     if (colon == std::string::npos || colon == 0 || colon + 1 == v.size() || end != v.c_str() + colon)
       throw Error("ISOCHOR_CAPTURE_S: expected TIME:PATH, got \"" + v + "\"");
     if (opt.linear_solver == LinearSolverKind::klu)
-      throw Error("ISOCHOR_CAPTURE_S: captures the effective stiffness S of linear_solver = \"reduced\", \"krylov\" or \"amg\", not \"klu\"");
+      throw Error(
+          "ISOCHOR_CAPTURE_S: captures the effective stiffness S of linear_solver = \"reduced\", \"krylov\" or "
+          "\"amg\", not \"klu\"");
     capture_path = v.substr(colon + 1);
   }
 
@@ -90,9 +92,8 @@ struct IdaIntegrator::Impl {
     if (opt.linear_solver != LinearSolverKind::klu)
       // CG's residual below what IDA's Newton test can see: 1e-6 rtol, at most 1e-12
       // (docs/decisions.md), unless the scene sets integrator.linear_tol.
-      reduced = std::make_unique<ReducedSolver>(
-          ggl, symmetric_solver_of(opt.linear_solver),
-          opt.linear_tol > 0 ? opt.linear_tol : std::min(1e-12, 1e-6 * opt.rtol));
+      reduced = std::make_unique<ReducedSolver>(ggl, symmetric_solver_of(opt.linear_solver),
+                                                opt.linear_tol > 0 ? opt.linear_tol : std::min(1e-12, 1e-6 * opt.rtol));
     else if (opt.ordering == KluOrdering::metis) {
       check_groups(sys, "KLU's METIS ordering (integrator.ordering = \"metis\")");
       const auto t0 = Clock::now();
@@ -114,7 +115,8 @@ struct IdaIntegrator::Impl {
         const int b = i < n ? 0 : i < 2 * n ? 1 : i < 2 * n + m ? 2 : 3;
         mx[b] = std::max(mx[b], std::abs(r[i]));
       }
-      std::fprintf(stderr, "ida   res t=%.9g |Fq|=%.3g |Fv|=%.3g |Fg|=%.3g |Fgv|=%.3g\n", t, mx[0], mx[1], mx[2], mx[3]);
+      std::fprintf(stderr, "ida   res t=%.9g |Fq|=%.3g |Fv|=%.3g |Fg|=%.3g |Fgv|=%.3g\n", t, mx[0], mx[1], mx[2],
+                   mx[3]);
     }
     return ok ? 0 : 1;  // not finite: recoverable, IDA retries with a smaller step
   }
@@ -184,8 +186,8 @@ int res_fn(sunrealtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* data) {
   auto& s = *static_cast<Impl*>(data);
   return guarded(s.caught, [&] { return s.residual(t, yy, yp, rr); });
 }
-int jac_fn(sunrealtype t, sunrealtype cj, N_Vector yy, N_Vector yp, N_Vector, SUNMatrix J, void* data, N_Vector, N_Vector,
-           N_Vector) {
+int jac_fn(sunrealtype t, sunrealtype cj, N_Vector yy, N_Vector yp, N_Vector, SUNMatrix J, void* data, N_Vector,
+           N_Vector, N_Vector) {
   auto& s = *static_cast<Impl*>(data);
   return guarded(s.caught, [&] { return s.jacobian(t, cj, yy, yp, J); });
 }
@@ -364,7 +366,7 @@ void create_ida(Impl& s, double t0, double t_end, const VectorXd& q0, const Vect
   check(IDASetMaxOrd(mem, s.opt.max_order), "IDASetMaxOrd", t0);
   check(IDASetMaxNonlinIters(mem, s.opt.max_newton), "IDASetMaxNonlinIters", t0);
   if (s.opt.max_step > 0) check(IDASetMaxStep(mem, s.opt.max_step), "IDASetMaxStep", t0);
-  const double h0 = s.opt.initial_step > 0 ? s.opt.initial_step
+  const double h0 = s.opt.initial_step > 0        ? s.opt.initial_step
                     : a0.size() > 0 && t_end > t0 ? first_step(s, q0, a0, t_end - t0)
                                                   : 0.0;
   if (h0 > 0) check(IDASetInitStep(mem, h0), "IDASetInitStep", t0);
@@ -385,7 +387,8 @@ void attach_linear_solver(Impl& s, double t0) {
     if (s.opt.ordering == KluOrdering::metis)
       use_klu_order(s.klu, &s.order);
     else
-      check(SUNLinSol_KLUSetOrdering(s.klu, s.opt.ordering == KluOrdering::amd ? 0 : 1), "SUNLinSol_KLUSetOrdering", t0);
+      check(SUNLinSol_KLUSetOrdering(s.klu, s.opt.ordering == KluOrdering::amd ? 0 : 1), "SUNLinSol_KLUSetOrdering",
+            t0);
     check(SUNLinSolInitialize(s.klu), "SUNLinSolInitialize", t0);
     s.LS_owner = make_custom_linear_solver(s.ctx, &s, timed_klu_setup, timed_klu_solve);
   }
@@ -408,8 +411,8 @@ void collect(Impl& s, double t) {
   double h = 0;
   check(IDAGetLastOrder(mem, &order), "IDAGetLastOrder", t);
   check(IDAGetLastStep(mem, &h), "IDAGetLastStep", t);
-  s.stats.frames.push_back({s.stats.steps, s.stats.newton_iterations, s.stats.error_test_failures, s.stats.newton_failures,
-                            s.stats.jacobian_evals, order, h});
+  s.stats.frames.push_back({s.stats.steps, s.stats.newton_iterations, s.stats.error_test_failures,
+                            s.stats.newton_failures, s.stats.jacobian_evals, order, h});
 }
 
 // ISOCHOR_TRACE_IDA=T: one line per step ending after time T, on stderr: the step, order,
@@ -443,9 +446,9 @@ void trace_step(Impl& s, double t) {
   const std::size_t k3 = std::min<std::size_t>(3, top.size());
   std::partial_sort(top.begin(), top.begin() + static_cast<std::ptrdiff_t>(k3), top.end(),
                     [](const auto& a, const auto& b) { return a.first > b.first; });
-  std::fprintf(stderr, "ida t=%.9g h=%.3g k=%d steps=%ld netf=%ld ncfn=%ld nni=%ld err=%.3g q=%.2f v=%.2f top:", t, h, order,
-               nst, netf, ncfn, nni, std::sqrt(total / static_cast<double>(N)), share[0] / std::max(total, 1e-300),
-               share[1] / std::max(total, 1e-300));
+  std::fprintf(stderr, "ida t=%.9g h=%.3g k=%d steps=%ld netf=%ld ncfn=%ld nni=%ld err=%.3g q=%.2f v=%.2f top:", t, h,
+               order, nst, netf, ncfn, nni, std::sqrt(total / static_cast<double>(N)),
+               share[0] / std::max(total, 1e-300), share[1] / std::max(total, 1e-300));
   for (std::size_t j = 0; j < k3; ++j) {
     const Index i = top[j].second % n;
     std::fprintf(stderr, " %ld.%ld%s(%.2f)", static_cast<long>(i / 3), static_cast<long>(i % 3),
@@ -508,10 +511,11 @@ void check_progress(Impl& s) {
   s.stalled = std::abs(h) < kStall * s.frame_interval ? s.stalled + 1 : 0;
   if (s.stalled >= kStallSteps) {
     char buf[240];
-    std::snprintf(buf, sizeof buf,
-                  "no progress: %ld steps in a row below %g of the frame interval (the last step %.3g s; the model or its "
-                  "state is too stiff to integrate, e.g. a body starting inside a contact or an inverted mesh)",
-                  kStallSteps, kStall, h);
+    std::snprintf(
+        buf, sizeof buf,
+        "no progress: %ld steps in a row below %g of the frame interval (the last step %.3g s; the model or its "
+        "state is too stiff to integrate, e.g. a body starting inside a contact or an inverted mesh)",
+        kStallSteps, kStall, h);
     throw IntegrationError(s.tcur, buf);
   }
 }
@@ -567,9 +571,11 @@ void IdaIntegrator::begin(const std::vector<double>& times, const FrameCallback&
   VectorXd q0, v0, a0, l0;
   consistent_initial_state(s.sys, t0, q0, v0, a0, l0);
   if (!s.reduced && constraints_dependent(s.sys, t0, q0))
-    throw IntegrationError(t0, "the constraints are linearly dependent (e.g. zones.global together with zones that partition the "
-                               "mesh), which makes the matrix that KLU factors singular: remove the redundant zones, or set "
-                               "integrator.linear_solver = \"reduced\" or \"krylov\", which take the multipliers of smallest norm");
+    throw IntegrationError(
+        t0,
+        "the constraints are linearly dependent (e.g. zones.global together with zones that partition the "
+        "mesh), which makes the matrix that KLU factors singular: remove the redundant zones, or set "
+        "integrator.linear_solver = \"reduced\" or \"krylov\", which take the multipliers of smallest norm");
   s.running = true;
   s.context = sun::make_context(t0);
   s.ctx = s.context.get();

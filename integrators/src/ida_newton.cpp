@@ -40,7 +40,8 @@ int test(Newton& c, double norm, double tol) {
   return c.ss * norm <= tol ? sun::kSuccess : SUN_NLS_CONTINUE;
 }
 
-int solve(SUNNonlinearSolver s, N_Vector, N_Vector ycor, N_Vector w, sunrealtype tol, sunbooleantype call_setup, void* mem) {
+int solve(SUNNonlinearSolver s, N_Vector, N_Vector ycor, N_Vector w, sunrealtype tol, sunbooleantype call_setup,
+          void* mem) {
   Newton& c = content(s);
   c.iters = 0;
   c.conv_fails = 0;
@@ -127,7 +128,9 @@ int set_lsolve(SUNNonlinearSolver s, SUNNonlinSolLSolveFn f) {
   return f ? sun::kSuccess : sun::kNonlinearIllInput;
 }
 // IDA hands its own test (and its memory); this solver uses its own (above) instead.
-int set_ctest(SUNNonlinearSolver, SUNNonlinSolConvTestFn f, void*) { return f ? sun::kSuccess : sun::kNonlinearIllInput; }
+int set_ctest(SUNNonlinearSolver, SUNNonlinSolConvTestFn f, void*) {
+  return f ? sun::kSuccess : sun::kNonlinearIllInput;
+}
 int set_max_iters(SUNNonlinearSolver s, int n) {
   if (n < 1) return sun::kNonlinearIllInput;
   content(s).max_iters = n;

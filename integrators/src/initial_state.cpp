@@ -16,8 +16,8 @@ void check_groups(const ConstrainedSystem& sys, const std::string& who) {
   const Index n = sys.num_dofs(), per = sys.dofs_per_group();
   if (n % per != 0)
     throw Error(who + " orders the dofs by groups of dofs_per_group() = " + std::to_string(per) +
-                                ", but the system has " + std::to_string(n) +
-                                " dofs, not a multiple of it (override dofs_per_group() for groups other than x, y, z)");
+                ", but the system has " + std::to_string(n) +
+                " dofs, not a multiple of it (override dofs_per_group() for groups other than x, y, z)");
 }
 
 void check_system(const ConstrainedSystem& sys) {
@@ -27,10 +27,11 @@ void check_system(const ConstrainedSystem& sys) {
     throw Error("the system's mass() must hold " + std::to_string(n) + " positive entries");
   if (static_cast<Index>(sys.constraint_rows().size()) != sys.num_constraints())
     throw Error("the system's constraint_rows() must hold num_constraints() = " +
-                                std::to_string(sys.num_constraints()) + " rows");
+                std::to_string(sys.num_constraints()) + " rows");
   for (const auto& row : sys.constraint_rows())
     for (Index d : row)
-      if (d < 0 || d >= n) throw Error("a constraint row names dof " + std::to_string(d) + " outside 0.." + std::to_string(n - 1));
+      if (d < 0 || d >= n)
+        throw Error("a constraint row names dof " + std::to_string(d) + " outside 0.." + std::to_string(n - 1));
 }
 
 namespace {
@@ -38,7 +39,8 @@ namespace {
 Eigen::SparseMatrix<double> sparse_rows(const ConstrainedSystem& sys, const std::vector<std::vector<double>>& G) {
   std::vector<Eigen::Triplet<double>> tr;
   for (std::size_t j = 0; j < G.size(); ++j)
-    for (std::size_t k = 0; k < G[j].size(); ++k) tr.emplace_back(static_cast<Index>(j), sys.constraint_rows()[j][k], G[j][k]);
+    for (std::size_t k = 0; k < G[j].size(); ++k)
+      tr.emplace_back(static_cast<Index>(j), sys.constraint_rows()[j][k], G[j][k]);
   Eigen::SparseMatrix<double> S(sys.num_constraints(), sys.num_dofs());
   S.setFromTriplets(tr.begin(), tr.end());
   return S;
@@ -67,12 +69,16 @@ class GramSolver {
     if (ldlt_.info() == Eigen::Success && d.size() && d.minCoeff() > 1e-12 * d.maxCoeff()) return;
     dependent_ = true;
     if (A.rows() > kDenseLimit) {
-      const double scale = d.size() && std::isfinite(d.maxCoeff()) && d.maxCoeff() > 0 ? d.maxCoeff() : A.diagonal().cwiseAbs().maxCoeff();
+      const double scale = d.size() && std::isfinite(d.maxCoeff()) && d.maxCoeff() > 0
+                               ? d.maxCoeff()
+                               : A.diagonal().cwiseAbs().maxCoeff();
       Eigen::SparseMatrix<double> I(A.rows(), A.cols());
       I.setIdentity();
       ldlt_.compute(A + 1e-12 * scale * I);
       if (ldlt_.info() != Eigen::Success)
-        throw Error(std::to_string(A.rows()) + " constraints that are linearly dependent (e.g. zones.global together with zones that partition the mesh): remove the redundant zones");
+        throw Error(std::to_string(A.rows()) +
+                    " constraints that are linearly dependent (e.g. zones.global together with zones that partition "
+                    "the mesh): remove the redundant zones");
       return;
     }
     dense_ = true;
@@ -104,7 +110,8 @@ bool constraints_dependent(ConstrainedSystem& sys, double t, const VectorXd& q) 
 
 double constraint_error(const ConstrainedSystem& sys, const VectorXd& g) {
   double worst = 0;
-  for (Index j = 0; j < g.size(); ++j) worst = std::max(worst, std::abs(g[j]) / sys.constraint_scale(static_cast<int>(j)));
+  for (Index j = 0; j < g.size(); ++j)
+    worst = std::max(worst, std::abs(g[j]) / sys.constraint_scale(static_cast<int>(j)));
   return worst;
 }
 
@@ -134,7 +141,8 @@ void project_state(ConstrainedSystem& sys, double t, VectorXd& q, VectorXd& v) {
   v -= Minv.asDiagonal() * (S.transpose() * GramSolver(S, Minv).solve(VectorXd(S * v + gt)));
 }
 
-void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, VectorXd& v, VectorXd& a, VectorXd& lambda) {
+void consistent_initial_state(ConstrainedSystem& sys, double t0, VectorXd& q, VectorXd& v, VectorXd& a,
+                              VectorXd& lambda) {
   const Index n = sys.num_dofs(), m = sys.num_constraints();
   sys.initial_state(t0, q, v);
   const VectorXd Minv = sys.mass().cwiseInverse();

@@ -6,10 +6,14 @@ namespace isochor {
 
 const char* to_string(LinearSolverKind k) {
   switch (k) {
-    case LinearSolverKind::klu: return "klu";
-    case LinearSolverKind::reduced: return "reduced";
-    case LinearSolverKind::krylov: return "krylov";
-    case LinearSolverKind::amg: return "amg";
+    case LinearSolverKind::klu:
+      return "klu";
+    case LinearSolverKind::reduced:
+      return "reduced";
+    case LinearSolverKind::krylov:
+      return "krylov";
+    case LinearSolverKind::amg:
+      return "amg";
   }
   return "?";
 }

@@ -71,8 +71,6 @@ bool KktFactor::factor(const double* values) {
   return numeric_ && common_.status == KLU_OK;
 }
 
-void KktFactor::solve(double* rhs) const {
-  klu_l_solve(symbolic_, numeric_, layout_.p.n, 1, rhs, &common_);
-}
+void KktFactor::solve(double* rhs) const { klu_l_solve(symbolic_, numeric_, layout_.p.n, 1, rhs, &common_); }
 
 }  // namespace isochor

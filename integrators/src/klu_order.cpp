@@ -38,7 +38,7 @@ std::vector<Index> metis_order(const SparsePattern& K, int per_group, Index n, i
   const Index m = static_cast<Index>(rows.size());
   std::vector<Index> position(groups);  // new position of each group
   for (Index k = 0; k < groups; ++k) position[perm[k]] = k;
-  constexpr std::size_t kLocal = 64;     // constraints on at most this many groups are local
+  constexpr std::size_t kLocal = 64;              // constraints on at most this many groups are local
   std::vector<std::vector<Index>> after(groups);  // constraints placed after each group
   std::vector<Index> last;
   for (Index j = 0; j < m; ++j) {
@@ -51,8 +51,10 @@ std::vector<Index> metis_order(const SparsePattern& K, int per_group, Index n, i
         ++count;
         latest = std::max(latest, position[previous]);
       }
-    if (count <= kLocal && latest >= 0) after[perm[latest]].push_back(j);
-    else last.push_back(j);
+    if (count <= kLocal && latest >= 0)
+      after[perm[latest]].push_back(j);
+    else
+      last.push_back(j);
   }
   std::vector<Index> order;
   order.reserve(copies * n + tail_blocks * m);

@@ -182,11 +182,15 @@ class BlockJacobiPcg : public SymmetricSolver {
 
 }  // namespace
 
-std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, SymmetricSolverKind kind, double tol) {
+std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, SymmetricSolverKind kind,
+                                                       double tol) {
   switch (kind) {
-    case SymmetricSolverKind::pcg: return std::make_unique<BlockJacobiPcg>(pattern, tol);
-    case SymmetricSolverKind::amg: return make_amg_solver(pattern, tol);
-    case SymmetricSolverKind::cholmod: return std::make_unique<SymmetricFactor>(pattern);
+    case SymmetricSolverKind::pcg:
+      return std::make_unique<BlockJacobiPcg>(pattern, tol);
+    case SymmetricSolverKind::amg:
+      return make_amg_solver(pattern, tol);
+    case SymmetricSolverKind::cholmod:
+      return std::make_unique<SymmetricFactor>(pattern);
   }
   return nullptr;
 }

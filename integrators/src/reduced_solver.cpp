@@ -68,7 +68,11 @@ struct ReducedSolver::Impl {
     return use_direct;
   }
   Impl(const GglForm& f, SymmetricSolverKind kind, double pcg_tol)
-      : form(f), n(f.n()), m(f.m()), S(make_symmetric_solver(f.system().pattern(), kind, pcg_tol)), fallback(kind != SymmetricSolverKind::cholmod) {
+      : form(f),
+        n(f.n()),
+        m(f.m()),
+        S(make_symmetric_solver(f.system().pattern(), kind, pcg_tol)),
+        fallback(kind != SymmetricSolverKind::cholmod) {
     Sx.resize(f.system().pattern().nnz());
     Ax.resize(Sx.size());
     Gt.setZero(n, m), W.setZero(n, m), Z1.setZero(n, m), Z2.setZero(n, m), Z3.setZero(n, m), Bt.setZero(n, m);
@@ -210,7 +214,8 @@ bool ReducedSolver::can_retarget() const { return !impl_->use_direct && impl_->S
 bool ReducedSolver::retarget(double cj, double* vals) {
   Impl& s = *impl_;
   if (cj == s.cj) return true;
-  if (!can_retarget() || (vals && vals != s.vals)) throw Error("ReducedSolver::retarget: not after this setup's factor");
+  if (!can_retarget() || (vals && vals != s.vals))
+    throw Error("ReducedSolver::retarget: not after this setup's factor");
   const GglForm& f = s.form;
   const VectorXd& M = f.system().mass();
   const double d = cj - s.cj, ratio = cj / s.cj;

@@ -17,11 +17,11 @@ struct SymmetricFactor::Impl {
   cholmod_factor* Lsup = nullptr;  // supernodal LL^T (BLAS-3)
   cholmod_factor* Lldl = nullptr;  // simplicial LDL^T, for an indefinite matrix
   cholmod_dense *B = nullptr, *X = nullptr, *Y = nullptr, *E = nullptr;
-  bool ldlt = false;     // the last factorisation was LDL^T
-  bool refuse = false;   // refuse_indefinite(): no LDL^T
-  int since_ldlt = 0;    // factorisations in LDL^T mode since LL^T was last tried
+  bool ldlt = false;    // the last factorisation was LDL^T
+  bool refuse = false;  // refuse_indefinite(): no LDL^T
+  int since_ldlt = 0;   // factorisations in LDL^T mode since LL^T was last tried
   static constexpr int kRetry = 8;
-  double analyse = 0;  // seconds in cholmod_l_analyze (METIS ordering and symbolic factorisation)
+  double analyse = 0;             // seconds in cholmod_l_analyze (METIS ordering and symbolic factorisation)
   double flops = 0, entries = 0;  // of the supernodal LL^T, from its analysis
   cholmod_factor* analyze_ll() {
     cholmod_factor* f = analyze();

@@ -26,7 +26,7 @@ struct StaticSolver::Impl {
   ConstrainedSystem& sys;
   StaticOptions opt;
   Index n, m;
-  KktLayout kkt;                                 // (n + m) KKT pattern and slots
+  KktLayout kkt;  // (n + m) KKT pattern and slots
   std::vector<double> K;
   std::vector<std::vector<double>> G;
   VectorXd q, v0, lambda, f, g;
@@ -43,12 +43,16 @@ struct StaticSolver::Impl {
   std::unique_ptr<void, KinFree> kin;
   SUNContext ctx = nullptr;
   void* mem = nullptr;
-  std::exception_ptr caught;  // thrown inside a callback, rethrown when KINSOL returns
-  std::vector<Index> order;  // METIS order for KLU
+  std::exception_ptr caught;                 // thrown inside a callback, rethrown when KINSOL returns
+  std::vector<Index> order;                  // METIS order for KLU
   std::unique_ptr<BorderedSolver> bordered;  // reduced/krylov: A = K + H_lambda and the borders
 
   Impl(ConstrainedSystem& s, StaticOptions o)
-      : sys(s), opt(o), n((check_system(s), s.num_dofs())), m(s.num_constraints()), kkt(s.pattern(), s.constraint_rows()) {
+      : sys(s),
+        opt(o),
+        n((check_system(s), s.num_dofs())),
+        m(s.num_constraints()),
+        kkt(s.pattern(), s.constraint_rows()) {
     const SparsePattern& S = sys.pattern();
     G.resize(m);
     for (Index j = 0; j < m; ++j) G[j].resize(sys.constraint_rows()[j].size());
@@ -115,25 +119,25 @@ int kin_jac(N_Vector u, N_Vector, SUNMatrix J, void* data, N_Vector, N_Vector) {
 int bordered_setup(SUNLinearSolver LS, SUNMatrix) {
   auto& s = *static_cast<StaticSolver::Impl*>(LS->content);
   return guarded(s.caught, [&] {
-  const auto t0 = Clock::now();
-  const bool ok = s.bordered->factor(s.K.data()) && s.bordered->set_borders(s.G);
-  s.stats.factor_seconds += seconds_since(t0);
-  s.stats.fresh_factorisations++;
-  s.stats.factor_nnz = s.bordered->symmetric().factor_nnz();
-  s.stats.symbolic_seconds = s.bordered->symmetric().analyse_seconds();
-  return ok ? sun::kSuccess : sun::kLinearFailUnrecoverable;
+    const auto t0 = Clock::now();
+    const bool ok = s.bordered->factor(s.K.data()) && s.bordered->set_borders(s.G);
+    s.stats.factor_seconds += seconds_since(t0);
+    s.stats.fresh_factorisations++;
+    s.stats.factor_nnz = s.bordered->symmetric().factor_nnz();
+    s.stats.symbolic_seconds = s.bordered->symmetric().analyse_seconds();
+    return ok ? sun::kSuccess : sun::kLinearFailUnrecoverable;
   });
 }
 int bordered_solve(SUNLinearSolver LS, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) {
   auto& s = *static_cast<StaticSolver::Impl*>(LS->content);
   return guarded(s.caught, [&] {
-  const auto t0 = Clock::now();
-  const double* r = N_VGetArrayPointer(b);
-  double* y = N_VGetArrayPointer(x);
-  const bool ok = s.bordered->solve(r, r + s.n, y, y + s.n);
-  s.stats.solve_seconds += seconds_since(t0);
-  s.stats.linear_iterations = s.bordered->symmetric().iterations();
-  return ok ? sun::kSuccess : sun::kLinearFailUnrecoverable;
+    const auto t0 = Clock::now();
+    const double* r = N_VGetArrayPointer(b);
+    double* y = N_VGetArrayPointer(x);
+    const bool ok = s.bordered->solve(r, r + s.n, y, y + s.n);
+    s.stats.solve_seconds += seconds_since(t0);
+    s.stats.linear_iterations = s.bordered->symmetric().iterations();
+    return ok ? sun::kSuccess : sun::kLinearFailUnrecoverable;
   });
 }
 }  // namespace
@@ -237,7 +241,8 @@ void increment(Impl& s, double from, double to, int depth) {
   char* name = KINGetReturnFlagName(flag);
   std::string reason = std::string(name ? name : "KINSOL failure") + ", scaled residual " + std::to_string(fnorm);
   if (s.opt.substeps_on_failure > 0)
-    reason += " (from pseudo-time " + std::to_string(from) + ", after " + std::to_string(depth) + " halvings of the increment)";
+    reason += " (from pseudo-time " + std::to_string(from) + ", after " + std::to_string(depth) +
+              " halvings of the increment)";
   free(name);
   throw IntegrationError(to, reason);
 }
@@ -271,8 +276,8 @@ RunStats StaticSolver::run(const std::vector<double>& times, const FrameCallback
       s.stats.frames.push_back(
           {s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 0, fnorm});
       const double* y = N_VGetArrayPointer(s.u.get());
-      on_frame(static_cast<int>(k), s.t, Eigen::Map<const VectorXd>(y, s.n), s.v0, Eigen::Map<const VectorXd>(y + s.n, s.m),
-               s.stats.frames.back());
+      on_frame(static_cast<int>(k), s.t, Eigen::Map<const VectorXd>(y, s.n), s.v0,
+               Eigen::Map<const VectorXd>(y + s.n, s.m), s.stats.frames.back());
     }
   } catch (...) {
     s.stats.wall_seconds = seconds_since(wall0);

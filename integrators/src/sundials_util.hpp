@@ -29,7 +29,6 @@ T* check_ptr(T* p, const char* function) {
   return p;
 }
 
-
 // Owners of SUNDIALS' objects, each released by its destroy function. Declared in the order
 // they are made (context, vectors, matrix, solvers, solver memory), they are released in reverse.
 namespace sun {
@@ -45,7 +44,8 @@ inline void free_linear_solver(SUNLinearSolver s) { SUNLinSolFree(s); }
 using Context = std::unique_ptr<std::remove_pointer_t<SUNContext>, Release<SUNContext, free_context>>;
 using Vector = std::unique_ptr<std::remove_pointer_t<N_Vector>, Release<N_Vector, N_VDestroy>>;
 using Matrix = std::unique_ptr<std::remove_pointer_t<SUNMatrix>, Release<SUNMatrix, SUNMatDestroy>>;
-using LinearSolver = std::unique_ptr<std::remove_pointer_t<SUNLinearSolver>, Release<SUNLinearSolver, free_linear_solver>>;
+using LinearSolver =
+    std::unique_ptr<std::remove_pointer_t<SUNLinearSolver>, Release<SUNLinearSolver, free_linear_solver>>;
 using NonlinearSolver =
     std::unique_ptr<std::remove_pointer_t<SUNNonlinearSolver>, Release<SUNNonlinearSolver, free_nonlinear_solver>>;
 // A new context (IntegrationError if SUNDIALS cannot make one). quiet: SUNDIALS 7 prints no error

@@ -38,7 +38,8 @@ RunStats Xpbd::run(const std::vector<double>& times, const FrameCallback& on_fra
           const double at = sys_.compliance(c) / (h * h);
           double denom = at;
           for (std::size_t p = 0; p < pts.size(); ++p)
-            denom += w[pts[p]] * (grad[3 * p] * grad[3 * p] + grad[3 * p + 1] * grad[3 * p + 1] + grad[3 * p + 2] * grad[3 * p + 2]);
+            denom += w[pts[p]] * (grad[3 * p] * grad[3 * p] + grad[3 * p + 1] * grad[3 * p + 1] +
+                                  grad[3 * p + 2] * grad[3 * p + 2]);
           if (denom <= 0 || !std::isfinite(value)) continue;  // all points fixed, or a degenerate element
           const double dl = (-value - at * lambda[c]) / denom;
           lambda[c] += dl;

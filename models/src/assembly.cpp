@@ -98,7 +98,8 @@ ElementSchedule colour_elements(int num_nodes, const std::vector<std::vector<int
     std::vector<std::uint64_t> key(E);
     for (int e = 0; e < E; ++e) {
       const Vec3 u = (centroids->col(e) - lo).cwiseProduct(scale);
-      key[e] = morton(static_cast<std::uint64_t>(u.x()), static_cast<std::uint64_t>(u.y()), static_cast<std::uint64_t>(u.z()));
+      key[e] = morton(static_cast<std::uint64_t>(u.x()), static_cast<std::uint64_t>(u.y()),
+                      static_cast<std::uint64_t>(u.z()));
     }
     std::stable_sort(s.order.begin(), s.order.end(), [&](int a, int b) { return key[a] < key[b]; });
   }
@@ -241,8 +242,10 @@ double element_pass(const ElementPass& p, const Nodes& nodes, const Index* slots
   if (p.grad)
     for (int k = 0; k < N; ++k) p.grad->template segment<3>(3 * nodes[k]) += g.template segment<3>(3 * k);
   if (hess && p.project) project_psd(H);
-  if (p.values) scatter<D>(H, slots, p.scale, p.values, p.scale2, p.values2);
-  else if (p.values2) scatter<D>(H, slots, p.scale2, p.values2, 0.0, nullptr);
+  if (p.values)
+    scatter<D>(H, slots, p.scale, p.values, p.scale2, p.values2);
+  else if (p.values2)
+    scatter<D>(H, slots, p.scale2, p.values2, 0.0, nullptr);
   if (p.Kv)
     for (int k = 0; k < N; ++k) p.Kv->template segment<3>(3 * nodes[k]) += p.v_scale * Hv.template segment<3>(3 * k);
   return E;
@@ -253,35 +256,42 @@ double ElasticAssembly::evaluate(const Points& x, const ElementPass& p) const {
   // The gradient alone (every residual of an implicit integrator): one lean pass, the general
   // path's formulas without its 12- and 9-vectors: P = 2 W_I F + W_J cof F, node a gets V P b_a.
   const bool gradient_only = p.grad && !p.values && !p.values2 && !p.Kv;
-  const double tets = gradient_only ? for_each_coloured(tet_colours_, [&](int e) {
-    const Tet& t = tets_[e];
-    const TetShape& s = shapes_[e];
-    const Vec3 x0 = x.col(t[0]);
-    Mat3 Ds;
-    Ds << x.col(t[1]) - x0, x.col(t[2]) - x0, x.col(t[3]) - x0;
-    const Mat3 F = Ds * s.Dm_inv;
-    const Mat3 C = cofactor(F);
-    const InvariantDerivatives w = material_->first_invariants(F.squaredNorm(), F.col(0).dot(C.col(0)));
-    const Mat3 G = s.rest_volume * (((2.0 * w.W_I) * F + w.W_J * C) * s.Dm_inv.transpose());
-    Eigen::VectorXd& g = *p.grad;
-    g.segment<3>(3 * static_cast<Index>(t[0])) -= G.col(0) + G.col(1) + G.col(2);
-    for (int k = 1; k < 4; ++k) g.segment<3>(3 * static_cast<Index>(t[k])) += G.col(k - 1);
-    return s.rest_volume * w.W;
-  }) : for_each_coloured(tet_colours_, [&](int e) {
-    const Tet& t = tets_[e];
-    return element_pass<4>(p, t, tet_slots_.data() + 144 * static_cast<std::size_t>(e), [&](Vec12* g, Mat12* H, const Vec12* d, Vec12* Hd) {
-      return tet_energy(*material_, shapes_[e], gather(x, t), g, H, d, Hd);
-    });
-  });
+  const double tets =
+      gradient_only
+          ? for_each_coloured(tet_colours_,
+                              [&](int e) {
+                                const Tet& t = tets_[e];
+                                const TetShape& s = shapes_[e];
+                                const Vec3 x0 = x.col(t[0]);
+                                Mat3 Ds;
+                                Ds << x.col(t[1]) - x0, x.col(t[2]) - x0, x.col(t[3]) - x0;
+                                const Mat3 F = Ds * s.Dm_inv;
+                                const Mat3 C = cofactor(F);
+                                const InvariantDerivatives w =
+                                    material_->first_invariants(F.squaredNorm(), F.col(0).dot(C.col(0)));
+                                const Mat3 G = s.rest_volume * (((2.0 * w.W_I) * F + w.W_J * C) * s.Dm_inv.transpose());
+                                Eigen::VectorXd& g = *p.grad;
+                                g.segment<3>(3 * static_cast<Index>(t[0])) -= G.col(0) + G.col(1) + G.col(2);
+                                for (int k = 1; k < 4; ++k) g.segment<3>(3 * static_cast<Index>(t[k])) += G.col(k - 1);
+                                return s.rest_volume * w.W;
+                              })
+          : for_each_coloured(tet_colours_, [&](int e) {
+              const Tet& t = tets_[e];
+              return element_pass<4>(p, t, tet_slots_.data() + 144 * static_cast<std::size_t>(e),
+                                     [&](Vec12* g, Mat12* H, const Vec12* d, Vec12* Hd) {
+                                       return tet_energy(*material_, shapes_[e], gather(x, t), g, H, d, Hd);
+                                     });
+            });
   const double tris = for_each_coloured(tri_colours_, [&](int f) {
     const Tri& t = mesh_.surface()[f];
-    return element_pass<3>(p, t, tri_slots_.data() + 81 * static_cast<std::size_t>(f), [&](Vec9n* g, Mat9n* H, const Vec9n* d, Vec9n* Hd) {
-      Mat9n Hl;
-      Mat9n* Hp = H ? H : (Hd ? &Hl : nullptr);
-      const double E = epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), g, Hp);
-      if (Hd) *Hd = *Hp * *d;
-      return E;
-    });
+    return element_pass<3>(
+        p, t, tri_slots_.data() + 81 * static_cast<std::size_t>(f), [&](Vec9n* g, Mat9n* H, const Vec9n* d, Vec9n* Hd) {
+          Mat9n Hl;
+          Mat9n* Hp = H ? H : (Hd ? &Hl : nullptr);
+          const double E = epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), g, Hp);
+          if (Hd) *Hd = *Hp * *d;
+          return E;
+        });
   });
   return tets + tris;
 }
@@ -293,8 +303,8 @@ double ElasticAssembly::gradient(const Points& x, Eigen::VectorXd& grad) const {
   return evaluate(x, p);
 }
 
-void ElasticAssembly::add_hessian(const Points& x, double scale, double* values, double scale2,
-                                  double* values2, bool project) const {
+void ElasticAssembly::add_hessian(const Points& x, double scale, double* values, double scale2, double* values2,
+                                  bool project) const {
   ElementPass p;
   p.project = project;
   p.values = values;
@@ -322,8 +332,7 @@ void ElasticAssembly::pressures(const Points& x, std::vector<double>& p) const {
 
 int ElasticAssembly::inverted_tets(const Points& x) const {
   int n = 0;
-  for (const Tet& t : mesh_.tets())
-    n += tet_signed_volume(x.col(t[0]), x.col(t[1]), x.col(t[2]), x.col(t[3])) <= 0;
+  for (const Tet& t : mesh_.tets()) n += tet_signed_volume(x.col(t[0]), x.col(t[1]), x.col(t[2]), x.col(t[3])) <= 0;
   return n;
 }
 

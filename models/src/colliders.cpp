@@ -14,7 +14,8 @@ namespace {
 // half extents of the inner box; the rounding radius rho is subtracted by the caller): outside
 // the inner box |max(q, 0)|, inside max_i q_i. Gradient and Hessian with respect to q.
 template <int N>
-double rounded_box(const Eigen::Matrix<double, N, 1>& q, Eigen::Matrix<double, N, 1>& g, Eigen::Matrix<double, N, N>& H) {
+double rounded_box(const Eigen::Matrix<double, N, 1>& q, Eigen::Matrix<double, N, 1>& g,
+                   Eigen::Matrix<double, N, N>& H) {
   g.setZero();
   H.setZero();
   const Eigen::Matrix<double, N, 1> o = q.cwiseMax(0.0);
@@ -38,24 +39,36 @@ double sign_of(double v) { return v < 0 ? -1.0 : 1.0; }
 
 const char* ColliderShape::name() const {
   switch (kind) {
-    case Kind::plane: return "plane";
-    case Kind::sphere: return "sphere";
-    case Kind::capsule: return "capsule";
-    case Kind::box: return "box";
-    case Kind::cylinder: return wall > 0 ? "hollow cylinder" : "cylinder";
-    case Kind::mesh: return "mesh";
+    case Kind::plane:
+      return "plane";
+    case Kind::sphere:
+      return "sphere";
+    case Kind::capsule:
+      return "capsule";
+    case Kind::box:
+      return "box";
+    case Kind::cylinder:
+      return wall > 0 ? "hollow cylinder" : "cylinder";
+    case Kind::mesh:
+      return "mesh";
   }
   return "?";
 }
 
 double ColliderShape::bound() const {
   switch (kind) {
-    case Kind::plane: return std::numeric_limits<double>::infinity();
-    case Kind::sphere: return radius;
-    case Kind::capsule: return half_length + radius;
-    case Kind::box: return half_extents.norm();
-    case Kind::cylinder: return std::hypot(radius + wall, half_length);
-    case Kind::mesh: return mesh->bound();
+    case Kind::plane:
+      return std::numeric_limits<double>::infinity();
+    case Kind::sphere:
+      return radius;
+    case Kind::capsule:
+      return half_length + radius;
+    case Kind::box:
+      return half_extents.norm();
+    case Kind::cylinder:
+      return std::hypot(radius + wall, half_length);
+    case Kind::mesh:
+      return mesh->bound();
   }
   return 0;
 }
@@ -65,7 +78,9 @@ double ColliderShape::distance(const Vec3& l, Vec3* grad, Mat3* hess) const {
   Mat3 H = Mat3::Zero();
   double s = 0;
   switch (kind) {
-    case Kind::plane: s = l.z(); break;
+    case Kind::plane:
+      s = l.z();
+      break;
     case Kind::sphere:
     case Kind::capsule: {
       // Distance to the axis segment [-L, L] e_z (a point for the sphere) minus the radius.
@@ -105,7 +120,8 @@ double ColliderShape::distance(const Vec3& l, Vec3* grad, Mat3* hess) const {
       const Vec3 ez = Vec3::UnitZ();
       const Vec3 dr = sr * er, dz = sz * ez;  // dq/dl
       g = gq[0] * dr + gq[1] * dz;
-      H = Hq(0, 0) * dr * dr.transpose() + Hq(0, 1) * (dr * dz.transpose() + dz * dr.transpose()) + Hq(1, 1) * dz * dz.transpose();
+      H = Hq(0, 0) * dr * dr.transpose() + Hq(0, 1) * (dr * dz.transpose() + dz * dr.transpose()) +
+          Hq(1, 1) * dz * dz.transpose();
       if (r > 0) {  // the curvature of r: d2r/dl2 = (I_xy - er er^T) / r
         Mat3 Pxy = Mat3::Identity();
         Pxy(2, 2) = 0.0;
@@ -113,7 +129,9 @@ double ColliderShape::distance(const Vec3& l, Vec3* grad, Mat3* hess) const {
       }
       break;
     }
-    case Kind::mesh: s = mesh->distance(l, &g, hess ? &H : nullptr); break;
+    case Kind::mesh:
+      s = mesh->distance(l, &g, hess ? &H : nullptr);
+      break;
   }
   if (grad) *grad = g;
   if (hess) *hess = H;

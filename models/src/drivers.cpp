@@ -35,10 +35,14 @@ Eigen::Vector3d tangent(const std::vector<double>& times, const std::vector<Eige
 
 Eigen::Vector3d Driver::displacement(double t) const {
   switch (kind) {
-    case Kind::fixed: return Eigen::Vector3d::Zero();
-    case Kind::ramp: return vector * std::clamp((t - t0) / (t1 - t0), 0.0, 1.0);
-    case Kind::sinusoid: return vector * std::sin(2 * M_PI * frequency * t + phase);
-    default: break;
+    case Kind::fixed:
+      return Eigen::Vector3d::Zero();
+    case Kind::ramp:
+      return vector * std::clamp((t - t0) / (t1 - t0), 0.0, 1.0);
+    case Kind::sinusoid:
+      return vector * std::sin(2 * M_PI * frequency * t + phase);
+    default:
+      break;
   }
   double s;
   const int i = segment(times, t, s);
@@ -49,15 +53,20 @@ Eigen::Vector3d Driver::displacement(double t) const {
   const double h = times[i + 1] - times[i];
   const double h00 = 2 * s * s * s - 3 * s * s + 1, h10 = s * s * s - 2 * s * s + s, h01 = -2 * s * s * s + 3 * s * s,
                h11 = s * s * s - s * s;
-  return h00 * values[i] + h10 * h * tangent(times, values, i) + h01 * values[i + 1] + h11 * h * tangent(times, values, i + 1);
+  return h00 * values[i] + h10 * h * tangent(times, values, i) + h01 * values[i + 1] +
+         h11 * h * tangent(times, values, i + 1);
 }
 
 Eigen::Vector3d Driver::velocity(double t) const {
   switch (kind) {
-    case Kind::fixed: return Eigen::Vector3d::Zero();
-    case Kind::ramp: return (t > t0 && t < t1) ? Eigen::Vector3d(vector / (t1 - t0)) : Eigen::Vector3d::Zero();
-    case Kind::sinusoid: return vector * 2 * M_PI * frequency * std::cos(2 * M_PI * frequency * t + phase);
-    default: break;
+    case Kind::fixed:
+      return Eigen::Vector3d::Zero();
+    case Kind::ramp:
+      return (t > t0 && t < t1) ? Eigen::Vector3d(vector / (t1 - t0)) : Eigen::Vector3d::Zero();
+    case Kind::sinusoid:
+      return vector * 2 * M_PI * frequency * std::cos(2 * M_PI * frequency * t + phase);
+    default:
+      break;
   }
   double s;
   const int i = segment(times, t, s);
@@ -65,17 +74,23 @@ Eigen::Vector3d Driver::velocity(double t) const {
   const double h = times[i + 1] - times[i];
   if (kind == Kind::keyframes_linear) return (values[i + 1] - values[i]) / h;
   const double d00 = 6 * s * s - 6 * s, d10 = 3 * s * s - 4 * s + 1, d01 = -6 * s * s + 6 * s, d11 = 3 * s * s - 2 * s;
-  return (d00 * values[i] + d01 * values[i + 1]) / h + d10 * tangent(times, values, i) + d11 * tangent(times, values, i + 1);
+  return (d00 * values[i] + d01 * values[i + 1]) / h + d10 * tangent(times, values, i) +
+         d11 * tangent(times, values, i + 1);
 }
 
 void Driver::breakpoints(std::vector<double>& out) const {
   switch (kind) {
-    case Kind::ramp: out.insert(out.end(), {t0, t1}); break;
-    case Kind::keyframes_linear: out.insert(out.end(), times.begin(), times.end()); break;
+    case Kind::ramp:
+      out.insert(out.end(), {t0, t1});
+      break;
+    case Kind::keyframes_linear:
+      out.insert(out.end(), times.begin(), times.end());
+      break;
     case Kind::keyframes_cubic:
       if (!times.empty()) out.insert(out.end(), {times.front(), times.back()});
       break;
-    default: break;
+    default:
+      break;
   }
 }
 

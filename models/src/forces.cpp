@@ -11,9 +11,14 @@
 
 namespace isochor {
 
-ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::vector<Collider> colliders, const DofMap& dofs,
-                                     const Pattern& pattern, Eigen::VectorXd area, std::shared_ptr<const Skeleton> skeleton)
-    : mass_(std::move(mass)), gravity_(gravity), colliders_(std::move(colliders)), skeleton_(std::move(skeleton)), dofs_(dofs),
+ExternalPotential::ExternalPotential(Eigen::VectorXd mass, Vec3 gravity, std::vector<Collider> colliders,
+                                     const DofMap& dofs, const Pattern& pattern, Eigen::VectorXd area,
+                                     std::shared_ptr<const Skeleton> skeleton)
+    : mass_(std::move(mass)),
+      gravity_(gravity),
+      colliders_(std::move(colliders)),
+      skeleton_(std::move(skeleton)),
+      dofs_(dofs),
       area_(std::move(area)) {
   for (const Collider& c : colliders_) {
     if (c.law.per_area && area_.size() != mass_.size())
@@ -60,7 +65,8 @@ void ExternalPotential::for_each_contact(std::size_t c, const Points& x, bool fr
     // |l| - bound is a lower bound of s: nodes farther than bound + delta cannot touch.
     if ((x.col(i) - P.b).squaredNorm() > reach * reach) continue;
     // A mesh's distance alone costs a fifth of it with derivatives: most nodes are out of reach.
-    if (C.shape.kind == ColliderShape::Kind::mesh && C.distance(P, x.col(i), nullptr, nullptr) >= C.law.thickness) continue;
+    if (C.shape.kind == ColliderShape::Kind::mesh && C.distance(P, x.col(i), nullptr, nullptr) >= C.law.thickness)
+      continue;
     Vec3 n;
     Mat3 H;
     const double s = C.distance(P, x.col(i), &n, &H);
@@ -77,8 +83,8 @@ void ExternalPotential::add_damping(const Points& x, const Eigen::VectorXd& xdot
     const ColliderPose& P = poses_[c];
     for_each_contact(c, x, false, [&](int, int i, double k, double s, const Vec3& n, const Mat3& H) {
       const Vec3 vrel = xdot.segment<3>(3 * i) - P.velocity_at(x.col(i));
-      grad.segment<3>(3 * i) -= contact_damping_force(k, L.damping, L.friction, L.slip_speed, L.thickness, s, n, H, vrel,
-                                                      -skew(P.omega), nullptr, nullptr);
+      grad.segment<3>(3 * i) -= contact_damping_force(k, L.damping, L.friction, L.slip_speed, L.thickness, s, n, H,
+                                                      vrel, -skew(P.omega), nullptr, nullptr);
     });
   }
 }
@@ -94,7 +100,8 @@ void ExternalPotential::add_damping_jacobians(const Points& x, const Eigen::Vect
     for_each_contact(c, x, true, [&](int f, int i, double k, double s, const Vec3& n, const Mat3& H) {
       Mat3 Dx, Dv;
       const Vec3 vrel = xdot.segment<3>(3 * i) - P.velocity_at(x.col(i));
-      contact_damping_force(k, L.damping, L.friction, L.slip_speed, L.thickness, s, n, H, vrel, -skew(P.omega), &Dx, &Dv);
+      contact_damping_force(k, L.damping, L.friction, L.slip_speed, L.thickness, s, n, H, vrel, -skew(P.omega), &Dx,
+                            &Dv);
       for (int e = 0; e < 9; ++e) {
         if (neg_dfdx) neg_dfdx[diag_slots_[9 * f + e]] += Dx(e / 3, e % 3);
         if (neg_dfdv) neg_dfdv[diag_slots_[9 * f + e]] += Dv(e / 3, e % 3);
@@ -113,8 +120,9 @@ void ExternalPotential::contact_forces(const Points& x, const Eigen::VectorXd* x
       contact_energy(k, L.thickness, s, n, H, &g, nullptr);
       out.col(i) -= g;
       if (xdot && (L.damping > 0 || L.friction > 0))
-        out.col(i) += contact_damping_force(k, L.damping, L.friction, L.slip_speed, L.thickness, s, n, H,
-                                            xdot->segment<3>(3 * i) - P.velocity_at(x.col(i)), -skew(P.omega), nullptr, nullptr);
+        out.col(i) +=
+            contact_damping_force(k, L.damping, L.friction, L.slip_speed, L.thickness, s, n, H,
+                                  xdot->segment<3>(3 * i) - P.velocity_at(x.col(i)), -skew(P.omega), nullptr, nullptr);
     });
   }
   if (self_) self_->add_forces(x, xdot, out);
@@ -229,7 +237,8 @@ void RayleighDamping::add_matrix(const ElasticAssembly& a, const Eigen::VectorXd
   const Pattern& p = a.pattern();
   if (alpha != 0.0)
     for (int f = 0; f < a.dofs().num_free(); ++f)
-      for (int d = 0; d < 3; ++d) values[p.find(3 * Index(f) + d, 3 * Index(f) + d)] += scale * alpha * mass[a.dofs().free_nodes[f]];
+      for (int d = 0; d < 3; ++d)
+        values[p.find(3 * Index(f) + d, 3 * Index(f) + d)] += scale * alpha * mass[a.dofs().free_nodes[f]];
   if (beta != 0.0) a.add_hessian(x, scale * beta, values);
 }
 

@@ -68,7 +68,8 @@ MeshSdf::MeshSdf(const Points& x, const std::vector<Tri>& tris, double cell, dou
   std::vector<std::array<std::size_t, 3>> soup(tris.size());
   for (std::size_t t = 0; t < tris.size(); ++t)
     for (int a = 0; a < 3; ++a) {
-      if (tris[t][a] < 0 || tris[t][a] >= x.cols()) throw Error(what + ": triangle " + std::to_string(t) + " has no vertex " + std::to_string(tris[t][a]));
+      if (tris[t][a] < 0 || tris[t][a] >= x.cols())
+        throw Error(what + ": triangle " + std::to_string(t) + " has no vertex " + std::to_string(tris[t][a]));
       soup[t][a] = static_cast<std::size_t>(tris[t][a]);
     }
   CGAL::Polygon_mesh_processing::orient_polygon_soup(points, soup);
@@ -79,7 +80,8 @@ MeshSdf::MeshSdf(const Points& x, const std::vector<Tri>& tris, double cell, dou
     std::size_t border = 0;
     for (auto h : exact->mesh.halfedges())
       if (exact->mesh.is_border(h)) ++border;
-    throw Error(what + ": the surface is not closed (" + std::to_string(border) + " edges with one triangle; expected a closed surface)");
+    throw Error(what + ": the surface is not closed (" + std::to_string(border) +
+                " edges with one triangle; expected a closed surface)");
   }
   exact->tree.insert(faces(exact->mesh).first, faces(exact->mesh).second, exact->mesh);
   exact->tree.build();
@@ -93,7 +95,8 @@ MeshSdf::MeshSdf(const Points& x, const std::vector<Tri>& tris, double cell, dou
   origin_ = lo.array() - h_;
   for (int a = 0; a < 3; ++a) n_[a] = static_cast<int>(std::ceil((hi[a] - lo[a]) / h_)) + 3;
   const long total = static_cast<long>(n_[0]) * n_[1] * n_[2];
-  if (total > 200'000'000L) throw Error(what + ": the cell size makes " + std::to_string(total) + " samples (expected a larger cell)");
+  if (total > 200'000'000L)
+    throw Error(what + ": the cell size makes " + std::to_string(total) + " samples (expected a larger cell)");
   samples_.resize(total);
   (void)exact->signed_distance(lo);  // any lazily built part of the tree, before the threads
   // Row by row along x. A sample's sign is its neighbour's when either is farther from the surface
@@ -136,8 +139,8 @@ double MeshSdf::distance(const Vec3& l, Vec3* grad, Mat3* hess) const {
   for (int k = 0; k < 4; ++k)
     for (int j = 0; j < 4; ++j)
       for (int i = 0; i < 4; ++i) {
-        const double v =
-            samples_[(c[0] - 1 + i) + static_cast<long>(n_[0]) * ((c[1] - 1 + j) + static_cast<long>(n_[1]) * (c[2] - 1 + k))];
+        const double v = samples_[(c[0] - 1 + i) + static_cast<long>(n_[0]) *
+                                                       ((c[1] - 1 + j) + static_cast<long>(n_[1]) * (c[2] - 1 + k))];
         s += w[0][i] * w[1][j] * w[2][k] * v;
         if (!grad && !hess) continue;
         g += v * Vec3(d[0][i] * w[1][j] * w[2][k], w[0][i] * d[1][j] * w[2][k], w[0][i] * w[1][j] * d[2][k]);

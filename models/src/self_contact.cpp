@@ -14,9 +14,13 @@ using KdTree = nanoflann::KDTreeEigenMatrixAdaptor<Points, 3, nanoflann::metric_
 
 }  // namespace
 
-SelfContact::SelfContact(const Mesh& mesh, const ContactLaw& law, double exclude, const DofMap& dofs, const Pattern& pattern,
-                         Eigen::VectorXd area, double smoothing)
-    : mesh_(mesh), law_(law), exclude2_(exclude * exclude), dofs_(dofs), area_(std::move(area)),
+SelfContact::SelfContact(const Mesh& mesh, const ContactLaw& law, double exclude, const DofMap& dofs,
+                         const Pattern& pattern, Eigen::VectorXd area, double smoothing)
+    : mesh_(mesh),
+      law_(law),
+      exclude2_(exclude * exclude),
+      dofs_(dofs),
+      area_(std::move(area)),
       tau_(smoothing > 0 ? smoothing : 0.1 * law.thickness) {
   diag_slots_.resize(9 * static_cast<std::size_t>(dofs.num_free()));
   for (int f = 0; f < dofs.num_free(); ++f)
@@ -169,6 +173,5 @@ void SelfContact::add_damping_jacobian(const Points& x, double* neg_dfdv) const 
       for (int j = 0; j < 3; ++j) add(t.tri[j], t.omega * t.weights[j] * t.n);
   }
 }
-
 
 }  // namespace isochor

@@ -47,7 +47,8 @@ Eigen::Matrix3d joint_frame(const BoneSpec& b) {
   Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
   if (b.joint == BoneSpec::Joint::pin) {
     const Eigen::Vector3d z = b.axes.col(0);
-    const Eigen::Vector3d x = (std::abs(z.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(z).normalized();
+    const Eigen::Vector3d x =
+        (std::abs(z.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(z).normalized();
     F << x, z.cross(x), z;
   } else if (b.joint == BoneSpec::Joint::universal) {
     F << b.axes.col(0), b.axes.col(1), b.axes.col(0).cross(b.axes.col(1));
@@ -114,24 +115,35 @@ struct Skeleton::Impl {
   SimTK::State state;  // realize()'s memo: the state at Skeleton::t_
 };
 
-Skeleton::Skeleton(std::vector<BoneSpec> bones) : bones_(std::move(bones)), pose_(bones_.size()), impl_(std::make_unique<Impl>()) {
+Skeleton::Skeleton(std::vector<BoneSpec> bones)
+    : bones_(std::move(bones)), pose_(bones_.size()), impl_(std::make_unique<Impl>()) {
   using SimTK::MobilizedBody, SimTK::MobilizedBodyIndex, SimTK::Transform, SimTK::Rotation, SimTK::Mat33;
   const SimTK::Body::Rigid body(SimTK::MassProperties(1.0, SimTK::Vec3(0), SimTK::UnitInertia(1.0)));
   for (std::size_t i = 0; i < bones_.size(); ++i) {
     const BoneSpec& b = bones_[i];
-    MobilizedBody& parent = b.parent < 0 ? impl_->matter.updGround() : impl_->matter.updMobilizedBody(impl_->index[b.parent]);
+    MobilizedBody& parent =
+        b.parent < 0 ? impl_->matter.updGround() : impl_->matter.updMobilizedBody(impl_->index[b.parent]);
     const Eigen::Vector3d parent_origin = b.parent < 0 ? Eigen::Vector3d::Zero() : bones_[b.parent].origin;
     const Eigen::Matrix3d F = joint_frame(b);
     Mat33 f;
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) f(r, c) = F(r, c);
-    const Transform X_PF(Rotation(f), vec(Eigen::Vector3d(b.origin - parent_origin))), X_BM(Rotation(f), SimTK::Vec3(0));
+    const Transform X_PF(Rotation(f), vec(Eigen::Vector3d(b.origin - parent_origin))),
+        X_BM(Rotation(f), SimTK::Vec3(0));
     MobilizedBodyIndex idx;
     switch (b.joint) {
-      case BoneSpec::Joint::weld: idx = MobilizedBody::Weld(parent, X_PF, body, X_BM).getMobilizedBodyIndex(); break;
-      case BoneSpec::Joint::pin: idx = MobilizedBody::Pin(parent, X_PF, body, X_BM).getMobilizedBodyIndex(); break;
-      case BoneSpec::Joint::universal: idx = MobilizedBody::Universal(parent, X_PF, body, X_BM).getMobilizedBodyIndex(); break;
-      case BoneSpec::Joint::ball: idx = MobilizedBody::Ball(parent, X_PF, body, X_BM).getMobilizedBodyIndex(); break;
+      case BoneSpec::Joint::weld:
+        idx = MobilizedBody::Weld(parent, X_PF, body, X_BM).getMobilizedBodyIndex();
+        break;
+      case BoneSpec::Joint::pin:
+        idx = MobilizedBody::Pin(parent, X_PF, body, X_BM).getMobilizedBodyIndex();
+        break;
+      case BoneSpec::Joint::universal:
+        idx = MobilizedBody::Universal(parent, X_PF, body, X_BM).getMobilizedBodyIndex();
+        break;
+      case BoneSpec::Joint::ball:
+        idx = MobilizedBody::Ball(parent, X_PF, body, X_BM).getMobilizedBodyIndex();
+        break;
     }
     impl_->index.push_back(idx);
     if (b.joint != BoneSpec::Joint::weld)

@@ -56,9 +56,11 @@ TomlValue to_toml(py::handle v, const std::string& where) {
 toml::table to_table(py::handle d, const std::string& where) {
   toml::table t;
   for (auto [k, v] : py::reinterpret_borrow<py::dict>(d)) {
-    if (!py::isinstance<py::str>(k)) throw Error(where + ": keys must be strings, got " + py::repr(k).cast<std::string>());
+    if (!py::isinstance<py::str>(k))
+      throw Error(where + ": keys must be strings, got " + py::repr(k).cast<std::string>());
     const std::string key = k.cast<std::string>();
-    std::visit([&](auto&& x) { t.insert_or_assign(key, std::move(x)); }, to_toml(v, where.empty() ? key : where + "." + key));
+    std::visit([&](auto&& x) { t.insert_or_assign(key, std::move(x)); },
+               to_toml(v, where.empty() ? key : where + "." + key));
   }
   return t;
 }
@@ -81,8 +83,10 @@ void add_overrides(py::handle o, const std::string& prefix, std::vector<std::str
       std::visit(
           [&](const auto& x) {
             using T = std::decay_t<decltype(x)>;
-            if constexpr (std::is_same_v<T, toml::array> || std::is_same_v<T, toml::table>) s << x;
-            else s << toml::value<T>(x);  // TOML's own spelling: true, quoted strings, ...
+            if constexpr (std::is_same_v<T, toml::array> || std::is_same_v<T, toml::table>)
+              s << x;
+            else
+              s << toml::value<T>(x);  // TOML's own spelling: true, quoted strings, ...
           },
           to_toml(v, "--set " + key));
       out.push_back(s.str());
@@ -168,10 +172,14 @@ py::dict run(const Scene& scene, const std::string& output, const std::string& m
   RunOptions opt;
   opt.output = output;
   opt.progress = progress;
-  if (mode == "create") opt.mode = OutputWriter::Mode::create;
-  else if (mode == "overwrite") opt.mode = OutputWriter::Mode::overwrite;
-  else if (mode == "resume") opt.mode = OutputWriter::Mode::resume;
-  else throw Error("mode: expected create, overwrite or resume, got " + mode);
+  if (mode == "create")
+    opt.mode = OutputWriter::Mode::create;
+  else if (mode == "overwrite")
+    opt.mode = OutputWriter::Mode::overwrite;
+  else if (mode == "resume")
+    opt.mode = OutputWriter::Mode::resume;
+  else
+    throw Error("mode: expected create, overwrite or resume, got " + mode);
   std::optional<py::error_already_set> raised;
   bool stopped_by_callback = false;
   opt.on_frame = [&](int k, const Frame& f) {
@@ -215,10 +223,7 @@ std::shared_ptr<Scene> scene_from_dict(py::dict d, py::object overrides, const s
   return std::make_shared<Scene>(parse_scene(SceneFile::parse(text.str(), name, overrides_of(overrides), directory)));
 }
 
-}  // namespace
-
-PYBIND11_MODULE(_isochor, m) {
-  m.doc() = "isochor's C++ core (use the isochor package)";
+void bind_error(py::module_& m) {
   // One isochor.Error for the compiled part and the pure-Python reader (isochor/errors.py): its
   // class is kept for the interpreter's life (never released: no destructor runs at exit).
   static PyObject* const error = py::object(py::module_::import("isochor.errors").attr("Error")).release().ptr();
@@ -230,7 +235,10 @@ PYBIND11_MODULE(_isochor, m) {
       PyErr_SetString(error, e.what());
     }
   });
+}
 
+// isochor.Scene: a loaded scene's name, text, mesh, zones, frame times and choices, read-only.
+void bind_scene(py::module_& m) {
   py::class_<Scene, std::shared_ptr<Scene>>(m, "Scene")
       .def_property_readonly("name", [](const Scene& s) { return s.file.name(); })
       .def_property_readonly("text", [](const Scene& s) { return s.file.text_as_run(); })
@@ -240,15 +248,27 @@ PYBIND11_MODULE(_isochor, m) {
       .def_property_readonly("rest_positions", [](const Scene& s) { return points_array(s.mesh.rest_positions()); })
       .def_property_readonly("tets", [](const Scene& s) { return index_array(s.mesh.tets()); })
       .def_property_readonly("surface", [](const Scene& s) { return index_array(s.mesh.surface()); })
-      .def_property_readonly("zones", [](const Scene& s) {
-        py::dict d;
-        for (const auto& [name, tets] : s.zones) d[py::str(name)] = py::array_t<int>(static_cast<py::ssize_t>(tets.size()), tets.data());
-        return d;
-      })
+      .def_property_readonly("zones",
+                             [](const Scene& s) {
+                               py::dict d;
+                               for (const auto& [name, tets] : s.zones)
+                                 d[py::str(name)] =
+                                     py::array_t<int>(static_cast<py::ssize_t>(tets.size()), tets.data());
+                               return d;
+                             })
       .def_property_readonly("frame_times", [](const Scene& s) { return vector_array(s.frames.times()); })
-      .def_property_readonly("gravity", [](const Scene& s) { return std::vector<double>(s.gravity.data(), s.gravity.data() + 3); })
+      .def_property_readonly("gravity",
+                             [](const Scene& s) { return std::vector<double>(s.gravity.data(), s.gravity.data() + 3); })
       .def_property_readonly("integrator", [](const Scene& s) { return std::string(to_string(s.integrator.kind)); })
       .def_property_readonly("material", [](const Scene& s) { return std::string(to_string(s.material.model)); });
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_isochor, m) {
+  m.doc() = "isochor's C++ core (use the isochor package)";
+  bind_error(m);
+  bind_scene(m);
 
   m.def(
       "load_scene",
@@ -259,8 +279,8 @@ PYBIND11_MODULE(_isochor, m) {
   m.def("scene_from_dict", &scene_from_dict, py::arg("scene"), py::arg("overrides") = py::none(),
         py::arg("name") = "<dict>", py::arg("directory") = "");
   m.def("overrides", &overrides_of, py::arg("overrides"), "The `--set` strings of a dict or list of overrides");
-  m.def("run", &run, py::arg("scene"), py::arg("output") = "", py::arg("mode") = "create",
-        py::arg("progress") = false, py::arg("on_frame") = py::none());
+  m.def("run", &run, py::arg("scene"), py::arg("output") = "", py::arg("mode") = "create", py::arg("progress") = false,
+        py::arg("on_frame") = py::none());
 
   m.def(
       "study_cases",

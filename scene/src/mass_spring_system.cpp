@@ -27,11 +27,13 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
   const Mesh& mesh = scene.mesh;
   const int N = mesh.num_nodes();
   if (!scene.zones.empty())
-    throw Error(scene.file.name() + ": [zones] are not available with material.model = \"mass_spring\" (it keeps the "
-                                    "volume enclosed by its surface; expected no zones)");
+    throw Error(scene.file.name() +
+                ": [zones] are not available with material.model = \"mass_spring\" (it keeps the "
+                "volume enclosed by its surface; expected no zones)");
   if (!scene.pressure_loads.empty())
-    throw Error(scene.file.name() + ": a pressure [[load]] is not available with material.model = \"mass_spring\" (expected "
-                                    "point loads or tractions)");
+    throw Error(scene.file.name() +
+                ": a pressure [[load]] is not available with material.model = \"mass_spring\" (expected "
+                "point loads or tractions)");
   std::vector<char> moving(N, 0);
   for (int v : mesh.surface_nodes()) moving[v] = 1;
   // Driven surface nodes follow their drivers; driven interior nodes are carried like the rest
@@ -68,8 +70,9 @@ MassSpringSystem::MassSpringSystem(const Scene& scene) : scene_(scene) {
   dof_mass_.resize(num_dofs());
   for (int f = 0; f < dofs_.num_free(); ++f) dof_mass_.segment<3>(3 * f).setConstant(node_mass_[dofs_.free_nodes[f]]);
   if (scene.self_contact.enabled)
-    throw Error(scene.file.name() + ": [contact.self] is not available with the mass-spring model (expected no contact "
-                                    "between body parts)");
+    throw Error(scene.file.name() +
+                ": [contact.self] is not available with the mass-spring model (expected no contact "
+                "between body parts)");
   external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.colliders, dofs_, pattern_,
                                                   surface_areas(scene.mesh), scene.skeleton);
   external_->set_loads(scene.loads);
@@ -180,7 +183,8 @@ void MassSpringSystem::constraint(double t, const VectorXd& q, VectorXd& g) {
   if (supports_) supports_->value(x_, g.data() + volume_rows());
 }
 
-void MassSpringSystem::constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* g_t) {
+void MassSpringSystem::constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G,
+                                           VectorXd* g_t) {
   place(t, q);
   G.resize(num_constraints());
   if (g_t) g_t->resize(num_constraints());
@@ -194,7 +198,8 @@ void MassSpringSystem::constraint_jacobian(double t, const VectorXd& q, std::vec
   }
 }
 
-void MassSpringSystem::add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) {
+void MassSpringSystem::add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale,
+                                              double* values) {
   place(t, q);
   if (constrained_) volume_.add_hessian(x_, w.data(), scale, values);  // the supports' rows are linear
 }

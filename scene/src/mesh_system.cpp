@@ -11,18 +11,21 @@ namespace isochor {
 
 std::shared_ptr<const Material> make_material(const MaterialSpec& m) {
   switch (m.model) {
-    case MaterialModel::unh: return make_unh(m.mu, m.lambda);
-    case MaterialModel::snh: return make_snh(m.mu, m.lambda);
-    case MaterialModel::cnh: return make_cnh(m.mu, m.lambda, m.beta, m.epsilon);
-    case MaterialModel::snh_simple: return make_xpbd_pair(m.mu, m.lambda);
-    case MaterialModel::mass_spring: break;
+    case MaterialModel::unh:
+      return make_unh(m.mu, m.lambda);
+    case MaterialModel::snh:
+      return make_snh(m.mu, m.lambda);
+    case MaterialModel::cnh:
+      return make_cnh(m.mu, m.lambda, m.beta, m.epsilon);
+    case MaterialModel::snh_simple:
+      return make_xpbd_pair(m.mu, m.lambda);
+    case MaterialModel::mass_spring:
+      break;
   }
   throw Error("material.model = \"mass_spring\" is not a tet material (expected cnh, unh, snh or snh_simple)");
 }
 
-DofMap scene_dofs(const Scene& s) {
-  return DofMap::make(s.mesh.num_nodes(), s.driven_nodes());
-}
+DofMap scene_dofs(const Scene& s) { return DofMap::make(s.mesh.num_nodes(), s.driven_nodes()); }
 
 std::vector<std::vector<int>> scene_zone_tets(const Scene& s) {
   std::vector<std::vector<int>> z;
@@ -30,27 +33,32 @@ std::vector<std::vector<int>> scene_zone_tets(const Scene& s) {
   return z;
 }
 
-MeshSystem::MeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(scene)), material_(make_material(scene.material)) {
-  if (dofs_.num_free() == 0) throw Error(scene.file.name() + ": every node is driven (by [[boundary]] or a bone): nothing to simulate");
-  elastic_ = std::make_unique<ElasticAssembly>(scene.mesh, material_, dofs_,
-                                               EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
+MeshSystem::MeshSystem(const Scene& scene)
+    : scene_(scene), dofs_(scene_dofs(scene)), material_(make_material(scene.material)) {
+  if (dofs_.num_free() == 0)
+    throw Error(scene.file.name() + ": every node is driven (by [[boundary]] or a bone): nothing to simulate");
+  elastic_ = std::make_unique<ElasticAssembly>(
+      scene.mesh, material_, dofs_, EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
   node_mass_ = lumped_mass(scene.mesh, scene.material.density);
   const Eigen::VectorXd area = surface_areas(scene.mesh);
-  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.colliders, dofs_, elastic_->pattern(), area,
-                                                  scene.skeleton);
+  external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.colliders, dofs_,
+                                                  elastic_->pattern(), area, scene.skeleton);
   external_->set_loads(scene.loads);
   if (scene.self_contact.enabled)
-    external_->set_self_contact(std::make_unique<SelfContact>(scene.mesh, scene.self_contact.law, scene.self_contact.exclude, dofs_,
-                                                              elastic_->pattern(), area, scene.self_contact.smoothing));
+    external_->set_self_contact(std::make_unique<SelfContact>(scene.mesh, scene.self_contact.law,
+                                                              scene.self_contact.exclude, dofs_, elastic_->pattern(),
+                                                              area, scene.self_contact.smoothing));
   pressure_loads_ = std::make_unique<PressureLoads>(scene.pressure_loads, dofs_, elastic_->pattern());
   damping_ = scene.damping;
   const auto all_zones = scene_zone_tets(scene);
   zone_volumes_ = VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern());
   if (scene.keep_zones && !all_zones.empty()) {
-    auto zones = std::make_unique<VolumeConstraints>(VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern()));
+    auto zones = std::make_unique<VolumeConstraints>(
+        VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern()));
     for (int j = 0; j < zones->size(); ++j)
       if (zones->row_dofs(j).empty())
-        throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first + "\" has only driven nodes on its boundary: its volume cannot be kept");
+        throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first +
+                    "\" has only driven nodes on its boundary: its volume cannot be kept");
     if (scene.zone_restore_time > 0)
       zones->restore_from(scene.initial_positions.cols() ? scene.initial_positions : scene.mesh.rest_positions(),
                           scene.frames.times().front(), scene.zone_restore_time);
@@ -108,7 +116,8 @@ void MeshSystem::force(double t, const VectorXd& q, const VectorXd& v, VectorXd&
   force_and_jacobians(t, q, v, f, nullptr, nullptr);
 }
 
-void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq, double* neg_dfdv) {
+void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd& v, double* neg_dfdq,
+                                     double* neg_dfdv) {
   set_state(t, q, v);
   // -df/dv = alpha M + beta K: the element Hessians of K are computed once for both outputs.
   const RayleighDamping damping = damping_on_ ? damping_ : RayleighDamping{};
@@ -121,7 +130,8 @@ void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd
     elastic_->add_hessian(x_, damping.beta, damped, 0.0, nullptr, project_hessian_);
   }
   if (damping_on_) external_->add_damping_jacobians(x_, xdot_, neg_dfdq, neg_dfdv);
-  if (neg_dfdv && damping.alpha != 0) RayleighDamping{damping.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
+  if (neg_dfdv && damping.alpha != 0)
+    RayleighDamping{damping.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
 }
 
 void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd& v, VectorXd& f, double* neg_dfdq,
@@ -159,7 +169,8 @@ void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd
     const int n = dofs_.free_nodes[k];
     f.segment<3>(3 * k) = -grad_.segment<3>(3 * n) - damping.alpha * node_mass_[n] * xdot_.segment<3>(3 * n);
   }
-  if (neg_dfdv && damping.alpha != 0) RayleighDamping{damping.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
+  if (neg_dfdv && damping.alpha != 0)
+    RayleighDamping{damping.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
 }
 
 void MeshSystem::loads(Points& out) const {

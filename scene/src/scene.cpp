@@ -41,9 +41,7 @@ std::vector<double> FramesSpec::times() const {
   return t;
 }
 
-double Scene::gravity_scale(double t) const {
-  return gravity_ramp > 0 ? std::clamp(t / gravity_ramp, 0.0, 1.0) : 1.0;
-}
+double Scene::gravity_scale(double t) const { return gravity_ramp > 0 ? std::clamp(t / gravity_ramp, 0.0, 1.0) : 1.0; }
 
 std::vector<int> Scene::driven_nodes() const {
   std::vector<int> driven;
@@ -91,7 +89,8 @@ Driver parse_keyframes(const Section& b, const std::string& key, int per_time, d
     if (d.times[i] <= d.times[i - 1]) b.fail("times", "expected increasing times");
   const std::size_t n = static_cast<std::size_t>(per_time) * d.times.size();
   if (flat.size() != n)
-    b.fail(key, "expected " + what + " per keyframe time, " + std::to_string(n) + " numbers in all, got " + std::to_string(flat.size()));
+    b.fail(key, "expected " + what + " per keyframe time, " + std::to_string(n) + " numbers in all, got " +
+                    std::to_string(flat.size()));
   for (std::size_t i = 0; i < d.times.size(); ++i) {
     Eigen::Vector3d v = Eigen::Vector3d::Zero();
     for (int k = 0; k < per_time; ++k) v[k] = scale * flat[per_time * i + k];
@@ -104,7 +103,8 @@ namespace {
 
 // A string key with a fixed set of choices, as an enum.
 template <class E>
-E parse_choice(const Section& s, std::string_view key, E fallback, const std::vector<std::pair<std::string, E>>& table) {
+E parse_choice(const Section& s, std::string_view key, E fallback,
+               const std::vector<std::pair<std::string, E>>& table) {
   std::vector<std::string> names;
   std::string name;
   for (const auto& [n, e] : table) {
@@ -117,9 +117,11 @@ E parse_choice(const Section& s, std::string_view key, E fallback, const std::ve
   return fallback;
 }
 
-const std::vector<std::pair<std::string, MaterialModel>> kModels = {
-    {"cnh", MaterialModel::cnh}, {"unh", MaterialModel::unh}, {"snh", MaterialModel::snh},
-    {"snh_simple", MaterialModel::snh_simple}, {"mass_spring", MaterialModel::mass_spring}};
+const std::vector<std::pair<std::string, MaterialModel>> kModels = {{"cnh", MaterialModel::cnh},
+                                                                    {"unh", MaterialModel::unh},
+                                                                    {"snh", MaterialModel::snh},
+                                                                    {"snh_simple", MaterialModel::snh_simple},
+                                                                    {"mass_spring", MaterialModel::mass_spring}};
 
 template <class E>
 const char* name_of(const std::vector<std::pair<std::string, E>>& table, E e) {
@@ -197,7 +199,8 @@ Driver parse_boundary(const Section& b, const Mesh& mesh) {
     if (c.empty()) b.fail("components", "expected at least one of \"x\", \"y\", \"z\"");
     std::set<std::string> seen;
     for (const std::string& name : c) {
-      if (name != "x" && name != "y" && name != "z") b.fail("components", "unknown component \"" + name + "\" (expected \"x\", \"y\" or \"z\")");
+      if (name != "x" && name != "y" && name != "z")
+        b.fail("components", "unknown component \"" + name + "\" (expected \"x\", \"y\" or \"z\")");
       if (!seen.insert(name).second) b.fail("components", "component \"" + name + "\" given twice");
     }
     if (seen.size() < 3)
@@ -207,7 +210,9 @@ Driver parse_boundary(const Section& b, const Mesh& mesh) {
     if (n.norm() == 0) b.fail("normal", "expected a non-zero vector");
     d.held.push_back(n.normalized());
   }
-  if (!d.held.empty() && d.rotation) b.fail(b.has("normal") ? "normal" : "components", "a rotation drives all three components (expected no components or normal with kind = \"rotation\")");
+  if (!d.held.empty() && d.rotation)
+    b.fail(b.has("normal") ? "normal" : "components",
+           "a rotation drives all three components (expected no components or normal with kind = \"rotation\")");
   return d;
 }
 
@@ -257,7 +262,8 @@ void parse_load(const Section& l, const Mesh& mesh, Scene& sc) {
     if (!l.has("force")) l.fail("force", "missing, a point load needs its force [x, y, z] (N)");
     const Vec3 f = l.vec3("force", {});
     const bool split = l.boolean("split", true);
-    sc.loads.push_back({nodes, std::vector<Vec3>(nodes.size(), split ? Vec3(f / static_cast<double>(nodes.size())) : f), history});
+    sc.loads.push_back(
+        {nodes, std::vector<Vec3>(nodes.size(), split ? Vec3(f / static_cast<double>(nodes.size())) : f), history});
     return;
   }
   std::vector<char> in(mesh.num_nodes(), 0);
@@ -265,7 +271,8 @@ void parse_load(const Section& l, const Mesh& mesh, Scene& sc) {
   std::vector<Tri> faces;
   for (const Tri& t : mesh.surface())
     if (in[t[0]] && in[t[1]] && in[t[2]]) faces.push_back(t);
-  if (faces.empty()) l.fail("select", "selects no surface triangle (expected the corners of at least one boundary face)");
+  if (faces.empty())
+    l.fail("select", "selects no surface triangle (expected the corners of at least one boundary face)");
   if (kind == "pressure") {
     if (!l.has("pressure")) l.fail("pressure", "missing, a pressure load needs its pressure (Pa)");
     sc.pressure_loads.push_back({faces, l.number("pressure", 0.0), history});
@@ -299,7 +306,8 @@ void check_zone_name(const Section& z, std::string_view key, const std::string& 
 
 // Zones painted by the mesh file's own surface groups (Gmsh 2-D physical groups, node sets of
 // the mesh): `groups = [names]`, each a zone of that name, its paint 1 on the group's nodes.
-void parse_group_paint(const Section& p, const Mesh& mesh, std::vector<std::pair<std::string, std::vector<int>>>& zones) {
+void parse_group_paint(const Section& p, const Mesh& mesh,
+                       std::vector<std::pair<std::string, std::vector<int>>>& zones) {
   for (const char* key : {"file", "labels", "colors", "weights", "property"})
     if (p.has(key)) p.fail(key, "not with groups (the mesh's surface groups are the paint)");
   const std::vector<std::string> groups = p.strings("groups");
@@ -319,12 +327,15 @@ void parse_group_paint(const Section& p, const Mesh& mesh, std::vector<std::pair
       p.fail("groups", "the mesh has no group \"" + g + "\" (its groups: " + (known.empty() ? "none" : known) + ")");
     }
     std::vector<double> m(nodes.size(), 0.0);
-    for (std::size_t i = 0; i < nodes.size(); ++i) m[i] = std::binary_search(it->second.begin(), it->second.end(), nodes[i]);
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+      m[i] = std::binary_search(it->second.begin(), it->second.end(), nodes[i]);
     membership.push_back(std::move(m));
   }
-  std::vector<std::vector<int>> tets = painted_zones(mesh, painted, membership, std::numeric_limits<double>::infinity());
+  std::vector<std::vector<int>> tets =
+      painted_zones(mesh, painted, membership, std::numeric_limits<double>::infinity());
   for (std::size_t z = 0; z < groups.size(); ++z) {
-    if (tets[z].empty()) p.fail("groups", "no tet is painted by group \"" + groups[z] + "\" (expected a group of surface triangles)");
+    if (tets[z].empty())
+      p.fail("groups", "no tet is painted by group \"" + groups[z] + "\" (expected a group of surface triangles)");
     zones.emplace_back(groups[z], std::move(tets[z]));
   }
 }
@@ -334,11 +345,13 @@ void parse_group_paint(const Section& p, const Mesh& mesh, std::vector<std::pair
 void parse_paint(const Section& p, const Mesh& mesh, const SceneFile& file,
                  std::vector<std::pair<std::string, std::vector<int>>>& zones) {
   if (p.has("groups")) return parse_group_paint(p, mesh, zones);
-  if (!p.has("file")) p.fail("file", "missing, expected a paint file (.ply, .obj or .csv) or the mesh's surface groups (groups)");
+  if (!p.has("file"))
+    p.fail("file", "missing, expected a paint file (.ply, .obj or .csv) or the mesh's surface groups (groups)");
   const std::string path = file.resolve_path(p.string("file", ""));
   PaintRule rule;
   const int given = p.has("labels") + p.has("colors") + p.has("weights");
-  if (given != 1) p.fail(given ? "colors" : "labels", "expected exactly one of labels, colors or weights (a table from zone names)");
+  if (given != 1)
+    p.fail(given ? "colors" : "labels", "expected exactly one of labels, colors or weights (a table from zone names)");
   const char* key = p.has("labels") ? "labels" : p.has("colors") ? "colors" : "weights";
   rule.by = p.has("labels") ? PaintRule::By::labels : p.has("colors") ? PaintRule::By::colors : PaintRule::By::weights;
   const Section t = p.table(key);
@@ -376,10 +389,11 @@ void parse_paint(const Section& p, const Mesh& mesh, const SceneFile& file,
       t.fail(rule.zones[z], "no tet is painted " + rule.zones[z] + " (expected some painted vertex with this paint)");
     auto pieces = connected_pieces(mesh, tets[z]);
     if (pieces.size() > 1 && disconnected == "error")
-      t.fail(rule.zones[z], "zone \"" + rule.zones[z] + "\" is painted in " + std::to_string(pieces.size()) +
-                                " disconnected pieces (of " + std::to_string(pieces[0].size()) + ", " +
-                                std::to_string(pieces[1].size()) + (pieces.size() > 2 ? ", ..." : "") +
-                                " tets): paint each piece as its own zone, or set disconnected = \"keep\" or \"split\"");
+      t.fail(rule.zones[z],
+             "zone \"" + rule.zones[z] + "\" is painted in " + std::to_string(pieces.size()) +
+                 " disconnected pieces (of " + std::to_string(pieces[0].size()) + ", " +
+                 std::to_string(pieces[1].size()) + (pieces.size() > 2 ? ", ..." : "") +
+                 " tets): paint each piece as its own zone, or set disconnected = \"keep\" or \"split\"");
     if (pieces.size() > 1 && disconnected == "split") {
       for (std::size_t k = 0; k < pieces.size(); ++k) {
         std::sort(pieces[k].begin(), pieces[k].end());
@@ -391,8 +405,8 @@ void parse_paint(const Section& p, const Mesh& mesh, const SceneFile& file,
   }
 }
 
-std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section& s, const Mesh& mesh, const SceneFile& file,
-                                                                  bool global) {
+std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section& s, const Mesh& mesh,
+                                                                  const SceneFile& file, bool global) {
   std::vector<std::pair<std::string, std::vector<int>>> zones;
   if (s.boolean("global", global)) {
     std::vector<int> all(mesh.num_tets());
@@ -407,11 +421,13 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
     const auto rings = ring_zones(mesh, static_cast<int>(k), all);
     std::set<std::vector<int>> seen;
     for (std::size_t v = 0; v < rings.size(); ++v)
-      if (seen.insert(rings[v]).second) zones.emplace_back("ring" + std::to_string(k) + "_" + std::to_string(v), rings[v]);
+      if (seen.insert(rings[v]).second)
+        zones.emplace_back("ring" + std::to_string(k) + "_" + std::to_string(v), rings[v]);
   }
   if (const long k = s.integer("patches", 0, 0, 100); k > 0) {
     const auto patches = patch_zones(mesh, static_cast<int>(k));
-    for (std::size_t p = 0; p < patches.size(); ++p) zones.emplace_back("patch" + std::to_string(k) + "_" + std::to_string(p), patches[p]);
+    for (std::size_t p = 0; p < patches.size(); ++p)
+      zones.emplace_back("patch" + std::to_string(k) + "_" + std::to_string(p), patches[p]);
   }
   if (s.boolean("from_mesh", false))
     for (const auto& [name, tets] : mesh.zones) zones.emplace_back(name, tets);
@@ -420,7 +436,8 @@ std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section&
     const std::string name = z.string("name", "");
     check_zone_name(z, "name", name, zones);
     Section sel = z.table("select");
-    if (!sel.exists()) z.fail("select", "missing, expected a selection such as { kind = \"box\", min = [..], max = [..] }");
+    if (!sel.exists())
+      z.fail("select", "missing, expected a selection such as { kind = \"box\", min = [..], max = [..] }");
     zones.emplace_back(name, select_tets(mesh, Selection::parse(sel)));
   }
   return zones;
@@ -478,14 +495,56 @@ std::shared_ptr<const MeshSdf> parse_mesh_shape(const Section& c, const SceneFil
   return nullptr;
 }
 
+// A collider's motion: carried by a bone, moved by a driver's motion, or static.
+void parse_collider_motion(const Section& c, const Scene& sc, Collider& C) {
+  const Section motion = c.table("motion");
+  if (c.has("bone")) {
+    if (motion.exists()) c.fail("motion", "a collider follows a bone or a motion, not both");
+    const std::string bone = c.string("bone", "");
+    if (!sc.skeleton) c.fail("bone", "the scene has no [skeleton] (expected a bone name from [[skeleton.bone]])");
+    const auto& bones = sc.skeleton->bones();
+    for (std::size_t b = 0; b < bones.size(); ++b)
+      if (bones[b].name == bone) C.bone = static_cast<int>(b);
+    if (C.bone < 0) c.fail("bone", "no bone named \"" + bone + "\" in [skeleton]");
+  } else if (motion.exists()) {
+    C.motion = parse_motion(motion);
+  }
+}
+
+// A round collider's radius factor in time (resize: keyframes of positive factors).
+void parse_collider_resize(const Section& c, Collider& C) {
+  using K = ColliderShape::Kind;
+  const ColliderShape& S = C.shape;
+  const Section resize = c.table("resize");
+  if (!resize.exists()) return;
+  if (S.kind != K::sphere && S.kind != K::capsule && S.kind != K::cylinder)
+    c.fail("resize", "only a sphere's, capsule's or cylinder's radius can change");
+  if (C.law.damping > 0 || C.law.friction > 0)
+    c.fail("resize",
+           "a collider whose radius changes has no damping or friction (expected damping = 0 and friction = 0)");
+  C.resize = parse_keyframes(resize, "factors", 1, 1.0, "one factor on the radius");
+  for (const Eigen::Vector3d& f : C.resize.values)
+    if (!(f.x() > 0)) resize.fail("factors", "expected positive factors on the radius");
+  double smallest_factor = 1.0;
+  for (const Eigen::Vector3d& f : C.resize.values) smallest_factor = std::min(smallest_factor, f.x());
+  if (S.kind == K::cylinder && S.wall == 0 && S.rounding > S.radius * smallest_factor)
+    resize.fail("factors", "the radius would shrink below the rounding (" + std::to_string(S.rounding) + " m)");
+}
+
 // One [[collider]]: its shape, pose, law and motion (docs/scenes.md).
 Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& defaults) {
   Collider C;
   C.name = c.path();
   using K = ColliderShape::Kind;
-  if (!c.has("shape")) c.fail("shape", "missing, expected one of \"plane\", \"sphere\", \"capsule\", \"box\", \"cylinder\", \"mesh\"");
+  if (!c.has("shape"))
+    c.fail("shape", "missing, expected one of \"plane\", \"sphere\", \"capsule\", \"box\", \"cylinder\", \"mesh\"");
   C.shape.kind = parse_choice<K>(c, "shape", K::plane,
-                                 {{"plane", K::plane}, {"sphere", K::sphere}, {"capsule", K::capsule}, {"box", K::box}, {"cylinder", K::cylinder}, {"mesh", K::mesh}});
+                                 {{"plane", K::plane},
+                                  {"sphere", K::sphere},
+                                  {"capsule", K::capsule},
+                                  {"box", K::box},
+                                  {"cylinder", K::cylinder},
+                                  {"mesh", K::mesh}});
   ColliderShape& S = C.shape;
   C.law = parse_contact_law(c, defaults);
   C.center = c.vec3("center", Eigen::Vector3d::Zero());
@@ -495,8 +554,11 @@ Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& def
   C.rotation = S.kind == K::mesh ? Mat3(Eigen::AngleAxisd(angle, axis)) : frame_with_axis(axis, angle);
   double smallest = 0;  // the smallest half dimension (bounds the rounding)
   switch (S.kind) {
-    case K::plane: break;
-    case K::sphere: S.radius = required_positive(c, "radius", "a sphere needs its radius (m)"); break;
+    case K::plane:
+      break;
+    case K::sphere:
+      S.radius = required_positive(c, "radius", "a sphere needs its radius (m)");
+      break;
     case K::capsule:
       S.radius = required_positive(c, "radius", "a capsule needs its radius (m)");
       S.half_length = 0.5 * required_positive(c, "length", "a capsule needs the length of its axis segment (m)");
@@ -515,39 +577,17 @@ Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& def
       S.wall = c.number("wall", 0.0, Range::non_negative());
       smallest = std::min(S.half_length, S.wall > 0 ? 0.5 * S.wall : S.radius);
       break;
-    case K::mesh: S.mesh = parse_mesh_shape(c, sc.file, C.law.thickness); break;
+    case K::mesh:
+      S.mesh = parse_mesh_shape(c, sc.file, C.law.thickness);
+      break;
   }
   if (S.kind == K::box || S.kind == K::cylinder) {
     S.rounding = c.number("rounding", 0.1 * smallest, Range::non_negative());
     if (S.rounding > smallest)
       c.fail("rounding", "expected at most " + std::to_string(smallest) + " m (half the shape's smallest dimension)");
   }
-  const Section motion = c.table("motion");
-  if (c.has("bone")) {
-    if (motion.exists()) c.fail("motion", "a collider follows a bone or a motion, not both");
-    const std::string bone = c.string("bone", "");
-    if (!sc.skeleton) c.fail("bone", "the scene has no [skeleton] (expected a bone name from [[skeleton.bone]])");
-    const auto& bones = sc.skeleton->bones();
-    for (std::size_t b = 0; b < bones.size(); ++b)
-      if (bones[b].name == bone) C.bone = static_cast<int>(b);
-    if (C.bone < 0) c.fail("bone", "no bone named \"" + bone + "\" in [skeleton]");
-  } else if (motion.exists()) {
-    C.motion = parse_motion(motion);
-  }
-  const Section resize = c.table("resize");
-  if (resize.exists()) {
-    if (S.kind != K::sphere && S.kind != K::capsule && S.kind != K::cylinder)
-      c.fail("resize", "only a sphere's, capsule's or cylinder's radius can change");
-    if (C.law.damping > 0 || C.law.friction > 0)
-      c.fail("resize", "a collider whose radius changes has no damping or friction (expected damping = 0 and friction = 0)");
-    C.resize = parse_keyframes(resize, "factors", 1, 1.0, "one factor on the radius");
-    for (const Eigen::Vector3d& f : C.resize.values)
-      if (!(f.x() > 0)) resize.fail("factors", "expected positive factors on the radius");
-    double smallest_factor = 1.0;
-    for (const Eigen::Vector3d& f : C.resize.values) smallest_factor = std::min(smallest_factor, f.x());
-    if (S.kind == K::cylinder && S.wall == 0 && S.rounding > S.radius * smallest_factor)
-      resize.fail("factors", "the radius would shrink below the rounding (" + std::to_string(S.rounding) + " m)");
-  }
+  parse_collider_motion(c, sc, C);
+  parse_collider_resize(c, C);
   return C;
 }
 
@@ -564,7 +604,8 @@ void parse_colliders(const Section& root, Scene& sc) {
     nonzero_vec3(contact, "normal", Eigen::Vector3d::UnitZ());
   }
   for (const Section& p : contact.tables("plane")) {
-    if (!p.has("point") || !p.has("normal")) p.fail(p.has("point") ? "normal" : "point", "missing, a contact plane needs a point and a normal");
+    if (!p.has("point") || !p.has("normal"))
+      p.fail(p.has("point") ? "normal" : "point", "missing, a contact plane needs a point and a normal");
     Collider C = Collider::plane(p.vec3("point", {}), nonzero_vec3(p, "normal", {}), parse_contact_law(p, defaults));
     C.name = p.path();
     const Eigen::Vector3d u = p.vec3("displacement", Eigen::Vector3d::Zero());
@@ -585,7 +626,8 @@ void parse_colliders(const Section& root, Scene& sc) {
     ContactLaw plain = defaults;  // the ground's damping and friction are not inherited
     plain.damping = plain.friction = 0;
     sc.self_contact.law = parse_contact_law(self, plain);
-    if (sc.self_contact.law.friction > 0) self.fail("friction", "contact between body parts has no friction (expected 0)");
+    if (sc.self_contact.law.friction > 0)
+      self.fail("friction", "contact between body parts has no friction (expected 0)");
     // The default neighbourhood: three mean surface edges.
     const Points& X = sc.mesh.rest_positions();
     double edges = 0;
@@ -595,7 +637,8 @@ void parse_colliders(const Section& root, Scene& sc) {
     sc.self_contact.exclude = self.number("exclude", 3 * mean, Range::positive());
     sc.self_contact.smoothing = self.number("smoothing", 0.1 * sc.self_contact.law.thickness, Range::positive());
     if (sc.self_contact.exclude <= sc.self_contact.law.thickness)
-      self.fail("exclude", "expected more than the contact thickness (" + std::to_string(sc.self_contact.law.thickness) + " m)");
+      self.fail("exclude",
+                "expected more than the contact thickness (" + std::to_string(sc.self_contact.law.thickness) + " m)");
   }
 }
 
@@ -620,8 +663,8 @@ void check_initial_contact(const Section& root, const Scene& sc) {
     if (inside == 0) continue;
     char where[160];
     if (C.shape.kind == ColliderShape::Kind::plane)
-      std::snprintf(where, sizeof where, "below the plane through [%g, %g, %g] with normal [%g, %g, %g]", P.b.x(), P.b.y(),
-                    P.b.z(), P.A(0, 2), P.A(1, 2), P.A(2, 2));
+      std::snprintf(where, sizeof where, "below the plane through [%g, %g, %g] with normal [%g, %g, %g]", P.b.x(),
+                    P.b.y(), P.b.z(), P.A(0, 2), P.A(1, 2), P.A(2, 2));
     else
       std::snprintf(where, sizeof where, "inside this %s at t = 0", C.shape.name());
     char buf[400];
@@ -630,8 +673,11 @@ void check_initial_contact(const Section& root, const Scene& sc) {
                   "body outside it: move mesh.center or the collider)",
                   inside, static_cast<int>(x.cols()), C.law.thickness, where, -deepest);
     if (C.name == "contact.ground") contact.fail("ground", buf);
-    if (C.name.rfind("contact.plane", 0) == 0) contact.tables("plane").at(k - (sc.colliders[0].name == "contact.ground")).fail("point", buf);
-    root.tables("collider").at(k - (sc.colliders.size() - root.tables("collider").size())).fail(C.shape.kind == ColliderShape::Kind::plane ? "center" : "shape", buf);
+    if (C.name.rfind("contact.plane", 0) == 0)
+      contact.tables("plane").at(k - (sc.colliders[0].name == "contact.ground")).fail("point", buf);
+    root.tables("collider")
+        .at(k - (sc.colliders.size() - root.tables("collider").size()))
+        .fail(C.shape.kind == ColliderShape::Kind::plane ? "center" : "shape", buf);
   }
 }
 
@@ -649,8 +695,9 @@ std::vector<int> parse_boundaries(const Section& root, Scene& sc) {
       // Supports that hold some components may share a node (a corner on two symmetry planes);
       // a driver of all three components owns its nodes.
       if (driven_by[v] >= 0 && (sc.boundary.back().held.empty() || sc.boundary[driven_by[v]].held.empty()))
-        b.fail("select", "node " + std::to_string(v) + " is already driven by boundary[" + std::to_string(driven_by[v]) +
-                             "] (expected each node in at most one [[boundary]], unless both hold only some components)");
+        b.fail("select",
+               "node " + std::to_string(v) + " is already driven by boundary[" + std::to_string(driven_by[v]) +
+                   "] (expected each node in at most one [[boundary]], unless both hold only some components)");
       driven_by[v] = k;
     }
   }
@@ -681,8 +728,8 @@ void check_run_length(const Section& fr, const Section& in, const Scene& sc) {
   const double frames = std::floor(sc.frames.duration * sc.frames.rate + 1e-9) + 1;
   if (frames > 1e8) {
     char buf[200];
-    std::snprintf(buf, sizeof buf, "%g s at frames.rate = %g makes %.3g frames (expected at most 1e8)", sc.frames.duration,
-                  sc.frames.rate, frames);
+    std::snprintf(buf, sizeof buf, "%g s at frames.rate = %g makes %.3g frames (expected at most 1e8)",
+                  sc.frames.duration, sc.frames.rate, frames);
     fr.fail(fr.has("duration") ? "duration" : "rate", buf);
   }
   double dt = 0;
@@ -717,15 +764,35 @@ void parse_frames(const Section& root, Scene& sc) {
   sc.frames.duration = fr.number("duration", sc.frames.duration, Range::non_negative());
   sc.frames.count = static_cast<int>(fr.integer("count", 0, 1, 1000000));
   if (statics != (sc.frames.count > 0))
-    fr.fail(statics ? "count" : "rate", statics ? "a static run needs frames.count (load increments)"
-                                                : "frames.count is for statics; a dynamic run needs frames.rate and frames.duration");
+    fr.fail(statics ? "count" : "rate",
+            statics ? "a static run needs frames.count (load increments)"
+                    : "frames.count is for statics; a dynamic run needs frames.rate and frames.duration");
   if (!statics) check_run_length(fr, root.table("integrator"), sc);
 }
 
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
-  Scene sc{std::move(file), {}, {}, {}, Eigen::Vector3d(0, 0, -9.81), 0.0, {}, {}, {}, {}, {}, Eigen::Vector3d::Zero(), {}, {}, 0.0, true, {}, {}, {}, {}};
+  Scene sc{std::move(file),
+           {},
+           {},
+           {},
+           Eigen::Vector3d(0, 0, -9.81),
+           0.0,
+           {},
+           {},
+           {},
+           {},
+           {},
+           Eigen::Vector3d::Zero(),
+           {},
+           {},
+           0.0,
+           true,
+           {},
+           {},
+           {},
+           {}};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");

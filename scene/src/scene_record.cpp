@@ -12,15 +12,26 @@ ColliderRecord collider_record(const Collider& C) {
   const ColliderShape& S = C.shape;
   ColliderRecord r;
   r.name = C.name;
-  r.shape = S.kind == K::plane ? "plane" : S.kind == K::sphere ? "sphere" : S.kind == K::capsule ? "capsule"
-            : S.kind == K::box ? "box" : S.kind == K::cylinder ? "cylinder" : "mesh";
+  r.shape = S.kind == K::plane      ? "plane"
+            : S.kind == K::sphere   ? "sphere"
+            : S.kind == K::capsule  ? "capsule"
+            : S.kind == K::box      ? "box"
+            : S.kind == K::cylinder ? "cylinder"
+                                    : "mesh";
   switch (S.kind) {
-    case K::plane: break;
-    case K::sphere: r.dimensions = {{"radius", S.radius}}; break;
-    case K::capsule: r.dimensions = {{"radius", S.radius}, {"length", 2 * S.half_length}}; break;
+    case K::plane:
+      break;
+    case K::sphere:
+      r.dimensions = {{"radius", S.radius}};
+      break;
+    case K::capsule:
+      r.dimensions = {{"radius", S.radius}, {"length", 2 * S.half_length}};
+      break;
     case K::box:
-      r.dimensions = {{"size_x", 2 * S.half_extents.x()}, {"size_y", 2 * S.half_extents.y()},
-                      {"size_z", 2 * S.half_extents.z()}, {"rounding", S.rounding}};
+      r.dimensions = {{"size_x", 2 * S.half_extents.x()},
+                      {"size_y", 2 * S.half_extents.y()},
+                      {"size_z", 2 * S.half_extents.z()},
+                      {"rounding", S.rounding}};
       break;
     case K::cylinder:
       r.dimensions = {{"radius", S.radius}, {"length", 2 * S.half_length}, {"wall", S.wall}, {"rounding", S.rounding}};

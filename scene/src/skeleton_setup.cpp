@@ -31,8 +31,8 @@ void bvh_motion(const Section& b, const Bvh& bvh, const std::string& joint, Bone
     order += static_cast<char>('X' + (ch - BvhJoint::Xrotation));
   }
   if (columns.size() != 3)
-    b.fail("bvh_joint", "\"" + joint + "\" has " + std::to_string(columns.size()) +
-                            " rotation channels, expected 3 (a ball joint)");
+    b.fail("bvh_joint",
+           "\"" + joint + "\" has " + std::to_string(columns.size()) + " rotation channels, expected 3 (a ball joint)");
   bone.motion.kind = Driver::Kind::keyframes_cubic;
   Eigen::Vector3d previous = Eigen::Vector3d::Zero();
   for (Eigen::Index f = 0; f < bvh.motion.rows(); ++f) {
@@ -103,7 +103,8 @@ void parse_motion(const Section& s, const Section& b, const std::optional<Bvh>& 
     bone.motion.phase = b.number("phase", 0.0);
   } else if (motion == "bvh") {
     if (!bvh) s.fail("bvh", "missing, bone \"" + bone.name + "\" takes its motion from a BVH file");
-    if (bone.joint != BoneSpec::Joint::ball) b.fail("joint", "motion = \"bvh\" drives ball joints (expected joint = \"ball\")");
+    if (bone.joint != BoneSpec::Joint::ball)
+      b.fail("joint", "motion = \"bvh\" drives ball joints (expected joint = \"ball\")");
     if (b.has("order")) b.fail("order", "comes from the BVH file's channels with motion = \"bvh\"");
     bvh_motion(b, *bvh, b.string("bvh_joint", bone.name), bone);
   }
@@ -120,7 +121,8 @@ BoneSpec parse_bone(const Section& s, const Section& b, const std::optional<Bvh>
   const std::string parent = b.string("parent", "ground");
   if (parent != "ground") {
     auto it = index.find(parent);
-    if (it == index.end()) b.fail("parent", "\"" + parent + "\" is not a bone defined above (expected \"ground\" or an earlier bone)");
+    if (it == index.end())
+      b.fail("parent", "\"" + parent + "\" is not a bone defined above (expected \"ground\" or an earlier bone)");
     bone.parent = it->second;
   }
   bone.origin = b.vec3("origin", Eigen::Vector3d::Zero());
@@ -136,7 +138,8 @@ BoneSpec parse_bone(const Section& s, const Section& b, const std::optional<Bvh>
   bone.from = b.vec3("from", bone.origin + start * direction);
   bone.to = b.vec3("to", bone.origin + length * direction);
   if ((b.has("from") || b.has("to")) && (b.has("start") || b.has("length") || b.has("direction")))
-    b.fail(b.has("from") ? "from" : "to", "give the capsule either by from and to or by direction, start and length, not both");
+    b.fail(b.has("from") ? "from" : "to",
+           "give the capsule either by from and to or by direction, start and length, not both");
   return bone;
 }
 
@@ -149,7 +152,8 @@ void bind_nodes(const std::vector<Section>& sections, const Mesh& mesh, const st
   for (std::size_t i = 0; i < bones.size(); ++i)
     for (int v : bones[i].nodes) {
       if (bound_to[v] >= 0)
-        sections[i].fail("select", "node " + std::to_string(v) + " is already bound to bone \"" + bones[bound_to[v]].name + "\"");
+        sections[i].fail("select",
+                         "node " + std::to_string(v) + " is already bound to bone \"" + bones[bound_to[v]].name + "\"");
       bound_to[v] = static_cast<int>(i);
     }
   std::vector<double> attach(bones.size());
@@ -173,12 +177,16 @@ void bind_nodes(const std::vector<Section>& sections, const Mesh& mesh, const st
   for (std::size_t i = 0; i < bones.size(); ++i) {
     std::sort(bones[i].nodes.begin(), bones[i].nodes.end());
     if ((bones[i].radius > 0 || listed[i]) && bones[i].nodes.empty())
-      sections[i].fail("radius", "bone \"" + bones[i].name + "\" binds no mesh node (expected its capsule, the segment from-to with this radius, to hold mesh nodes)");
+      sections[i].fail(
+          "radius",
+          "bone \"" + bones[i].name +
+              "\" binds no mesh node (expected its capsule, the segment from-to with this radius, to hold mesh nodes)");
     for (int v : bones[i].nodes)
       if (driven_by[v] >= 0)
-        sections[i].fail(listed[i] ? "select" : "radius",
-                         "node " + std::to_string(v) + " of bone \"" + bones[i].name + "\" is already driven by boundary[" +
-                             std::to_string(driven_by[v]) + "] (expected each node driven once)");
+        sections[i].fail(listed[i] ? "select" : "radius", "node " + std::to_string(v) + " of bone \"" + bones[i].name +
+                                                              "\" is already driven by boundary[" +
+                                                              std::to_string(driven_by[v]) +
+                                                              "] (expected each node driven once)");
   }
 }
 

@@ -15,12 +15,13 @@
 
 namespace isochor {
 
-
 XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_dofs(scene)) {
   if (scene.damping.alpha != 0 || scene.damping.beta != 0)
-    throw Error(scene.file.name() + ": [damping] is not available with integrator.kind = \"xpbd\" (expected no Rayleigh damping)");
+    throw Error(scene.file.name() +
+                ": [damping] is not available with integrator.kind = \"xpbd\" (expected no Rayleigh damping)");
   if (!scene.loads.empty() || !scene.pressure_loads.empty())
-    throw Error(scene.file.name() + ": [[load]] is not available with integrator.kind = \"xpbd\" (expected gravity as its only load)");
+    throw Error(scene.file.name() +
+                ": [[load]] is not available with integrator.kind = \"xpbd\" (expected gravity as its only load)");
   // The same supports (and checks) as the other models, grouped by node for the projection.
   if (const auto supports = make_supports(scene, dofs_)) {
     std::map<int, std::size_t> held_at;
@@ -32,13 +33,15 @@ XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_
     }
   }
   if (scene.self_contact.enabled)
-    throw Error(scene.file.name() + ": [contact.self] is not available with integrator.kind = \"xpbd\" (expected no contact "
-                                    "between body parts)");
+    throw Error(scene.file.name() +
+                ": [contact.self] is not available with integrator.kind = \"xpbd\" (expected no contact "
+                "between body parts)");
   for (const Collider& c : scene.colliders)
     if (c.law.damping != 0 || c.law.friction != 0)
-      throw Error(scene.file.name() + ": " + c.name + ": contact damping and friction are not available with integrator.kind = "
-                                      "\"xpbd\" (its contact is a projection onto the collider's surface; expected damping = 0 "
-                                      "and friction = 0)");
+      throw Error(scene.file.name() + ": " + c.name +
+                  ": contact damping and friction are not available with integrator.kind = "
+                  "\"xpbd\" (its contact is a projection onto the collider's surface; expected damping = 0 "
+                  "and friction = 0)");
   const Mesh& mesh = scene.mesh;
   const double mu = scene.material.mu, lambda = scene.material.lambda;
   const double lambda_p = std::isinf(lambda) ? lambda : lambda + mu;
@@ -58,16 +61,19 @@ XpbdMeshSystem::XpbdMeshSystem(const Scene& scene) : scene_(scene), dofs_(scene_
   std::vector<std::vector<int>> elements;
   for (const Tet& t : mesh.tets()) elements.emplace_back(t.begin(), t.end());
   const Pattern pattern = pattern_from_elements(dofs_, elements);
-  zones_ = VolumeConstraints::zones(mesh, scene.keep_zones ? scene_zone_tets(scene) : std::vector<std::vector<int>>{}, dofs_, pattern);
+  zones_ = VolumeConstraints::zones(mesh, scene.keep_zones ? scene_zone_tets(scene) : std::vector<std::vector<int>>{},
+                                    dofs_, pattern);
   if (scene.zone_restore_time > 0)
-    zones_.restore_from(scene.initial_positions.cols() ? scene.initial_positions : mesh.rest_positions(), scene.frames.times().front(),
-                        scene.zone_restore_time);
+    zones_.restore_from(scene.initial_positions.cols() ? scene.initial_positions : mesh.rest_positions(),
+                        scene.frames.times().front(), scene.zone_restore_time);
   zone_grad_.resize(zones_.size());
   for (int j = 0; j < zones_.size(); ++j) zone_grad_[j].resize(zones_.row_dofs(j).size());
 }
 
 void XpbdMeshSystem::initial_state(double t0, Eigen::VectorXd& x, Eigen::VectorXd& v) {
-  const Points& X = start ? start->positions : scene_.initial_positions.cols() ? scene_.initial_positions : scene_.mesh.rest_positions();
+  const Points& X = start                             ? start->positions
+                    : scene_.initial_positions.cols() ? scene_.initial_positions
+                                                      : scene_.mesh.rest_positions();
   x = Eigen::Map<const Eigen::VectorXd>(X.data(), X.size());
   v.resize(x.size());
   for (int n = 0; n < scene_.mesh.num_nodes(); ++n)
@@ -108,7 +114,8 @@ void XpbdMeshSystem::hold(double t, Eigen::VectorXd& x, Eigen::VectorXd* v) cons
   }
 }
 
-double XpbdMeshSystem::constraint(int c, const Eigen::VectorXd& x, std::vector<int>& points, std::vector<double>& grad) {
+double XpbdMeshSystem::constraint(int c, const Eigen::VectorXd& x, std::vector<int>& points,
+                                  std::vector<double>& grad) {
   const int e = c / 2;
   const Tet& t = scene_.mesh.tets()[e];
   const TetShape& s = shapes_[e];
@@ -138,14 +145,16 @@ void XpbdMeshSystem::after_sweep(double, Eigen::VectorXd& x) {
 void XpbdMeshSystem::project_zones(Eigen::VectorXd& x) {
   if (zones_.size() == 0) return;
   zones_.set_time(t_);
-  // Each zone: one hard constraint V_j(x) = V_j(rest) (or its restore_time target), projected in turn with fresh values.
+  // Each zone: one hard constraint V_j(x) = V_j(rest) (or its restore_time target), projected in turn with fresh
+  // values.
   for (int j = 0; j < zones_.size(); ++j) {
     const Points xp = Eigen::Map<const Points>(x.data(), 3, num_points());
     zones_.value(xp, zone_value_);
     zones_.gradient(xp, zone_grad_);
     const auto& rows = zones_.row_dofs(j);
     double denom = 0;
-    for (std::size_t k = 0; k < rows.size(); ++k) denom += w_[dofs_.free_nodes[rows[k] / 3]] * zone_grad_[j][k] * zone_grad_[j][k];
+    for (std::size_t k = 0; k < rows.size(); ++k)
+      denom += w_[dofs_.free_nodes[rows[k] / 3]] * zone_grad_[j][k] * zone_grad_[j][k];
     if (denom <= 0) continue;
     const double dl = -zone_value_[j] / denom;
     for (std::size_t k = 0; k < rows.size(); ++k) {

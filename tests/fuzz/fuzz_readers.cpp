@@ -1,5 +1,5 @@
 // isochor_fuzz READER ITERATIONS SEED OUT_DIR [SEED_FILE...]: a deterministic fuzzer of isochor's
-// readers (issue 16). Each iteration takes a seed input, mutates its bytes and structure (bit
+// readers. Each iteration takes a seed input, mutates its bytes and structure (bit
 // flips, interesting bytes, deleted, duplicated and swapped ranges and lines, numbers replaced by
 // extreme values, truncation; for scenes also --set overrides with extreme values), writes it to
 // OUT_DIR and reads it. A reader may refuse its input only with isochor::Error (the one-line
@@ -61,8 +61,9 @@ void on_alarm(int) {
   _exit(3);
 }
 
-const char* const kNumbers[] = {"0", "-1", "1e308", "-1e308", "nan", "inf", "-inf", "2147483648", "9223372036854775807",
-                                "1e-300", "0.5", "3", "100000000", "-0", "1e9", "4294967296", "18446744073709551616"};
+const char* const kNumbers[] = {
+    "0",      "-1",  "1e308", "-1e308",    "nan", "inf", "-inf",       "2147483648",          "9223372036854775807",
+    "1e-300", "0.5", "3",     "100000000", "-0",  "1e9", "4294967296", "18446744073709551616"};
 const char kBytes[] = "0-9.e\n \t[]\"={}$,#'\\";
 
 class Mutator {
@@ -80,8 +81,12 @@ class Mutator {
   std::string once(std::string s) {
     if (s.empty()) return std::string(1, kBytes[below(sizeof kBytes - 1)]);
     switch (below(9)) {
-      case 0: s[below(s.size())] ^= static_cast<char>(1u << below(8)); break;
-      case 1: s[below(s.size())] = kBytes[below(sizeof kBytes - 1)]; break;
+      case 0:
+        s[below(s.size())] ^= static_cast<char>(1u << below(8));
+        break;
+      case 1:
+        s[below(s.size())] = kBytes[below(sizeof kBytes - 1)];
+        break;
       case 2: {
         const std::size_t at = below(s.size());
         s.erase(at, 1 + below(16));
@@ -92,11 +97,17 @@ class Mutator {
         s.insert(below(s.size()), s.substr(at, len));
         break;
       }
-      case 4: return number(std::move(s));
-      case 5: return lines(std::move(s), 0);
-      case 6: return lines(std::move(s), 1);
-      case 7: return lines(std::move(s), 2);
-      default: s.resize(below(s.size())); break;
+      case 4:
+        return number(std::move(s));
+      case 5:
+        return lines(std::move(s), 0);
+      case 6:
+        return lines(std::move(s), 1);
+      case 7:
+        return lines(std::move(s), 2);
+      default:
+        s.resize(below(s.size()));
+        break;
     }
     return s;
   }
@@ -119,9 +130,12 @@ class Mutator {
     for (std::string line; std::getline(in, line);) l.push_back(line);
     if (l.empty()) return s;
     const std::size_t a = below(l.size()), b = below(l.size());
-    if (kind == 0) l.erase(l.begin() + static_cast<long>(a));
-    else if (kind == 1) l.insert(l.begin() + static_cast<long>(b), l[a]);
-    else std::swap(l[a], l[b]);
+    if (kind == 0)
+      l.erase(l.begin() + static_cast<long>(a));
+    else if (kind == 1)
+      l.insert(l.begin() + static_cast<long>(b), l[a]);
+    else
+      std::swap(l[a], l[b]);
     std::string out;
     for (const std::string& line : l) out += line + "\n";
     return out;
@@ -162,9 +176,10 @@ std::vector<fs::path> make_mesh_seeds(const std::string& reader, const fs::path&
   if (reader == "ply" || reader == "csv") {  // paint files: ASCII and binary PLY, CSV by point and by node
     const Mesh m = make_box({1, 1, 1}, {2, 2, 2}, Eigen::Vector3d::Zero(), 6);
     std::ostringstream ascii, binary, points, nodes;
-    const char* header = "element vertex %d\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\n"
-                         "property uchar green\nproperty uchar blue\nproperty int label\nelement face %d\n"
-                         "property list uchar int vertex_indices\nend_header\n";
+    const char* header =
+        "element vertex %d\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\n"
+        "property uchar green\nproperty uchar blue\nproperty int label\nelement face %d\n"
+        "property list uchar int vertex_indices\nend_header\n";
     char h[400];
     std::snprintf(h, sizeof h, header, m.num_nodes(), static_cast<int>(m.surface().size()));
     ascii << "ply\nformat ascii 1.0\n" << h;
@@ -206,13 +221,15 @@ std::vector<fs::path> make_mesh_seeds(const std::string& reader, const fs::path&
     std::ostringstream node, ele, obj;
     node << m.num_nodes() << " 3 0 0\n";
     for (int i = 0; i < m.num_nodes(); ++i)
-      node << i + 1 << " " << m.rest_positions()(0, i) << " " << m.rest_positions()(1, i) << " " << m.rest_positions()(2, i) << "\n";
+      node << i + 1 << " " << m.rest_positions()(0, i) << " " << m.rest_positions()(1, i) << " "
+           << m.rest_positions()(2, i) << "\n";
     ele << m.num_tets() << " 4 1\n";
     for (int e = 0; e < m.num_tets(); ++e)
       ele << e + 1 << " " << m.tets()[e][0] + 1 << " " << m.tets()[e][1] + 1 << " " << m.tets()[e][2] + 1 << " "
           << m.tets()[e][3] + 1 << " " << (e % 2) << "\n";
     for (int i = 0; i < m.num_nodes(); ++i)
-      obj << "v " << m.rest_positions()(0, i) << " " << m.rest_positions()(1, i) << " " << m.rest_positions()(2, i) << "\n";
+      obj << "v " << m.rest_positions()(0, i) << " " << m.rest_positions()(1, i) << " " << m.rest_positions()(2, i)
+          << "\n";
     for (const Tri& t : m.surface()) obj << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
     if (reader == "tetgen") {
       write_text(dir / "seed.node", node.str());
@@ -231,12 +248,18 @@ std::vector<fs::path> make_mesh_seeds(const std::string& reader, const fs::path&
 void read_input(const std::string& reader, const fs::path& p, const std::vector<std::string>& overrides) {
   Points x;
   std::vector<Tri> tris;
-  if (reader == "scene") (void)load_scene(p.string(), overrides);
-  else if (reader == "msh") (void)read_msh(p.string());
-  else if (reader == "tetgen") (void)read_tetgen(p.string());
-  else if (reader == "obj") read_obj_surface(p.string(), x, tris);
-  else if (reader == "stl") read_stl_surface(p.string(), x, tris);
-  else if (reader == "bvh") (void)read_bvh(p.string());
+  if (reader == "scene")
+    (void)load_scene(p.string(), overrides);
+  else if (reader == "msh")
+    (void)read_msh(p.string());
+  else if (reader == "tetgen")
+    (void)read_tetgen(p.string());
+  else if (reader == "obj")
+    read_obj_surface(p.string(), x, tris);
+  else if (reader == "stl")
+    read_stl_surface(p.string(), x, tris);
+  else if (reader == "bvh")
+    (void)read_bvh(p.string());
   else if (reader == "ply" || reader == "csv") {  // paint files, read against a 27-node mesh
     const Mesh m = make_box({1, 1, 1}, {2, 2, 2}, Eigen::Vector3d::Zero(), 6);
     const PaintedPoints painted = read_paint(p.string(), &m.rest_positions());
@@ -244,7 +267,8 @@ void read_input(const std::string& reader, const fs::path& p, const std::vector<
     rule.zones = {"a", "b"};
     rule.labels = {1, 2};
     (void)painted_zones(m, painted, paint_membership(painted, rule), 1e9);
-  } else throw std::invalid_argument("unknown reader " + reader);
+  } else
+    throw std::invalid_argument("unknown reader " + reader);
 }
 
 // --set overrides for a scene: keys of the seed (key = value lines, under their [table]) with
@@ -256,8 +280,10 @@ std::vector<std::string> overrides_for(const std::string& text, Mutator& m) {
   static const std::regex header("^\\s*\\[([A-Za-z_.]+)\\]\\s*$"), pair("^\\s*([A-Za-z_]+)\\s*=\\s*(.*)$");
   for (std::string line; std::getline(in, line);) {
     std::smatch s;
-    if (std::regex_match(line, s, header)) table = s[1];
-    else if (std::regex_match(line, s, pair)) keys.push_back((table.empty() ? "" : table + ".") + std::string(s[1]));
+    if (std::regex_match(line, s, header))
+      table = s[1];
+    else if (std::regex_match(line, s, pair))
+      keys.push_back((table.empty() ? "" : table + ".") + std::string(s[1]));
   }
   std::vector<std::string> out;
   if (keys.empty()) return out;
@@ -300,11 +326,13 @@ int main(int argc, char** argv) {
     const std::string ext = from.extension().string();
     const fs::path input = dir / ("input" + ext);
     if (reader == "tetgen") {
-      for (const char* e : {".node", ".ele"}) fs::copy_file(fs::path(from).replace_extension(e), dir / (std::string("input") + e),
-                                                             fs::copy_options::overwrite_existing);
+      for (const char* e : {".node", ".ele"})
+        fs::copy_file(fs::path(from).replace_extension(e), dir / (std::string("input") + e),
+                      fs::copy_options::overwrite_existing);
     }
     write_text(input, m.mutate(text));
-    const std::vector<std::string> overrides = reader == "scene" && m.below(3) == 0 ? overrides_for(text, m) : std::vector<std::string>{};
+    const std::vector<std::string> overrides =
+        reader == "scene" && m.below(3) == 0 ? overrides_for(text, m) : std::vector<std::string>{};
     std::string label = input.string();
     for (const std::string& o : overrides) label += " --set '" + o + "'";
     std::snprintf(g_current, sizeof g_current, "%s (iteration %ld, from %s)", label.c_str(), i, from.string().c_str());
@@ -322,7 +350,8 @@ int main(int argc, char** argv) {
         if (std::getenv("ISOCHOR_FUZZ_VERBOSE")) std::fprintf(stderr, "refused: %s\n", e.what());
         _exit(10);
       } catch (const std::exception& e) {
-        std::fprintf(stderr, "isochor_fuzz: %s: not an isochor::Error but %s: %s\n", g_current, typeid(e).name(), e.what());
+        std::fprintf(stderr, "isochor_fuzz: %s: not an isochor::Error but %s: %s\n", g_current, typeid(e).name(),
+                     e.what());
         _exit(1);
       }
       _exit(0);
@@ -339,7 +368,7 @@ int main(int argc, char** argv) {
     }
   }
   for (const fs::path& p : seeds) fs::remove(dir / ("failure" + p.extension().string()));
-  std::printf("isochor_fuzz %s: %ld inputs (seed %lu), %ld refused with a one-line error, the rest read\n", reader.c_str(),
-              iterations, seed, refused);
+  std::printf("isochor_fuzz %s: %ld inputs (seed %lu), %ld refused with a one-line error, the rest read\n",
+              reader.c_str(), iterations, seed, refused);
   return 0;
 }

@@ -1,4 +1,4 @@
-"""Animation packages (issue 21): the point caches `isochor export` writes, read back by their
+"""Animation packages: the point caches `isochor export` writes, read back by their
 published layouts, and a Blender smoke test (when Blender is installed): one frame of a
 1,275-tet y-up run imported, checked against the run and rendered with Cycles."""
 import os

@@ -1,4 +1,4 @@
-"""tools/energy_chart.py (issue 20, the paper's Figure 8): its table against the run files read
+"""tools/energy_chart.py (the paper's Figure 8): its table against the run files read
 directly, a failed run marked as such, and a clear stop on a file that is not a run."""
 import csv
 import os

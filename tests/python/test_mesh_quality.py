@@ -1,4 +1,4 @@
-"""tools/mesh_quality.py (issue 20): on the sliver box its extremes are the ones geometry gives, and a
+"""tools/mesh_quality.py: on the sliver box its extremes are the ones geometry gives, and a
 file that is not a run stops with one line naming it."""
 import math
 import os

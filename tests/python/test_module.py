@@ -1,4 +1,4 @@
-"""The Python module (issue 21): a run from Python equals the command line's, frame by frame;
+"""The Python module: a run from Python equals the command line's, frame by frame;
 the callback sees what the file holds and can stop the run; errors arrive with the command
 line's message; isochor.open reads what was written; studies run from Python.
 

@@ -1,4 +1,4 @@
-"""Where users already look at runs (issue 21): ParaView through `isochor paraview` (when
+"""Where users already look at runs: ParaView through `isochor paraview` (when
 ParaView and xvfb are installed), meshio's TimeSeriesReader, and why not meshio.read()."""
 import os
 import shutil

@@ -2,7 +2,6 @@
 
 #include <cmath>
 
-
 namespace isochor {
 
 ComponentSupports::ComponentSupports(const Mesh& mesh, std::vector<Row> rows, const DofMap& dofs, double length)

@@ -137,7 +137,8 @@ void VolumeConstraints::set_time(double t) {
   if (start_offset_.empty()) return;
   const double s = std::clamp((t - restore_t0_) / restore_duration_, 0.0, 1.0);
   // remaining fraction 1 - p(s), p = 10s^3 - 15s^4 + 6s^5; dp/ds = 30 s^2 (1 - s)^2
-  const double p = s * s * s * (10.0 + s * (-15.0 + 6.0 * s)), dp = 30.0 * s * s * (1.0 - s) * (1.0 - s) / restore_duration_;
+  const double p = s * s * s * (10.0 + s * (-15.0 + 6.0 * s)),
+               dp = 30.0 * s * s * (1.0 - s) * (1.0 - s) / restore_duration_;
   offset_.resize(rest_.size());
   rate_.resize(rest_.size());
   for (std::size_t j = 0; j < rest_.size(); ++j) {
@@ -195,7 +196,8 @@ void VolumeConstraints::hessian_times(const Points& x, const Eigen::VectorXd& xd
     Mat12 H;
     tet_volume(element_x(x, e, o), nullptr, &H);
     Vec12 ve;
-    for (int k = 0; k < 4; ++k) ve.segment<3>(3 * k) = e.nodes[k] < 0 ? Vec3::Zero() : Vec3(xdot.segment<3>(3 * e.nodes[k]));
+    for (int k = 0; k < 4; ++k)
+      ve.segment<3>(3 * k) = e.nodes[k] < 0 ? Vec3::Zero() : Vec3(xdot.segment<3>(3 * e.nodes[k]));
     const Vec12 hv = H * ve;
     for (int a = 0; a < 12; ++a)
       if (row_slot_[i][a] >= 0) rows[e.constraint][row_slot_[i][a]] += hv[a];

@@ -7,7 +7,6 @@
 
 namespace isochor {
 
-
 double triangle_area(const Vec9n& x, Vec9n* grad, Mat9n* hess) {
   // n = (x1 - x0) x (x2 - x0), A = |n| / 2. dn = -[e2]x de1 + [e1]x de2 with e1 = x1 - x0, e2 = x2 - x0.
   const Vec3 e1 = x.segment<3>(3) - x.segment<3>(0), e2 = x.segment<3>(6) - x.segment<3>(0);
@@ -23,7 +22,7 @@ double triangle_area(const Vec9n& x, Vec9n* grad, Mat9n* hess) {
   if (grad) *grad = 0.5 * dn.transpose() * nh;
   if (hess) {
     // A'' = 1/2 [dn^T (I - nh nh^T)/|n| dn + sum_i nh_i d2n_i]; d2(n . w) for fixed w:
-    // n . w = e1 . (e2 x w) so d2/de1 de2 = -[w]x ... from n.w = e1^T [e2]x^T w = -e1^T [w]x e2... 
+    // n . w = e1 . (e2 x w) so d2/de1 de2 = -[w]x ... from n.w = e1^T [e2]x^T w = -e1^T [w]x e2...
     Mat9n H = dn.transpose() * (Mat3::Identity() - nh * nh.transpose()) / len * dn;
     // n . w = (e1 x e2) . w = e1 . (e2 x w) = e1^T [e2]x w = -e1^T [w]x e2, so d2/de1de2 = -[w]x.
     Eigen::Matrix<double, 6, 6> He = Eigen::Matrix<double, 6, 6>::Zero();
@@ -120,7 +119,8 @@ Vec3 contact_damping_force(double k, double alpha, double mu_c, double eps, doub
     const double c = k * alpha;
     f -= c * p * p * sdot * n;
     // f = -c p^2 sdot n with dp/dx = -n^T, dn/dx = H.
-    if (neg_dfdx) *neg_dfdx += c * (-2.0 * p * sdot * n * n.transpose() + p * p * n * dsdot.transpose() + p * p * sdot * H);
+    if (neg_dfdx)
+      *neg_dfdx += c * (-2.0 * p * sdot * n * n.transpose() + p * p * n * dsdot.transpose() + p * p * sdot * H);
     if (neg_dfdv) *neg_dfdv += c * p * p * n * n.transpose();
   }
   if (mu_c > 0) {

@@ -14,8 +14,8 @@ AlphaTilde alpha_tilde(double J, double eps) {
     const double a = std::cbrt(1.0 / J);
     return {a, -a / (3.0 * J), 4.0 * a / (9.0 * J * J)};
   }
-  const double e13 = std::cbrt(1.0 / eps);           // eps^(-1/3)
-  const double e43 = e13 / eps, e73 = e43 / eps;      // eps^(-4/3), eps^(-7/3)
+  const double e13 = std::cbrt(1.0 / eps);        // eps^(-1/3)
+  const double e43 = e13 / eps, e73 = e43 / eps;  // eps^(-4/3), eps^(-7/3)
   const double d = J - eps;
   return {e13 - e43 * d / 3.0 + 2.0 / 9.0 * e73 * d * d, -e43 / 3.0 + 4.0 / 9.0 * e73 * d, 4.0 / 9.0 * e73};
 }
@@ -78,8 +78,6 @@ Mat9 Material::dPdF(const Mat3& F) const {
   evaluate(F, nullptr, &d);
   return d;
 }
-double Material::pressure(const Mat3& F) const {
-  return -(P(F) * F.transpose()).trace() / (3.0 * F.determinant());
-}
+double Material::pressure(const Mat3& F) const { return -(P(F) * F.transpose()).trace() / (3.0 * F.determinant()); }
 
 }  // namespace isochor

@@ -10,7 +10,8 @@ namespace isochor {
 namespace {
 class Snh : public Material {
  public:
-  Snh(double mu, double lambda) : mu_(4.0 / 3.0 * mu), lambda_(lambda + 5.0 / 6.0 * mu), a_(1.0 + 0.75 * mu_ / lambda_) {}
+  Snh(double mu, double lambda)
+      : mu_(4.0 / 3.0 * mu), lambda_(lambda + 5.0 / 6.0 * mu), a_(1.0 + 0.75 * mu_ / lambda_) {}
   std::string name() const override { return "snh"; }
   InvariantDerivatives invariants(double I, double J) const override {
     const double d = J - a_;

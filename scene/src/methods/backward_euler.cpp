@@ -22,14 +22,16 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
   o.project_hessian = hessian != "exact";
   o.exact_near_solution = hessian == "hybrid";
   if (o.exact_near_solution && kind != IntegratorKind::backward_euler)
-    in.fail("hessian", "\"hybrid\" switches within backward Euler's Newton iteration (the semi-implicit step takes one update)");
+    in.fail("hessian",
+            "\"hybrid\" switches within backward Euler's Newton iteration (the semi-implicit step takes one update)");
   if (in.has("hessian") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
     in.fail("hessian", "is an option of the backward_euler and semi_implicit integrators");
   // Options of backward Euler's Newton iteration alone (semi-implicit takes one update).
   o.max_newton = static_cast<int>(in.integer("max_newton", 30, 1, 100000));
   o.line_search = in.boolean("line_search", true);
   o.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 0, 0, 30));
-  if (in.has("line_search") && kind != IntegratorKind::backward_euler) in.fail("line_search", "is an option of the backward_euler integrator");
+  if (in.has("line_search") && kind != IntegratorKind::backward_euler)
+    in.fail("line_search", "is an option of the backward_euler integrator");
   if (in.has("substeps_on_failure") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::statics)
     in.fail("substeps_on_failure", "is an option of the backward_euler and static integrators");
   if (in.has("max_newton") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::ida)

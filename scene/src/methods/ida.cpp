@@ -14,7 +14,8 @@ void parse_ida(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
   o.max_order = static_cast<int>(in.integer("max_order", 5, 1, 5));
   o.max_step = in.number("max_step", 0.0, Range::non_negative());
   // Unset: 0, the integrator's default (IdaOptions::kDefaultNewtonCoef, every linear solver).
-  o.newton_coef = in.has("newton_coef") ? in.number("newton_coef", IdaOptions::kDefaultNewtonCoef, {0.0, 1.0, true, true}) : 0.0;
+  o.newton_coef =
+      in.has("newton_coef") ? in.number("newton_coef", IdaOptions::kDefaultNewtonCoef, {0.0, 1.0, true, true}) : 0.0;
   // Read here for IDA only (backward Euler's parser reads the key with its own default and range).
   if (kind == IntegratorKind::ida) o.max_newton = static_cast<int>(in.integer("max_newton", 4, 1, 100));
   o.max_steps = parse_max_steps(in);

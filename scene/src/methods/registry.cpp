@@ -46,9 +46,10 @@ bool linear_solver_is_auto(const Section& in) { return linear_solver_name(in) ==
 LinearSolverKind parse_linear_solver(const Section& in, LinearSolverKind automatic) {
   const std::string s = linear_solver_name(in);
   if (s == "amg" && !amg_available())
-    in.fail("linear_solver", "\"amg\" needs isochor built with hypre and MPI (Debian: apt-get install libhypre-dev "
-                             "libopenmpi-dev, then rebuild)");
-  return s == "klu" ? LinearSolverKind::klu
+    in.fail("linear_solver",
+            "\"amg\" needs isochor built with hypre and MPI (Debian: apt-get install libhypre-dev "
+            "libopenmpi-dev, then rebuild)");
+  return s == "klu"       ? LinearSolverKind::klu
          : s == "reduced" ? LinearSolverKind::reduced
          : s == "krylov"  ? LinearSolverKind::krylov
          : s == "amg"     ? LinearSolverKind::amg

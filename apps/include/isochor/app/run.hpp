@@ -12,9 +12,9 @@ namespace isochor {
 
 struct RunSummary {
   std::string output;
-  int frames = 0;  // in the file (a resumed run: with the frames before the resume)
-  RunStats stats;  // a resumed run: steps, Newton iterations, Jacobians, rejections and wall time
-                   // include the part before the resume (from the file's per-frame series)
+  int frames = 0;              // in the file (a resumed run: with the frames before the resume)
+  RunStats stats;              // a resumed run: steps, Newton iterations, Jacobians, rejections and wall time
+                               // include the part before the resume (from the file's per-frame series)
   double simbody_seconds = 0;  // realizing the skeleton (0 without one)
   int resumed_from = -1;       // the frame a resumed run continued from
   double resumed_time = 0;

@@ -13,11 +13,11 @@
 namespace isochor {
 
 struct StudyCase {
-  std::string method;                   // the method's name ("reference" for the reference)
-  std::string label;                    // unique file stem
-  std::vector<std::string> overrides;   // base, then the method's, then the sweep's
+  std::string method;                                 // the method's name ("reference" for the reference)
+  std::string label;                                  // unique file stem
+  std::vector<std::string> overrides;                 // base, then the method's, then the sweep's
   std::vector<std::pair<std::string, double>> sweep;  // key, value
-  std::filesystem::path scene;          // the method's own base scene (method.scene); empty: the study's
+  std::filesystem::path scene;                        // the method's own base scene (method.scene); empty: the study's
 };
 
 struct Study {

@@ -10,10 +10,10 @@ namespace isochor {
 struct BvhJoint {
   enum Channel { Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation };
   std::string name;
-  int parent = -1;                         // index in Bvh::joints, -1 for the root
+  int parent = -1;  // index in Bvh::joints, -1 for the root
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();
-  std::vector<Channel> channels;           // in file order
-  int first_channel = 0;                   // column of its first channel in Bvh::motion
+  std::vector<Channel> channels;  // in file order
+  int first_channel = 0;          // column of its first channel in Bvh::motion
 };
 
 struct Bvh {

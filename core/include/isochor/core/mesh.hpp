@@ -22,8 +22,8 @@ struct Adjacency {
   const int* end(int i) const { return index.data() + offset[i + 1]; }
 };
 
-double tet_signed_volume(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                         const Eigen::Vector3d& c, const Eigen::Vector3d& d);
+double tet_signed_volume(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                         const Eigen::Vector3d& d);
 
 // The outward faces (positively oriented tets) that belong to one tet only, of every tet or of
 // the tets listed in `which`: the boundary of that set. `overshared`, when given, receives the face
@@ -82,15 +82,15 @@ double tets_volume(const Points& x, const std::vector<Tet>& tets);
 // How far x is from the rest shape X up to a rigid motion: the largest distance of a node of x,
 // moved by the rotation and translation that best fit it onto X (least squares, equal weights:
 // Kabsch; a reflection is not a rigid motion), to its rest position, over the diagonal of X's
-// bounding box. 0 for a rigidly moved copy; the scrambled starts of issue 20 measure recovery.
+// bounding box. 0 for a rigidly moved copy; the scrambled starts (initial.flatten) measure recovery.
 double rest_shape_error(const Points& X, const Points& x);
 
 struct SurfaceCheck {
-  bool closed = false;          // every edge in exactly two triangles
-  bool oriented = false;        // every directed edge at most once
-  int boundary_edges = 0;       // edges in one triangle only
-  int nonmanifold_edges = 0;    // edges in three or more triangles
-  int euler_characteristic = 0; // V - E + F over the nodes the triangles use
+  bool closed = false;           // every edge in exactly two triangles
+  bool oriented = false;         // every directed edge at most once
+  int boundary_edges = 0;        // edges in one triangle only
+  int nonmanifold_edges = 0;     // edges in three or more triangles
+  int euler_characteristic = 0;  // V - E + F over the nodes the triangles use
   std::array<int, 2> first_bad_edge{-1, -1};
 };
 SurfaceCheck check_surface(const std::vector<Tri>& surface);

@@ -16,8 +16,8 @@ class SceneFile;
 // layers alternate thick and thin, the thin ones this many times thinner (the box's size kept),
 // so thin layers hold slivers: smallest face angle atan(1 / (sqrt(2) sliver_ratio)), largest edge
 // ratio sqrt(2 sliver_ratio^2 + 1).
-Mesh make_box(const Eigen::Vector3d& size, const std::array<long, 3>& cells,
-              const Eigen::Vector3d& center, int split, double sliver_ratio = 1.0);
+Mesh make_box(const Eigen::Vector3d& size, const std::array<long, 3>& cells, const Eigen::Vector3d& center, int split,
+              double sliver_ratio = 1.0);
 // Two tets of equal volume sharing a face (the CNH paper's Figure 2). The shared face is an
 // equilateral triangle of edge `edge` in the plane x = 0; apexes at x = -h and x = +h.
 // Node sets: left (left apex), right (right apex), face (the shared face).

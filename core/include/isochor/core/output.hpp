@@ -15,18 +15,18 @@ namespace isochor {
 // it without parsing the scene: its shape and dimensions, its rest pose, and a mesh collider's
 // surface. Where it is at each frame is /frames/collider_pose.
 struct ColliderRecord {
-  std::string name;   // "contact.ground", "contact.plane[0]", "collider[2]"
-  std::string shape;  // plane, sphere, capsule, box, cylinder, mesh
+  std::string name;                                        // "contact.ground", "contact.plane[0]", "collider[2]"
+  std::string shape;                                       // plane, sphere, capsule, box, cylinder, mesh
   std::vector<std::pair<std::string, double>> dimensions;  // m: radius, length, size_x, ..., wall
   std::array<double, 12> rest_pose{1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};  // A (row-major), b: x = A l + b
-  Points vertices;           // mesh: its surface in the collider's frame (scaled)
+  Points vertices;  // mesh: its surface in the collider's frame (scaled)
   std::vector<Tri> triangles;
 };
 
 // What a viewer needs besides the body: the scene's up direction and its colliders.
 struct SceneRecord {
-  std::array<double, 3> up{0, 0, 1};  // unit
-  std::string up_source;              // why that is up ("the ground's normal", "against gravity", ...)
+  std::array<double, 3> up{0, 0, 1};      // unit
+  std::string up_source;                  // why that is up ("the ground's normal", "against gravity", ...)
   std::vector<ColliderRecord> colliders;  // the scene's order: the ground, the planes, the [[collider]]s
 };
 
@@ -42,13 +42,13 @@ struct RunInfo {
 
 struct Frame {
   double time = 0.0;
-  const Points* positions = nullptr;     // all nodes
-  const Points* velocities = nullptr;    // all nodes (m/s): with the positions, what a resume needs
+  const Points* positions = nullptr;                 // all nodes
+  const Points* velocities = nullptr;                // all nodes (m/s): with the positions, what a resume needs
   const std::vector<double>* multipliers = nullptr;  // the constraints' multipliers (a resume's start)
-  std::vector<double> volumes;           // total, then each zone (in the order given at open)
-  std::array<double, 3> energy{0, 0, 0};  // kinetic, elastic, external potential
-  const std::vector<double>* pressure = nullptr;  // per tet, when pressure output is on
-  const Points* loads = nullptr;  // the applied load on every node (N), when the scene has loads
+  std::vector<double> volumes;                       // total, then each zone (in the order given at open)
+  std::array<double, 3> energy{0, 0, 0};             // kinetic, elastic, external potential
+  const std::vector<double>* pressure = nullptr;     // per tet, when pressure output is on
+  const Points* loads = nullptr;                     // the applied load on every node (N), when the scene has loads
   const Points* contact = nullptr;  // the colliders' force on every node (N), when the scene has colliders
   // Where each collider is: 12 numbers per collider, its local-to-world rotation A (row-major)
   // and translation b (x = A l + b), in the scene's order (the ground and planes first).
@@ -62,10 +62,10 @@ struct Frame {
 struct ResumePoint {
   int frame = -1;  // index of the last complete frame (frames after it were dropped)
   double time = 0;
-  Points positions, velocities;                   // every node
-  std::vector<double> multipliers;                // the constraints' (empty if none were written)
-  std::map<std::string, double> stats;            // the per-frame /stats series at that frame
-  std::string status;                             // what the file said before: running, failed, ...
+  Points positions, velocities;         // every node
+  std::vector<double> multipliers;      // the constraints' (empty if none were written)
+  std::map<std::string, double> stats;  // the per-frame /stats series at that frame
+  std::string status;                   // what the file said before: running, failed, ...
 };
 
 class OutputWriter {

@@ -17,22 +17,24 @@ class RunFile {
   int num_nodes() const;
   int num_tets() const;
   int num_frames() const;
-  std::vector<std::string> zone_names() const;      // in /frames/volume column order
+  std::vector<std::string> zone_names() const;  // in /frames/volume column order
   std::map<std::string, std::size_t> zone_sizes() const;
   std::vector<double> times() const;
-  std::vector<std::vector<double>> volumes() const;  // per frame: total, then zones
+  std::vector<std::vector<double>> volumes() const;     // per frame: total, then zones
   std::vector<std::array<double, 3>> energies() const;  // per frame: kinetic, elastic, external
   std::vector<Tri> surface() const;
   Points rest_positions() const;
   Points positions(int frame) const;
-  Points velocities(int frame) const;  // every node (m/s): runs written since they could be resumed
+  Points velocities(int frame) const;              // every node (m/s): runs written since they could be resumed
   std::vector<double> pressures(int frame) const;  // per tet; the run must have output.pressure = true
-  Points loads(int frame) const { return node_vectors("load", frame); }       // per node (N); the scene must have [[load]]
-  Points contact(int frame) const { return node_vectors("contact", frame); }  // per node (N); the scene must have colliders
-  Points node_vectors(const std::string& name, int frame) const;  // /frames/<name>
-  std::map<std::string, std::string> attributes() const;       // root attributes (strings)
-  std::map<std::string, double> stat_totals() const;           // numeric attributes of /stats
-  std::string stat_text(const std::string& name) const;        // a string attribute of /stats ("" if none)
+  Points loads(int frame) const { return node_vectors("load", frame); }  // per node (N); the scene must have [[load]]
+  Points contact(int frame) const {
+    return node_vectors("contact", frame);
+  }                                                                // per node (N); the scene must have colliders
+  Points node_vectors(const std::string& name, int frame) const;   // /frames/<name>
+  std::map<std::string, std::string> attributes() const;           // root attributes (strings)
+  std::map<std::string, double> stat_totals() const;               // numeric attributes of /stats
+  std::string stat_text(const std::string& name) const;            // a string attribute of /stats ("" if none)
   std::map<std::string, std::vector<double>> stat_series() const;  // datasets under /stats
 
  private:

@@ -23,7 +23,7 @@ namespace isochor {
 struct PaintedPoints {
   std::string path;
   Points x;
-  std::vector<std::string> names;        // property names, in file order
+  std::vector<std::string> names;           // property names, in file order
   std::vector<std::vector<double>> values;  // per property, one value per point
   const std::vector<double>* find(const std::string& name) const;
 };
@@ -34,12 +34,12 @@ PaintedPoints read_paint(const std::string& path, const Points* nodes = nullptr)
 struct PaintRule {
   enum class By { labels, colors, weights };
   By by = By::labels;
-  std::vector<std::string> zones;      // zone names
-  std::string property = "label";      // labels: the property holding them
-  std::vector<long> labels;            // labels: per zone
-  std::vector<Eigen::Vector3d> colors; // colors: per zone, 0..1
-  double color_tolerance = 0.1;        // colors: largest distance in RGB (0..1) to count as that colour
-  std::vector<std::string> weights;    // weights: per zone, the property
+  std::vector<std::string> zones;       // zone names
+  std::string property = "label";       // labels: the property holding them
+  std::vector<long> labels;             // labels: per zone
+  std::vector<Eigen::Vector3d> colors;  // colors: per zone, 0..1
+  double color_tolerance = 0.1;         // colors: largest distance in RGB (0..1) to count as that colour
+  std::vector<std::string> weights;     // weights: per zone, the property
 };
 // Throws an Error naming the file and the missing property.
 std::vector<std::vector<double>> paint_membership(const PaintedPoints& p, const PaintRule& rule);

@@ -50,11 +50,10 @@ class Section {
   bool boolean(std::string_view key, bool fallback) const;
   std::string string(std::string_view key, const std::string& fallback,
                      const std::vector<std::string>& choices = {}) const;
-  std::optional<std::string> string_opt(std::string_view key,
-                                        const std::vector<std::string>& choices = {}) const;
+  std::optional<std::string> string_opt(std::string_view key, const std::vector<std::string>& choices = {}) const;
   Eigen::Vector3d vec3(std::string_view key, const Eigen::Vector3d& fallback, Range range = {}) const;
   std::optional<Eigen::Vector3d> vec3_opt(std::string_view key, Range range = {}) const;
-  std::vector<double> numbers(std::string_view key, Range range = {}) const;  // absent: empty
+  std::vector<double> numbers(std::string_view key, Range range = {}) const;   // absent: empty
   std::vector<long> integers(std::string_view key, long min, long max) const;  // absent: empty
   std::vector<std::string> strings(std::string_view key) const;                // absent: empty
   // The keys of this table, in file order.

@@ -58,9 +58,9 @@ struct BackwardEulerOptions {
   // linear_solver = "auto" (backward Euler): block-Jacobi PCG ("krylov") where the step is
   // solved with the line search (a matrix PCG finds indefinite is shifted, never a failure) and
   // the step matrix has at least kAutoKrylovMinDofs rows; else CHOLMOD ("reduced"). Measured on
-  // the pinned cube (docs/decisions.md, session 18): the two tie at 1,344 dofs (7^3 cells),
+  // the pinned cube (docs/decisions.md): the two tie at 1,344 dofs (7^3 cells),
   // PCG is 1.4 times faster at 7,644 (13^3) and some 5 times at 57K (26^3). With the line search
-  // the run then moves between PCG and CHOLMOD by a cost estimate from counts (session 19:
+  // the run then moves between PCG and CHOLMOD by a cost estimate from counts (for
   // stiff materials, where CG needs hundreds of iterations and one factor serves many steps;
   // backward_euler.cpp, after_step).
   bool automatic_linear_solver = false;

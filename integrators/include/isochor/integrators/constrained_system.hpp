@@ -62,8 +62,7 @@ class ConstrainedSystem {
   // Rows of G (values in the layout of constraint_rows()) and, when asked, dg/dt.
   virtual void constraint_jacobian(double t, const VectorXd& q, std::vector<std::vector<double>>& G, VectorXd* g_t) = 0;
   // values += scale sum_j w_j H_j, H_j the Hessian of g_j by q, in pattern().
-  virtual void add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale,
-                                      double* values) = 0;
+  virtual void add_constraint_hessian(double t, const VectorXd& q, const VectorXd& w, double scale, double* values) = 0;
   // Rows of d(G v + dg/dt)/dq (layout of constraint_rows()): (H_j xdot)^T with xdot the velocity of
   // every point the constraint depends on, driven ones included.
   virtual void constraint_velocity_jacobian(double t, const VectorXd& q, const VectorXd& v,

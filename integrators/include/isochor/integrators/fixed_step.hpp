@@ -15,8 +15,8 @@ namespace isochor {
 
 // One step from (q, v, lambda) at t to t1 (= t + h up to rounding), into (q1, v1, lambda1);
 // false with a reason.
-using FixedStep = std::function<bool(double t, double t1, const VectorXd& q, const VectorXd& v, VectorXd& q1, VectorXd& v1,
-                                     VectorXd& lambda1, std::string& reason)>;
+using FixedStep = std::function<bool(double t, double t1, const VectorXd& q, const VectorXd& v, VectorXd& q1,
+                                     VectorXd& v1, VectorXd& lambda1, std::string& reason)>;
 
 // Runs the loop from the initial state; `stats` gets steps and wall time, and `sample` is called
 // for each frame's statistics (with stats.steps up to date). `between`, when given, corrects a

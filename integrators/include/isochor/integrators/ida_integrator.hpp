@@ -32,7 +32,7 @@ struct IdaOptions {
   double atol_v = 0.0;
   double atol_lambda = 0.0;
   int max_order = 5;
-  double max_step = 0.0;      // 0: no limit
+  double max_step = 0.0;  // 0: no limit
   // IDA's nonlinear convergence coefficient: Newton stops once its predicted error is below this
   // fraction of the error test's tolerance (smaller: algebraic rows kept tighter); 0:
   // kDefaultNewtonCoef for every linear solver. Measured on the test DAEs (the MEBDFDAE pendulum,

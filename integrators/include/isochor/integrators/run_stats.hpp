@@ -13,14 +13,14 @@ namespace isochor {
 // Statistics of a run; per-frame series are sampled at each frame. Fields an integrator does not
 // have stay 0 (XPBD reports its sweeps as newton_iterations).
 struct RunStats {
-  long steps = 0, residual_evals = 0, jacobian_evals = 0, linear_setups = 0, newton_iterations = 0,
-       newton_failures = 0, error_test_failures = 0, fresh_factorisations = 0, reused_jacobians = 0;
+  long steps = 0, residual_evals = 0, jacobian_evals = 0, linear_setups = 0, newton_iterations = 0, newton_failures = 0,
+       error_test_failures = 0, fresh_factorisations = 0, reused_jacobians = 0;
   double wall_seconds = 0, assembly_seconds = 0, factor_seconds = 0, solve_seconds = 0;
-  double factor_nnz = 0;        // nnz(L) + nnz(U) of the last factorisation
-  long linear_iterations = 0;   // krylov: PCG iterations over the run
-  long linear_fallbacks = 0;    // krylov: setups solved by CHOLMOD after PCG failed
-  long retargets = 0;           // IDA krylov: setups moved to a new c_j (ReducedSolver::retarget)
-  double symbolic_seconds = 0;  // of factor_seconds: ordering and symbolic analysis
+  double factor_nnz = 0;          // nnz(L) + nnz(U) of the last factorisation
+  long linear_iterations = 0;     // krylov: PCG iterations over the run
+  long linear_fallbacks = 0;      // krylov: setups solved by CHOLMOD after PCG failed
+  long retargets = 0;             // IDA krylov: setups moved to a new c_j (ReducedSolver::retarget)
+  double symbolic_seconds = 0;    // of factor_seconds: ordering and symbolic analysis
   double projection_seconds = 0;  // IDA: projecting interpolated frames onto the constraints
   // Backward Euler as an optimisation: Newton iterations whose step the line search cut,
   // matrices shifted because they could not be factored or gave no descent, and steps

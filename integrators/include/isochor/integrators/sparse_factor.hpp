@@ -24,8 +24,8 @@ class SymmetricSolver {
   // x = S^-1 b; false if the solve failed (no factor, a non-finite solution from a zero pivot;
   // iterative: no convergence or S found indefinite).
   virtual bool solve(const double* b, double* x) = 0;
-  virtual double factor_nnz() const = 0;   // entries of the factor (0 for an iterative solver)
-  virtual long iterations() const { return 0; }  // iterative: iterations over all solves so far
+  virtual double factor_nnz() const = 0;                // entries of the factor (0 for an iterative solver)
+  virtual long iterations() const { return 0; }         // iterative: iterations over all solves so far
   virtual double analyse_seconds() const { return 0; }  // direct: ordering and symbolic analysis so far
   // factor() costs no more than a few products (block-Jacobi PCG): worth repeating for a shift.
   virtual bool cheap_factor() const { return false; }

@@ -3,8 +3,8 @@
 // Newton with a line search, KKT Jacobian [K + sum lambda_j H_j, G^T; G, 0] in a pattern built
 // once and factored by KLU (linear_solver "klu"), or reduced to its n x n block A = K + sum
 // lambda_j H_j with the constraint borders by a Schur complement: A factored by CHOLMOD
-// ("reduced") or solved by block-Jacobi PCG ("krylov", A positive definite only). Each frame starts from the previous solution, so drivers that move
-// with t apply their displacement in increments.
+// ("reduced") or solved by block-Jacobi PCG ("krylov", A positive definite only). Each frame starts from the previous
+// solution, so drivers that move with t apply their displacement in increments.
 #pragma once
 #include <memory>
 #include <string>

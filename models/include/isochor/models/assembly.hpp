@@ -104,8 +104,8 @@ class ElasticAssembly {
   double gradient(const Points& x, Eigen::VectorXd& grad) const;
   // values[slot] += scale * Hessian over the free dofs (values sized pattern().nnz()); with
   // values2, also values2[slot] += scale2 * Hessian from the same element Hessians.
-  void add_hessian(const Points& x, double scale, double* values, double scale2 = 0.0,
-                   double* values2 = nullptr, bool project = false) const;
+  void add_hessian(const Points& x, double scale, double* values, double scale2 = 0.0, double* values2 = nullptr,
+                   bool project = false) const;
   // out += scale * K(x) v over all nodes (Rayleigh damping; v of every node, 3 N).
   void add_hessian_times(const Points& x, const Eigen::VectorXd& v, double scale, Eigen::VectorXd& out) const;
   // Per-tet pressure of the material, -tr(sigma)/3 (for CNH: -lambda U'(J) plus the deviatoric

@@ -33,11 +33,11 @@ class Skeleton;
 struct ColliderShape {
   enum class Kind { plane, sphere, capsule, box, cylinder, mesh };
   Kind kind = Kind::plane;
-  double radius = 0;          // sphere, capsule; cylinder: the outer radius (solid) or the hole's (hollow)
-  double half_length = 0;     // capsule: half its axis segment; cylinder: half its height
+  double radius = 0;                 // sphere, capsule; cylinder: the outer radius (solid) or the hole's (hollow)
+  double half_length = 0;            // capsule: half its axis segment; cylinder: half its height
   Vec3 half_extents = Vec3::Zero();  // box
-  double rounding = 0;        // box, cylinder: radius of the rounded edges
-  double wall = 0;            // cylinder: > 0 makes it hollow (a band, a sleeve) with this wall thickness
+  double rounding = 0;               // box, cylinder: radius of the rounded edges
+  double wall = 0;                   // cylinder: > 0 makes it hollow (a band, a sleeve) with this wall thickness
   std::shared_ptr<const MeshSdf> mesh = nullptr;  // mesh: the closed surface's smoothed signed distance
 
   // Signed distance at the local point l; gradient and Hessian (local frame) if asked.
@@ -54,9 +54,9 @@ struct ContactLaw {
   double stiffness = 1e6;   // k: N/m^3 per node, N/m^4 per area
   double thickness = 1e-3;  // delta, m
   bool per_area = false;
-  double damping = 0.0;     // alpha, s/m
-  double friction = 0.0;    // Coulomb coefficient mu_c (0: frictionless)
-  double slip_speed = 1e-3; // m/s: tangential speed below which friction grows linearly (smoothing)
+  double damping = 0.0;      // alpha, s/m
+  double friction = 0.0;     // Coulomb coefficient mu_c (0: frictionless)
+  double slip_speed = 1e-3;  // m/s: tangential speed below which friction grows linearly (smoothing)
 };
 
 // Where a collider is at one time: local -> world x = A l + b; the material's velocity at x is

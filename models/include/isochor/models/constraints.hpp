@@ -78,14 +78,14 @@ class VolumeConstraints : public ConstraintSet {
   };
   std::vector<Element> elements_;
   ElementSchedule colours_;
-  std::vector<Index> slots_;              // 144 per element
+  std::vector<Index> slots_;  // 144 per element
   std::vector<std::vector<Index>> row_dofs_;
   std::vector<std::vector<int>> row_slot_;  // per element: 12 entries, position in its row or -1
   std::vector<double> rest_;
   std::vector<double> start_offset_, offset_, rate_;  // restore_from: target - rest at t0, now, d/dt now
   double restore_t0_ = 0, restore_duration_ = 0;
   std::vector<std::vector<int>> boundary_nodes_;  // per constraint: the nodes of its faces
-  std::vector<std::vector<int>> zone_tets_;   // zone constraints: the tets of each zone
+  std::vector<std::vector<int>> zone_tets_;       // zone constraints: the tets of each zone
   DofMap dofs_;
   const std::vector<Vec3>& origins(const Points& x) const;  // per constraint, where the origin is now
   mutable std::vector<Vec3> origins_;

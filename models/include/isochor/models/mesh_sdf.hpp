@@ -47,10 +47,10 @@ class MeshSdf {
   Points x_;
   std::vector<Tri> tris_;
   double h_ = 0, bound_ = 0;
-  Vec3 origin_ = Vec3::Zero();  // grid node (0, 0, 0)
+  Vec3 origin_ = Vec3::Zero();                   // grid node (0, 0, 0)
   Eigen::Vector3i n_ = Eigen::Vector3i::Zero();  // nodes per axis
-  std::vector<double> samples_;  // node (i, j, k) at i + n_x (j + n_y k)
-  struct Exact;                  // the CGAL surface and tree, kept for exact_distance
+  std::vector<double> samples_;                  // node (i, j, k) at i + n_x (j + n_y k)
+  struct Exact;                                  // the CGAL surface and tree, kept for exact_distance
   std::shared_ptr<const Exact> exact_;
 };
 

@@ -1,4 +1,4 @@
-// Contact between parts of one body (issue 17): every surface node against the deformed surface
+// Contact between parts of one body: every surface node against the deformed surface
 // of the body away from itself. Its energy is the ground's law on the node's distance d to the
 // surface triangles that are not near it at rest (no vertex within `exclude` of the node in the
 // rest state, so a node does not touch its own neighbourhood):
@@ -9,8 +9,8 @@
 // The gradient moves the node and the triangles' corners (by the closest points' barycentric
 // weights); the Jacobian keeps the scene's fixed pattern: only the 3x3 blocks of the node (exact)
 // and of each corner (Gauss-Newton, 2 k p w^2 n n^T) on themselves, so Newton's iterations are
-// those of an approximate Jacobian where contact is active (docs/decisions.md measures it). Candidates come from a k-d tree (nanoflann) over the deformed
-// surface's triangle centroids, rebuilt at each evaluation.
+// those of an approximate Jacobian where contact is active (docs/decisions.md measures it). Candidates come from a k-d
+// tree (nanoflann) over the deformed surface's triangle centroids, rebuilt at each evaluation.
 #pragma once
 #include <memory>
 #include <vector>

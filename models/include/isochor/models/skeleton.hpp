@@ -18,19 +18,18 @@
 
 namespace isochor {
 
-
 struct BoneSpec {
   enum class Joint { weld, pin, universal, ball };
   std::string name;
   int parent = -1;  // index of the parent bone, -1: the ground
   Joint joint = Joint::weld;
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();      // the joint, rest pose, world
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the joint, rest pose, world
   // The capsule that binds nodes by distance: its axis segment from-to (rest pose) and radius.
   Eigen::Vector3d from = Eigen::Vector3d::Zero(), to = Eigen::Vector3d::Zero();
   double radius = 0;
-  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();    // columns: the joint's rotation axes in order
-  int angles = 0;                                        // 0 weld, 1 pin, 2 universal, 3 ball
-  Driver motion;  // angles (rad) of the joint in x, y, z of its values; Kind::fixed: zero
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  // columns: the joint's rotation axes in order
+  int angles = 0;                                      // 0 weld, 1 pin, 2 universal, 3 ball
+  Driver motion;           // angles (rad) of the joint in x, y, z of its values; Kind::fixed: zero
   std::vector<int> nodes;  // bound mesh nodes
 
   // The joint rotation relative to the parent, and its angular velocity (parent frame), at t.

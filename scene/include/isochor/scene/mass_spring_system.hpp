@@ -51,14 +51,14 @@ class MassSpringSystem : public SceneSystem {
   void collider_poses(std::vector<double>& out) const override { external_->pose_numbers(out); }
   void collider_scales(std::vector<double>& out) const override { external_->scale_numbers(out); }
   std::array<double, 3> energies() const override;  // kinetic, springs, external
-  std::vector<double> volumes() const override;      // the enclosed volume (no zones)
+  std::vector<double> volumes() const override;     // the enclosed volume (no zones)
   const DofMap& dofs() const override { return dofs_; }
   bool has_tets() const override { return false; }
   // Hong's weight vector (their eq. 15) per free surface node, summing to their number.
   Eigen::VectorXd weights(const Eigen::Vector3d& center, double radius) const;
 
  private:
-  void place(double t, const VectorXd& q);                       // free and driven nodes
+  void place(double t, const VectorXd& q);                     // free and driven nodes
   void place(double t, const VectorXd& q, const VectorXd& v);  // and their velocities
   const Scene& scene_;
   DofMap dofs_;  // free = surface nodes not driven

@@ -26,10 +26,10 @@ const char* to_string(MaterialModel m);
 
 struct MaterialSpec {
   MaterialModel model = MaterialModel::cnh;
-  double density = 1000.0;    // kg/m^3
+  double density = 1000.0;        // kg/m^3
   double mu = 0.0, lambda = 0.0;  // Pa (Lamé parameters, from mu/lambda or E/nu)
-  double beta = 1.0;          // CNH penalty shape
-  double epsilon = 0.1;       // CNH: J below which alpha~ is extended
+  double beta = 1.0;              // CNH penalty shape
+  double epsilon = 0.1;           // CNH: J below which alpha~ is extended
   double epidermis_lambda = 0.0;  // Pa m (surface penalty weight); 0: no epidermis
   double epidermis_gamma = 1.0;
   double spring_stiffness = 1000.0;  // mass_spring: N/m, every spring
@@ -58,9 +58,9 @@ struct IntegratorSpec {
 };
 
 struct FramesSpec {
-  double rate = 100.0;     // frames per second
-  double duration = 1.0;   // s
-  int count = 0;           // statics: number of frames (load increments)
+  double rate = 100.0;    // frames per second
+  double duration = 1.0;  // s
+  int count = 0;          // statics: number of frames (load increments)
   // Frame times 0, 1/rate, ..., duration; statics: pseudo-times 0, 1/(count-1), ..., 1.
   std::vector<double> times() const;
   // How many: times().size() without making them.
@@ -85,7 +85,8 @@ struct Scene {
   MaterialSpec material;
   std::vector<Driver> boundary;  // Dirichlet drivers, in file order
   Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.81);
-  double gravity_ramp = 0.0;  // s (pseudo-time in statics): gravity grows linearly to full at this time; 0: full at once
+  double gravity_ramp =
+      0.0;  // s (pseudo-time in statics): gravity grows linearly to full at this time; 0: full at once
   // The ground (contact.ground), the [[contact.plane]]s and the [[collider]]s, in that order.
   std::vector<Collider> colliders;
   // [contact.self]: contact between parts of the body (self_contact.hpp); off without the table.
@@ -95,13 +96,14 @@ struct Scene {
     double exclude = 0;    // m
     double smoothing = 0;  // m: tau of the smoothed minimum distance
   } self_contact;
-  std::vector<NodeLoad> loads;     // [[load]]: point loads and tractions (dead loads)
+  std::vector<NodeLoad> loads;               // [[load]]: point loads and tractions (dead loads)
   std::vector<PressureLoad> pressure_loads;  // [[load]] kind = "pressure" (follower loads)
   RayleighDamping damping;
   Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();
   Points initial_positions;  // every node's start (initial.flatten); empty: the rest positions
   std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tet indices
-  double zone_restore_time = 0.0;  // zones.restore_time (s): zone targets go from the start's volumes to the rest volumes
+  double zone_restore_time =
+      0.0;                 // zones.restore_time (s): zone targets go from the start's volumes to the rest volumes
   bool keep_zones = true;  // zones.keep: false measures the zones' volumes without constraining them
   IntegratorSpec integrator;
   FramesSpec frames;
