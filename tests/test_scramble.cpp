@@ -27,6 +27,9 @@ lambda = 1000.0
 [forces]
 gravity = [0.0, 0.0, 0.0]
 
+[zones]
+restore_time = 0.5   # the zones start at volume 0 (IDA refuses a flattened start without it)
+
 [initial]
 flatten = "z"
 seed = 7

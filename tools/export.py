@@ -18,7 +18,7 @@ import sys
 
 import numpy as np
 
-from run_file import Error, Run
+from run_file import Error, Run, write_whole
 
 CHUNK = 500  # frames per read
 
@@ -34,8 +34,8 @@ def write_cache(h5_path, out, fmt="pc2", all_nodes=False, frames=0):
         times = run.times
         frames = min(run.num_frames, frames or run.num_frames)
         nodes = np.arange(len(run.rest_positions)) if all_nodes else surface_nodes(run)
-        tmp = out + ".tmp"
-        with open(tmp, "wb") as o:
+
+        def write(o):
             if fmt == "pc2":
                 o.write(b"POINTCACHE2\0" + struct.pack("<iiffi", 1, len(nodes), 0.0, 1.0, frames))
                 dtype = "<f4"
@@ -46,7 +46,8 @@ def write_cache(h5_path, out, fmt="pc2", all_nodes=False, frames=0):
             for k0 in range(0, frames, CHUNK):
                 block = run.frame_range("positions", k0, min(k0 + CHUNK, frames))
                 o.write(np.ascontiguousarray(block[:, nodes, :]).astype(dtype).tobytes())
-        os.replace(tmp, out)  # a complete cache or none
+
+        write_whole(out, write, "wb")  # a complete cache or none
     return len(nodes), frames
 
 

@@ -19,7 +19,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import render  # noqa: E402  (up_of, plane_at, Camera)
-from run_file import open_run  # noqa: E402
+from run_file import open_run, write_whole  # noqa: E402
 
 TEMPLATE = r'''# ParaView script for {run} (written by `isochor paraview`; regenerate it rather than edit).
 #   paraview --script={script}
@@ -177,8 +177,7 @@ def main():
                            frames=n, name=os.path.basename(xdmf), ux=up[0], uy=up[1],
                            uz=up[2], p_lo=p_lo, p_hi=p_hi, toward=cam.toward.tolist(),
                            center=center, span=span)
-    with open(out, "w") as o:
-        o.write(text)
+    write_whole(out, lambda o: o.write(text))
     print(f"wrote {out}: paraview --script={out}  (or: xvfb-run -a pvpython {out} --screenshot FRAME.png)")
 
 

@@ -36,7 +36,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.artist import Artist  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
-from run_file import open_run  # noqa: E402  (the one reader of run files)
+from run_file import open_run, write_whole  # noqa: E402  (the one reader of run files)
 
 
 # ---- The scene: up, planes, colliders (as the run file records them) -------------------------
@@ -466,7 +466,7 @@ def draw_frame(a, run, k, cam, up, up_from, scene, colouring, under, frames, pat
     ax.text(0.02, 0.97, f"{os.path.basename(a.run)}  t = {t:.4f} s{title}", transform=ax.transAxes, fontsize=9, va="top")
     ax.text(0.02, 0.02, f"up: {(np.round(up, 3) + 0.0).tolist()} ({up_from})", transform=ax.transAxes, fontsize=7,
             color=(0.4, 0.4, 0.4))
-    fig.savefig(path, dpi=100)
+    write_whole(path, lambda f: fig.savefig(f, dpi=100, format="png"), "wb")
     plt.close(fig)
 
 
@@ -496,7 +496,10 @@ def main():
     if single and len(frames) != 1:
         sys.exit("--out FILE.png needs exactly one frame")
     out = (os.path.dirname(a.out) or ".") if single else (a.out or os.path.splitext(a.run)[0] + "_png")
-    os.makedirs(out, exist_ok=True)
+    try:
+        os.makedirs(out, exist_ok=True)
+    except OSError as e:
+        sys.exit(f"{out}: cannot be created ({e.strerror or e})")
     check_series(a, run)
     cam = Camera(up, a.elev, a.azim)
     surf_nodes = np.unique(run.surface)

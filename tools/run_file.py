@@ -9,6 +9,20 @@ from isochor.errors import Error  # noqa: E402
 from isochor.runfile import Collider, Run  # noqa: E402,F401
 
 
+def write_whole(path, write, mode="w"):
+    """Writes `path` through write(file) into PATH.part and renames it into place: a failed
+    write (a full disk) leaves neither a partial file nor a traceback, one line and exit 1."""
+    part = path + ".part"
+    try:
+        with open(part, mode) as f:
+            write(f)
+        os.replace(part, path)
+    except OSError as e:
+        if os.path.exists(part):
+            os.remove(part)
+        sys.exit(f"{path}: cannot be written ({e.strerror or e})")
+
+
 def open_run(path, tool=""):
     """The run at `path`; one line naming the file and exit 1 when it is missing or not a run."""
     if not os.path.exists(path):

@@ -203,7 +203,7 @@ void check_output_room(const Scene& sc, const SceneSystem& sys, const std::strin
 // A resumed run: the summary says where it continues, the system starts from the file's last
 // complete frame, and the cumulative statistics go on from their values there. False when the
 // run had finished (nothing to do).
-bool resume_from(const ResumePoint& rp, SceneSystem& sys, OutputWriter& w, RunSummary& summary, StartState& start,
+bool resume_from(const ResumePoint& rp, SceneSystem& sys, RunSummary& summary, StartState& start,
                  std::map<std::string, double>& offsets) {
   summary.frames = rp.frame + 1;
   summary.resumed_from = rp.frame;
@@ -218,7 +218,6 @@ bool resume_from(const ResumePoint& rp, SceneSystem& sys, OutputWriter& w, RunSu
   sys.set_start(&start);
   for (const char* name : kCumulative)
     if (auto it = rp.stats.find(name); it != rp.stats.end() && std::isfinite(it->second)) offsets[name] = it->second;
-  w.set_status("running");
   return true;
 }
 
@@ -240,9 +239,10 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   const ResumePoint& rp = w.resume_point();
   std::map<std::string, double> offsets;
   StartState start;
-  if (resume && !resume_from(rp, *sys, w, summary, start, offsets)) return summary;
+  if (resume && !resume_from(rp, *sys, summary, start, offsets)) return summary;
   const std::vector<double> all_times = sc.frames.times();
   const std::vector<double> times = times_from(all_times, resume ? rp.frame : -1, rp.time, summary.output);
+  if (resume) w.continue_run();
   Progress bar(sc.file.name(), static_cast<int>(all_times.size()) - 1, times.front(), times.back(),
                opt.progress ? stderr : nullptr, last_step_time);
   auto finish_failed = [&](const std::string& status, const std::vector<std::pair<std::string, double>>& numbers,

@@ -1,5 +1,7 @@
+#include "isochor/core/input_file.hpp"
 #include "isochor/core/bvh.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -28,6 +30,7 @@ class Tokens {
     static const std::string end = "<end of file>";
     return done() ? end : words_[pos_].text;
   }
+  std::size_t remaining() const { return words_.size() - pos_; }
   std::string next(const std::string& expected) {
     if (done()) fail("expected " + expected + ", found the end of the file");
     return words_[pos_++].text;
@@ -41,10 +44,10 @@ class Tokens {
     try {
       std::size_t used = 0;
       const double v = std::stod(w, &used);
-      if (used == w.size()) return v;
+      if (used == w.size() && std::isfinite(v)) return v;
     } catch (...) {
     }
-    fail_at_previous("expected " + what + ", found \"" + w + "\"");
+    fail_at_previous("expected " + what + " (a finite number), found \"" + w + "\"");
   }
   [[noreturn]] void fail(const std::string& msg) const { fail_at(pos_, msg); }
   // At the token just read.
@@ -79,8 +82,14 @@ Eigen::Vector3d offset(Tokens& tk) {
   return o;
 }
 
+// Joints nested deeper than this are refused (a body's skeleton is some tens deep): the parser
+// recurses once per level.
+constexpr int kMaxJointDepth = 256;
+
 // A JOINT or ROOT body (after its name): offset, channels, children, End Site.
-void joint_body(Tokens& tk, Bvh& b, int self, int& columns) {
+void joint_body(Tokens& tk, Bvh& b, int self, int& columns, int depth) {
+  if (depth > kMaxJointDepth)
+    tk.fail_at_previous("joints nested more than " + std::to_string(kMaxJointDepth) + " deep (expected a skeleton)");
   tk.expect("{");
   b.joints[self].offset = offset(tk);
   tk.expect("CHANNELS");
@@ -97,7 +106,7 @@ void joint_body(Tokens& tk, Bvh& b, int self, int& columns) {
       if (b.find(j.name) >= 0) tk.fail_at_previous("joint \"" + j.name + "\" is defined twice");
       j.parent = self;
       b.joints.push_back(j);
-      joint_body(tk, b, static_cast<int>(b.joints.size()) - 1, columns);
+      joint_body(tk, b, static_cast<int>(b.joints.size()) - 1, columns, depth + 1);
     } else if (w == "End") {
       tk.expect("Site");
       tk.expect("{");
@@ -127,7 +136,7 @@ Bvh parse_bvh(const std::string& text, const std::string& name) {
   root.name = tk.next("the root joint's name");
   b.joints.push_back(root);
   int columns = 0;
-  joint_body(tk, b, 0, columns);
+  joint_body(tk, b, 0, columns, 1);
   tk.expect("MOTION");
   tk.expect("Frames:");
   const double frames = tk.number("the number of frames");
@@ -137,6 +146,12 @@ Bvh parse_bvh(const std::string& text, const std::string& name) {
   tk.expect("Time:");
   b.frame_time = tk.number("the frame time (s)");
   if (!(b.frame_time > 0)) tk.fail_at_previous("expected a positive frame time (s)");
+  // A large count of values the file cannot hold is refused before anything is allocated for
+  // it (a short small file says below which frame ends early).
+  if (frames * columns > 1e6 && frames * columns > static_cast<double>(tk.remaining()))
+    tk.fail("Frames: " + std::to_string(static_cast<long long>(frames)) + " frames of " + std::to_string(columns) +
+            " channels need " + std::to_string(static_cast<long long>(frames) * columns) + " values, the file holds " +
+            std::to_string(tk.remaining()));
   b.motion.resize(static_cast<Eigen::Index>(frames), columns);
   for (Eigen::Index f = 0; f < b.motion.rows(); ++f)
     for (int c = 0; c < columns; ++c) {
@@ -152,11 +167,7 @@ Bvh parse_bvh(const std::string& text, const std::string& name) {
 }
 
 Bvh read_bvh(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot be read (expected a BVH motion file)");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_bvh(ss.str(), path);
+  return parse_bvh(read_input_file(path, "a BVH motion file", input_limits::kMotion), path);
 }
 
 }  // namespace isochor

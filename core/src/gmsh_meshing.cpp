@@ -17,6 +17,7 @@
 #include <mutex>
 #include <unordered_map>
 
+#include "isochor/core/input_file.hpp"
 #include "isochor/base/error.hpp"
 #include "isochor/core/meshing.hpp"
 
@@ -287,10 +288,8 @@ void generate_3d(const std::string& what) {
   if (!err.empty()) throw Error(what + ": Gmsh could not mesh the volume: " + err);
 }
 
-void check_readable(const std::string& path, const std::string& expected) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw Error(path + ": no such file (expected " + expected + ")");
-  if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory (expected " + expected + ")");
+void check_readable(const std::string& path, const std::string& expected, double max_bytes) {
+  check_input_file(path, expected, max_bytes);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot be read (expected " + expected + ")");
 }
@@ -397,7 +396,7 @@ Mesh make_capsule(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double rad
 }
 
 Mesh read_msh(const std::string& path) {
-  check_readable(path, "a Gmsh .msh file");
+  check_readable(path, "a Gmsh .msh file", input_limits::kMesh);
   // Gmsh 4.8 falls back to its .geo parser on a file that is not a mesh, and a syntax error there
   // leaves Gmsh locked ("I'm busy!"): every later mesh of the process comes out empty. So the
   // header is checked here first; binary and ASCII .msh files both begin with $MeshFormat.
@@ -447,7 +446,7 @@ Mesh read_msh(const std::string& path) {
 }
 
 Mesh mesh_closed_surface(const std::string& path, double edge_length) {
-  check_readable(path, "a closed triangle surface (.obj or .stl)");
+  check_readable(path, "a closed triangle surface (.obj or .stl)", input_limits::kSurface);
   Points x;
   std::vector<Tri> tris;
   read_surface(path, x, tris);

@@ -42,6 +42,20 @@ void check_size(const Section& s, const std::string& key, double size) {
 // Tets of a Gmsh mesh of volume V at edge length h, at least.
 double gmsh_tets(double volume, double h) { return kGmshTetsPerEdgeCube * volume / (h * h * h); }
 
+// A closed surface file filled with tets: with an edge_length, the tets it makes are estimated
+// from the enclosed volume before Gmsh runs, as for the shapes.
+Mesh mesh_surface_file(const Section& s, const std::string& path) {
+  const double h = s.number("edge_length", 0.0, Range::non_negative());
+  if (h > 0) {
+    check_size(s, "edge_length", h);
+    Points x;
+    std::vector<Tri> tris;
+    read_surface(path, x, tris);
+    check_tets(s, "edge_length", gmsh_tets(std::abs(surface_volume(x, tris)), h));
+  }
+  return mesh_closed_surface(path, h);
+}
+
 }  // namespace
 
 Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
@@ -51,7 +65,7 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     s.fail(
         "shape",
         "missing, expected shape = \"box\" | \"capsule\" | \"cylinder\" | \"sphere\" | \"two_tets\" or file = \"...\"");
-  const Eigen::Vector3d center = s.vec3("center", Eigen::Vector3d::Zero());
+  const Eigen::Vector3d center = s.vec3("center", Eigen::Vector3d::Zero(), Range::coordinate());
   if (has_file) {
     const std::string name = s.string("file", "");
     const std::string path = file.resolve_path(name);
@@ -63,7 +77,7 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     else if (ext == ".node" || ext == ".ele")
       m = read_tetgen(path);
     else if (ext == ".obj" || ext == ".stl")
-      m = mesh_closed_surface(path, s.number("edge_length", 0.0, Range::non_negative()));
+      m = mesh_surface_file(s, path);
     else
       s.fail("file", "\"" + name + "\" has an unknown extension, expected .msh, .node, .ele, .obj or .stl");
     if (center != Eigen::Vector3d::Zero()) s.fail("center", "applies to shapes only, not to a mesh file");
@@ -76,7 +90,9 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     check_tets(s, "cells",
                static_cast<double>(cells[0]) * static_cast<double>(cells[1]) * static_cast<double>(cells[2]) * split);
     const double sliver = s.number("sliver_ratio", 1.0, {1.0, 1e6, false, false});
-    return make_box(s.vec3("size", Eigen::Vector3d::Ones(), Range::positive()), cells, center, split, sliver);
+    const Eigen::Vector3d size = s.vec3("size", Eigen::Vector3d::Ones(), Range::length());
+    check_size(s, "size", size.minCoeff());  // masses of a box far below a micrometre underflow
+    return make_box(size, cells, center, split, sliver);
   }
   if (shape == "cylinder") {
     const double r = s.number("radius", 0.5, Range::positive()), height = s.number("height", 1.0, Range::positive());

@@ -281,9 +281,11 @@ struct OutputWriter::Impl {
   std::map<std::string, std::unique_ptr<Series>> stats;
   H frames_group, xdmf_group, stats_group;
   int lock_fd = -1;
-  bool existed = false;    // the path existed before the writer (a failed create leaves it)
-  double frame_bytes = 0;  // what a frame adds to the file: an estimate, then the largest measured
-  off_t file_size = 0;     // after the last flush
+  bool existed = false;          // the path existed before the writer (a failed create leaves it)
+  std::size_t resume_zones = 0;  // Mode::resume: the zones, for continue_run
+  bool resume_pending = false;   // opened for resume, not yet continued: close() writes nothing
+  double frame_bytes = 0;        // what a frame adds to the file: an estimate, then the largest measured
+  off_t file_size = 0;           // after the last flush
   ResumePoint resume;
 
   void lock_path(Mode mode, const RunInfo& info);
@@ -464,10 +466,12 @@ struct OutputWriter::Impl {
 
   std::string xdmf_file() const { return std::filesystem::path(path).replace_extension(".xdmf").string(); }
 
-  // Mode::resume: the file of an earlier run of the same scene, cut back to its last complete
-  // frame (a killed writer may have extended some series and not others), its failure or
-  // interruption attributes removed, its sidecar rewritten for the frames kept.
+  // Mode::resume: the file of an earlier run of the same scene, read to its last complete frame
+  // (a killed writer may have extended some series and not others). Nothing is changed until
+  // continue_run(): a refused resume leaves the file and its sidecar as they were.
   void open_for_resume(hid_t fapl, const RunInfo& info, std::size_t zones) {
+    if (H5Fis_hdf5(path.c_str()) <= 0)
+      throw Error(path + ": not an HDF5 file (expected the output of an earlier run to resume)");
     const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl);
     if (f < 0)
       throw Error(path + ": cannot be opened to resume" + hdf5_reason() + " (expected an isochor output file)");
@@ -519,8 +523,9 @@ struct OutputWriter::Impl {
     hsize_t complete = time->rows();
     for (Series* series : all_series()) complete = std::min(complete, series->rows());
     if (complete == 0) throw Error(path + ": has no complete frame to resume from (run it again with --overwrite)");
-    cut_frames(static_cast<int>(complete));
     frames = static_cast<int>(complete);
+    resume_zones = zones;
+    resume_pending = true;
     resume.frame = frames - 1;
     resume.status = read_string_attribute(file, "status");
     time->read(complete - 1, &resume.time);
@@ -533,12 +538,20 @@ struct OutputWriter::Impl {
       multipliers->read(complete - 1, resume.multipliers.data());
     }
     for (auto& [name, series] : stats) series->read(complete - 1, &resume.stats[name]);
+  }
+
+  // The file changed only once the resume is accepted: the half-written frame cut, the last
+  // stop's reasons removed, the sidecar restarted, the status "running".
+  void continue_run() {
+    resume_pending = false;
+    cut_frames(frames);
     for (const char* a : {"failed_at_time", "failure", "interrupted_at", "signal"}) delete_attribute(stats_group, a);
-    std::vector<double> times(complete);
+    std::vector<double> times(static_cast<std::size_t>(frames));
     check(H5Dread(time->ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, times.data()), "read /frames/time");
+    string_attribute(file, "status", "running");
     check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush");
     start_xdmf(times);
-    start_measuring(zones);
+    start_measuring(resume_zones);
   }
 };
 
@@ -551,6 +564,8 @@ void OutputWriter::Impl::lock_path(Mode mode, const RunInfo& info) {
   if (xp == path)
     throw Error(path + ": the XDMF sidecar would overwrite the output itself (expected an output path ending in .h5)");
   if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory (expected an output file path)");
+  if (std::filesystem::is_directory(xp, ec))
+    throw Error(xp + ": is a directory (the run's XDMF sidecar is written there; expected a file or nothing)");
   existed = std::filesystem::exists(path, ec);
   if (mode == Mode::create && (existed || std::filesystem::exists(xp, ec)))
     throw Error((existed ? path : xp) + ": exists (pass --overwrite to replace it" +
@@ -849,6 +864,8 @@ void OutputWriter::set_status(const std::string& status) {
   check(H5Fflush(impl_->file, H5F_SCOPE_GLOBAL), "flush");
 }
 
+void OutputWriter::continue_run() { impl_->continue_run(); }
+
 const ResumePoint& OutputWriter::resume_point() const { return impl_->resume; }
 
 double output_room_bytes(const std::string& path) { return std::min(free_bytes(path), file_size_limit()); }
@@ -867,7 +884,8 @@ bool output_is_being_written(const std::string& path) {
 void OutputWriter::close() {
   Impl& m = *impl_;
   if (!m.file.valid()) return;
-  if (m.xdmf_fd < 0) m.start_xdmf();  // no frames: the sidecar still names the run's (empty) series
+  // No frames: the sidecar still names the run's (empty) series; a resume not continued leaves it.
+  if (m.xdmf_fd < 0 && !m.resume_pending) m.start_xdmf();
   m.close_xdmf();
   m.time.reset();
   m.positions.reset();

@@ -1,3 +1,4 @@
+#include "isochor/core/input_file.hpp"
 #include "isochor/core/output_reader.hpp"
 
 #include <hdf5.h>
@@ -63,8 +64,7 @@ struct RunFile::Impl {
 
 RunFile::RunFile(const std::string& path) : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw Error(path + ": no such file (expected an isochor .h5 output)");
+  check_input_file(path, "an isochor .h5 output", input_limits::kRun);
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not an HDF5 file (expected an isochor .h5 output)");
   // Read without HDF5's file lock, which would stop a run from opening the file to write or
@@ -312,6 +312,9 @@ std::string describe_run(const std::string& path) {
 }
 
 int export_obj_sequence(const std::string& h5_path, const std::string& dir, const std::string& prefix) {
+  // The files go into `dir` and nowhere else: a prefix is a file name's start, not a path.
+  if (prefix.empty() || prefix.find('/') != std::string::npos || prefix == "." || prefix == "..")
+    throw Error("--prefix " + prefix + ": expected the start of a file name (no '/'), e.g. frame");
   RunFile r(h5_path);
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
@@ -331,12 +334,25 @@ int export_obj_sequence(const std::string& h5_path, const std::string& dir, cons
     std::string num = std::to_string(f);
     num.insert(0, static_cast<std::size_t>(std::max(0, width - static_cast<int>(num.size()))), '0');
     std::string file = (std::filesystem::path(dir) / (prefix + "_" + num + ".obj")).string();
-    std::ofstream out(file);
-    if (!out) throw Error(file + ": cannot be written");
-    out.precision(9);
-    out << "# isochor surface, frame " << f << "\n";
-    for (int v : nodes) out << "v " << x(0, v) << " " << x(1, v) << " " << x(2, v) << "\n";
-    for (const Tri& t : surface) out << "f " << local[t[0]] << " " << local[t[1]] << " " << local[t[2]] << "\n";
+    // Written beside and renamed into place: a failed write (a full disk) leaves no partial file.
+    const std::string part = file + ".part";
+    {
+      std::ofstream out(part);
+      if (!out) throw Error(file + ": cannot be written");
+      out.precision(9);
+      out << "# isochor surface, frame " << f << "\n";
+      for (int v : nodes) out << "v " << x(0, v) << " " << x(1, v) << " " << x(2, v) << "\n";
+      for (const Tri& t : surface) out << "f " << local[t[0]] << " " << local[t[1]] << " " << local[t[2]] << "\n";
+      out.flush();
+      if (!out) {
+        out.close();
+        std::filesystem::remove(part, ec);
+        throw Error(file + ": cannot be written (the disk is full?); frames 0 to " + std::to_string(f - 1) +
+                    " were written");
+      }
+    }
+    std::filesystem::rename(part, file, ec);
+    if (ec) throw Error(file + ": cannot be written (" + ec.message() + ")");
   }
   return F;
 }

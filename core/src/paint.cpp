@@ -1,3 +1,4 @@
+#include "isochor/core/input_file.hpp"
 #include "isochor/core/paint.hpp"
 
 #include <nanoflann.hpp>
@@ -307,6 +308,7 @@ const std::vector<double>* PaintedPoints::find(const std::string& name) const {
 }
 
 PaintedPoints read_paint(const std::string& path, const Points* nodes) {
+  check_input_file(path, "a paint file (.ply, .obj or .csv)", input_limits::kPaint);
   const auto dot = path.find_last_of('.');
   std::string ext = dot == std::string::npos ? "" : path.substr(dot);
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -323,6 +325,12 @@ PaintedPoints read_paint(const std::string& path, const Points* nodes) {
   for (Eigen::Index i = 0; i < p.x.cols(); ++i)
     if (!p.x.col(i).allFinite())
       throw Error(path + ": vertex " + std::to_string(i) + " has a position that is not a finite number");
+  // Weights and labels too: a NaN weight is in no zone and not out of one either.
+  for (std::size_t k = 0; k < p.names.size(); ++k)
+    for (std::size_t i = 0; i < p.values[k].size(); ++i)
+      if (!std::isfinite(p.values[k][i]))
+        throw Error(path + ": vertex " + std::to_string(i) + "'s " + p.names[k] + " is " +
+                    (std::isnan(p.values[k][i]) ? "NaN" : "infinite") + " (expected a finite number)");
   return p;
 }
 

@@ -1,3 +1,4 @@
+#include "isochor/core/input_file.hpp"
 #include "isochor/core/scene_file.hpp"
 
 #include <toml++/toml.h>
@@ -299,14 +300,8 @@ std::string SceneFile::resolve_path(const std::string& p) const {
 }
 
 SceneFile SceneFile::load(const std::string& path, const std::vector<std::string>& overrides) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw Error(path + ": no such file (expected a scene file in TOML)");
-  if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory (expected a scene file in TOML)");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot be read (expected a readable scene file)");
-  std::stringstream buf;
-  buf << in.rdbuf();
-  return parse(buf.str(), path, overrides, std::filesystem::path(path).parent_path().string());
+  const std::string text = read_input_file(path, "a scene file in TOML", input_limits::kScene);
+  return parse(text, path, overrides, std::filesystem::path(path).parent_path().string());
 }
 
 SceneFile SceneFile::parse(const std::string& text, const std::string& name, const std::vector<std::string>& overrides,

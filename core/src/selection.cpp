@@ -30,7 +30,7 @@ Selection Selection::parse(const Section& s) {
   }
   if (kind == "half_space") {
     sel.kind = Kind::half_space;
-    sel.point = s.vec3("point", Eigen::Vector3d::Zero());
+    sel.point = s.vec3("point", Eigen::Vector3d::Zero(), Range::coordinate());
     if (!s.has("normal")) s.fail("normal", "missing, a half_space selection needs a normal");
     sel.normal = s.vec3("normal", {});
     if (sel.normal.norm() == 0) s.fail("normal", "expected a non-zero vector");
@@ -39,7 +39,7 @@ Selection Selection::parse(const Section& s) {
   if (kind == "cylinder") {
     sel.kind = Kind::cylinder;
     if (!s.has("radius")) s.fail("radius", "missing, a cylinder selection needs a radius (m)");
-    sel.point = s.vec3("center", Eigen::Vector3d::Zero());
+    sel.point = s.vec3("center", Eigen::Vector3d::Zero(), Range::coordinate());
     sel.normal = s.vec3("axis", Eigen::Vector3d::UnitZ());
     if (sel.normal.norm() == 0) s.fail("axis", "expected a non-zero vector");
     sel.normal.normalize();

@@ -7,12 +7,14 @@
 #include <map>
 #include <sstream>
 
+#include "isochor/core/input_file.hpp"
 #include "isochor/base/error.hpp"
 #include "isochor/core/meshing.hpp"
 
 namespace isochor {
 
 void read_obj_surface(const std::string& path, Points& x, std::vector<Tri>& tris) {
+  check_input_file(path, "an OBJ surface", input_limits::kSurface);
   std::ifstream in(path);
   if (!in) throw Error(path + ": cannot be read (expected an OBJ surface)");
   std::vector<Eigen::Vector3d> v;
@@ -52,9 +54,7 @@ void read_obj_surface(const std::string& path, Points& x, std::vector<Tri>& tris
 }
 
 void read_stl_surface(const std::string& path, Points& x, std::vector<Tri>& tris) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot be read (expected an STL surface)");
-  std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string data = read_input_file(path, "an STL surface", input_limits::kSurface);
   std::vector<Eigen::Vector3d> corners;
   bool binary = false;
   if (data.size() >= 84) {

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "isochor/core/input_file.hpp"
 #include "isochor/base/error.hpp"
 #include "isochor/core/meshing.hpp"
 
@@ -13,9 +14,9 @@ namespace {
 
 class LineReader {
  public:
-  explicit LineReader(const std::string& path) : path_(path), in_(path) {
-    std::error_code ec;
-    if (!std::filesystem::exists(path, ec)) throw Error(path + ": no such file (expected a TetGen file)");
+  explicit LineReader(const std::string& path) : path_(path) {
+    check_input_file(path, "a TetGen file", input_limits::kMesh);
+    in_.open(path);
     if (!in_) throw Error(path + ": cannot be read (expected a TetGen file)");
   }
   // The next non-empty line without comments, split into tokens; false at the end.

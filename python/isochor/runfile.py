@@ -51,6 +51,8 @@ class Run:
         self.path = os.fspath(path)
         if not os.path.exists(self.path):
             raise Error(f"{self.path}: no such file (expected a run's .h5 file)")
+        if not os.path.isfile(self.path):  # a directory, FIFO or device is not read (docs/reliability.md)
+            raise Error(f"{self.path}: is not a regular file (expected a run's .h5 file)")
         try:
             # HDF5's default locking, as h5py and meshio open files (one process cannot open a
             # file with two settings); the writer takes no HDF5 lock, so a run still being

@@ -24,58 +24,78 @@ namespace {
 
 // ---- Python values to TOML ------------------------------------------------------------------
 
-toml::table to_table(py::handle d, const std::string& where);
+toml::table to_table(py::handle d, const std::string& where, int depth);
+
+// Deeper nesting is refused: a scene is a few levels deep, and a dict or list that contains
+// itself would recurse without end.
+constexpr int kMaxDepth = 64;
+void check_depth(int depth, const std::string& where) {
+  if (depth > kMaxDepth)
+    throw Error(where + ": nested more than " + std::to_string(kMaxDepth) +
+                " levels deep (expected a scene's tables and lists; does a dict or list contain itself?)");
+}
+
+std::string type_name(py::handle v) { return py::str(py::type::of(v).attr("__name__")).cast<std::string>(); }
 
 // One TOML value (a plain function, not a template over sinks: that recursed without end).
 using TomlValue = std::variant<bool, int64_t, double, std::string, toml::array, toml::table>;
 
 // The TOML value of a Python value (`where` names it in errors).
-TomlValue to_toml(py::handle v, const std::string& where) {
-  if (py::isinstance<py::array>(v)) return to_toml(v.attr("tolist")(), where);  // a NumPy array: nested lists
+TomlValue to_toml(py::handle v, const std::string& where, int depth = 0) {
+  check_depth(depth, where);
+  if (py::isinstance<py::array>(v)) return to_toml(v.attr("tolist")(), where, depth + 1);  // nested lists
   if (py::isinstance<py::bool_>(v) ||
       (py::hasattr(v, "dtype") && py::str(v.attr("dtype").attr("kind")).cast<std::string>() == "b"))
     return v.cast<bool>();
-  if (py::isinstance<py::int_>(v) || (py::hasattr(v, "__index__") && !py::isinstance<py::float_>(v)))
-    return static_cast<int64_t>(py::int_(py::reinterpret_borrow<py::object>(v)).cast<long long>());
+  if (py::isinstance<py::int_>(v) || (py::hasattr(v, "__index__") && !py::isinstance<py::float_>(v))) {
+    try {
+      return static_cast<int64_t>(py::int_(py::reinterpret_borrow<py::object>(v)).cast<long long>());
+    } catch (const py::cast_error&) {
+      throw Error(where + ": " + py::repr(v).cast<std::string>() +
+                  " does not fit in a 64-bit integer (expected -2**63 to 2**63 - 1, or a float)");
+    }
+  }
   if (py::isinstance<py::float_>(v) || py::hasattr(v, "__float__"))
     return py::float_(py::reinterpret_borrow<py::object>(v)).cast<double>();
   if (py::isinstance<py::str>(v) || py::hasattr(v, "__fspath__"))
     return py::str(py::module_::import("os").attr("fspath")(v)).cast<std::string>();
-  if (py::isinstance<py::dict>(v)) return to_table(v, where);
+  if (py::isinstance<py::dict>(v)) return to_table(v, where, depth + 1);
   if (py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
     toml::array a;
     int i = 0;
     for (py::handle item : v)
-      std::visit([&](auto&& x) { a.push_back(std::move(x)); }, to_toml(item, where + "[" + std::to_string(i++) + "]"));
+      std::visit([&](auto&& x) { a.push_back(std::move(x)); },
+                 to_toml(item, where + "[" + std::to_string(i++) + "]", depth + 1));
     return a;
   }
-  throw Error(where + ": expected a number, string, boolean, list or dict, got a " +
-              py::str(py::type::of(v).attr("__name__")).cast<std::string>());
+  throw Error(where + ": expected a number, string, boolean, list or dict, got a " + type_name(v));
 }
 
-toml::table to_table(py::handle d, const std::string& where) {
+toml::table to_table(py::handle d, const std::string& where, int depth) {
+  check_depth(depth, where);
   toml::table t;
   for (auto [k, v] : py::reinterpret_borrow<py::dict>(d)) {
     if (!py::isinstance<py::str>(k))
       throw Error(where + ": keys must be strings, got " + py::repr(k).cast<std::string>());
     const std::string key = k.cast<std::string>();
     std::visit([&](auto&& x) { t.insert_or_assign(key, std::move(x)); },
-               to_toml(v, where.empty() ? key : where + "." + key));
+               to_toml(v, where.empty() ? key : where + "." + key, depth + 1));
   }
   return t;
 }
 
 // Overrides as `--set` takes them: "key=value" strings as they are, or a dict of dotted keys (a
 // dict value stands for its keys under the key) to TOML values.
-void add_overrides(py::handle o, const std::string& prefix, std::vector<std::string>& out) {
+void add_overrides(py::handle o, const std::string& prefix, std::vector<std::string>& out, int depth = 0) {
   if (o.is_none()) return;
+  check_depth(depth, "overrides" + (prefix.empty() ? std::string() : " " + prefix));
   if (py::isinstance<py::str>(o)) {
     out.push_back(o.cast<std::string>());
   } else if (py::isinstance<py::dict>(o)) {
     for (auto [k, v] : py::reinterpret_borrow<py::dict>(o)) {
       const std::string key = prefix + py::str(k).cast<std::string>();
       if (py::isinstance<py::dict>(v)) {
-        add_overrides(v, key + ".", out);
+        add_overrides(v, key + ".", out, depth + 1);
         continue;
       }
       std::ostringstream s;
@@ -92,7 +112,7 @@ void add_overrides(py::handle o, const std::string& prefix, std::vector<std::str
       out.push_back(s.str());
     }
   } else {
-    for (py::handle item : o) add_overrides(item, prefix, out);  // a list of "key=value"
+    for (py::handle item : o) add_overrides(item, prefix, out, depth + 1);  // a list of "key=value"
   }
 }
 
@@ -188,6 +208,15 @@ py::dict run(const Scene& scene, const std::string& output, const std::string& m
       if (PyErr_CheckSignals() != 0) throw py::error_already_set();
       if (on_frame.is_none()) return true;
       py::object r = on_frame(frame_dict(k, f));
+      const bool boolean =
+          py::isinstance<py::bool_>(r) ||
+          (py::hasattr(r, "dtype") && py::str(r.attr("dtype").attr("kind")).cast<std::string>() == "b");
+      if (!r.is_none() && !boolean) {
+        PyErr_SetString(PyExc_TypeError, ("on_frame returned a " + type_name(r) +
+                                          " (expected None or True to go on, False to stop the run)")
+                                             .c_str());
+        throw py::error_already_set();
+      }
       if (!r.is_none() && !r.cast<bool>()) {
         stopped_by_callback = true;
         return false;
@@ -219,7 +248,7 @@ py::dict run(const Scene& scene, const std::string& output, const std::string& m
 std::shared_ptr<Scene> scene_from_dict(py::dict d, py::object overrides, const std::string& name,
                                        const std::string& directory) {
   std::ostringstream text;
-  text << to_table(d, "");
+  text << to_table(d, "", 0);
   return std::make_shared<Scene>(parse_scene(SceneFile::parse(text.str(), name, overrides_of(overrides), directory)));
 }
 

@@ -176,7 +176,7 @@ Driver parse_motion(const Section& b) {
   } else if (kind == "rotation") {
     d = parse_keyframes(b, "angles", 1, M_PI / 180.0, "one angle (degrees)");
     d.rotation = true;
-    d.center = b.vec3("center", Eigen::Vector3d::Zero());
+    d.center = b.vec3("center", Eigen::Vector3d::Zero(), Range::coordinate());
     d.axis = b.vec3("axis", Eigen::Vector3d::UnitZ());
     if (d.axis.norm() == 0) b.fail("axis", "expected a non-zero vector");
     d.axis.normalize();
@@ -467,7 +467,7 @@ Eigen::Vector3d nonzero_vec3(const Section& s, std::string_view key, const Eigen
 
 double required_positive(const Section& s, std::string_view key, const std::string& what) {
   if (!s.has(key)) s.fail(key, "missing, " + what);
-  return s.number(key, 0.0, Range::positive());
+  return s.number(key, 0.0, Range::length());
 }
 
 // A [[collider]] with shape = "mesh": its closed surface (`file`, scaled by `scale`) and the smoothed
@@ -485,6 +485,12 @@ std::shared_ptr<const MeshSdf> parse_mesh_shape(const Section& c, const SceneFil
   }
   x *= scale;
   const double longest = x.cols() ? (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).maxCoeff() : 0.0;
+  if (x.cols() && !(longest >= 1e-6 && longest <= 1e6)) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "%g makes the surface %g m across (expected 1e-06 to 1e+06 m: sizes are in metres)",
+                  scale, longest);
+    c.fail("scale", buf);
+  }
   const double cell = c.number("cell", longest / 64, Range::positive());
   try {
     // The samples reach past the contact thickness by four cells (the spline's support and more).
@@ -547,7 +553,7 @@ Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& def
                                   {"mesh", K::mesh}});
   ColliderShape& S = C.shape;
   C.law = parse_contact_law(c, defaults);
-  C.center = c.vec3("center", Eigen::Vector3d::Zero());
+  C.center = c.vec3("center", Eigen::Vector3d::Zero(), Range::coordinate());
   const Eigen::Vector3d axis = nonzero_vec3(c, "axis", Eigen::Vector3d::UnitZ());
   const double angle = c.number("angle", 0.0) * M_PI / 180.0;
   // A mesh keeps its file's frame, turned by `angle` about `axis`; the other shapes' axis is `axis`.
@@ -566,7 +572,8 @@ Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& def
     case K::box: {
       if (!c.has("size")) c.fail("size", "missing, a box needs its edge lengths [x, y, z] (m)");
       const Eigen::Vector3d size = c.vec3("size", {});
-      if (size.minCoeff() <= 0) c.fail("size", "expected three positive edge lengths (m)");
+      if (size.minCoeff() <= 0 || size.maxCoeff() > 1e6)
+        c.fail("size", "expected three positive edge lengths of at most 1e+06 m");
       S.half_extents = 0.5 * size;
       smallest = S.half_extents.minCoeff();
       break;
@@ -574,7 +581,7 @@ Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& def
     case K::cylinder:
       S.radius = required_positive(c, "radius", "a cylinder needs its radius (m; hollow: the hole's)");
       S.half_length = 0.5 * required_positive(c, "length", "a cylinder needs its height (m)");
-      S.wall = c.number("wall", 0.0, Range::non_negative());
+      S.wall = c.number("wall", 0.0, Range::closed(0.0, 1e6));
       smallest = std::min(S.half_length, S.wall > 0 ? 0.5 * S.wall : S.radius);
       break;
     case K::mesh:
@@ -596,17 +603,19 @@ void parse_colliders(const Section& root, Scene& sc) {
   const Section contact = root.table("contact");
   const ContactLaw defaults = parse_contact_law(contact, ContactLaw{});
   if (contact.boolean("ground", false)) {
-    sc.colliders.push_back(Collider::plane(contact.vec3("point", Eigen::Vector3d::Zero()),
+    sc.colliders.push_back(Collider::plane(contact.vec3("point", Eigen::Vector3d::Zero(), Range::coordinate()),
                                            nonzero_vec3(contact, "normal", Eigen::Vector3d::UnitZ()), defaults));
     sc.colliders.back().name = "contact.ground";
   } else {
-    contact.vec3("point", Eigen::Vector3d::Zero());  // read (and checked) for a --set contact.ground variant
+    contact.vec3("point", Eigen::Vector3d::Zero(),
+                 Range::coordinate());  // read (and checked) for a --set contact.ground variant
     nonzero_vec3(contact, "normal", Eigen::Vector3d::UnitZ());
   }
   for (const Section& p : contact.tables("plane")) {
     if (!p.has("point") || !p.has("normal"))
       p.fail(p.has("point") ? "normal" : "point", "missing, a contact plane needs a point and a normal");
-    Collider C = Collider::plane(p.vec3("point", {}), nonzero_vec3(p, "normal", {}), parse_contact_law(p, defaults));
+    Collider C = Collider::plane(p.vec3("point", {}, Range::coordinate()), nonzero_vec3(p, "normal", {}),
+                                 parse_contact_law(p, defaults));
     C.name = p.path();
     const Eigen::Vector3d u = p.vec3("displacement", Eigen::Vector3d::Zero());
     const double t0 = p.number("t0", 0.0, Range::non_negative()), t1 = p.number("t1", 1.0, Range::positive());
@@ -744,6 +753,14 @@ void check_run_length(const Section& fr, const Section& in, const Scene& sc) {
     dt = ig.hong.dt;
     max_steps = ig.hong.max_steps;
   }
+  if (dt > 0 && sc.frames.duration > 0 && dt > sc.frames.duration) {
+    char buf[240];
+    std::snprintf(buf, sizeof buf,
+                  "%g s is longer than the run (frames.duration = %g s): not one step would be taken (expected dt "
+                  "at most the duration)",
+                  dt, sc.frames.duration);
+    in.fail("dt", buf);
+  }
   if (dt > 0 && sc.frames.duration / dt > static_cast<double>(max_steps)) {
     char buf[240];
     std::snprintf(buf, sizeof buf,
@@ -816,6 +833,13 @@ Scene parse_scene(SceneFile file) {
   sc.initial_velocity = initial.vec3("velocity", Eigen::Vector3d::Zero());
   parse_flatten(initial, sc);
   parse_integrator(root, sc);
+  // IDA starts from a consistent state: zones flattened to volume 0 cannot meet their rest
+  // volumes at t = 0 (it would fail there with IDA_CONV_FAIL and no hint).
+  if (sc.initial_positions.size() && !sc.zones.empty() && sc.zone_restore_time == 0 &&
+      sc.integrator.kind == IntegratorKind::ida)
+    root.table("initial").fail("flatten",
+                               "starts every zone at volume 0, which IDA cannot hold to its rest volume at t = 0 "
+                               "(expected zones.restore_time > 0: the volumes restored over that time)");
   parse_frames(root, sc);
   check_initial_contact(root, sc);
 

@@ -227,3 +227,32 @@ def test_the_documented_example_is_the_example_file():
         script = f.read()
     with open(os.path.join(SOURCE, "docs", "python.md")) as f:
         assert "```python\n" + script + "```" in f.read()
+
+
+def test_values_python_can_hold_and_toml_cannot_are_explained(tmp_path):
+    # A dict that contains itself would recurse without end: refused by its depth, as a scene,
+    # as overrides and inside a value.
+    d = {}
+    d["x"] = d
+    with pytest.raises(isochor.Error, match="nested more than 64 levels deep"):
+        isochor.load(SWING, {"material": d})
+    with open(SWING, "rb") as f:
+        table = tomllib.load(f)
+    table["material"]["extra"] = d
+    with pytest.raises(isochor.Error, match=r"material\.extra(\.x)+: nested more than 64 levels deep"):
+        isochor.scene(table, directory=os.path.dirname(SWING))
+    loop = []
+    loop.append(loop)
+    with pytest.raises(isochor.Error, match="nested more than 64 levels deep"):
+        isochor.load(SWING, {"mesh.cells": loop})
+    # An integer beyond 64 bits is named with its key, not as a failed cast.
+    with pytest.raises(isochor.Error, match=r"--set mesh\.cells: 1180591620717411303424 does not fit in a 64-bit integer"):
+        isochor.load(SWING, {"mesh.cells": 2**70})
+
+
+def test_a_callback_that_returns_neither_a_boolean_nor_none_stops_with_a_type_error(tmp_path):
+    out = tmp_path / "s.h5"
+    with pytest.raises(TypeError, match=r"on_frame returned a str \(expected None or True to go on, False to stop"):
+        isochor.run(SWING, out, on_frame=lambda f: "yes")
+    with isochor.open(out) as r:  # the frame written before the callback ran is kept
+        assert r.status == "interrupted" and r.num_frames == 1

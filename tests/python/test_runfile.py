@@ -72,3 +72,5 @@ def test_a_file_that_is_not_a_run_is_one_line(tmp_path):
         isochor.open(bad)
     p = subprocess.run([sys.executable, os.path.join(SOURCE, "tools", "render.py"), str(bad)], capture_output=True, text=True)
     assert p.returncode == 1 and p.stderr.count("\n") == 1 and "cannot be read as HDF5" in p.stderr
+    with pytest.raises(isochor.Error, match=r"/dev/zero: is not a regular file"):
+        isochor.open("/dev/zero")

@@ -90,8 +90,11 @@ class OutputWriter {
   // The root attribute `status`: "running" while written, then "finished", "interrupted" or
   // "failed" (docs/output.md).
   void set_status(const std::string& status);
-  // Mode::resume: the frame the run continues from.
+  // Mode::resume: the frame the run continues from. Opening for resume reads only; the file is
+  // changed by continue_run(), once the run has accepted the resume (status "running", the frames
+  // after resume_point() cut, the last stop's reasons removed).
   const ResumePoint& resume_point() const;
+  void continue_run();
   // Closes the file (also done by the destructor).
   void close();
 

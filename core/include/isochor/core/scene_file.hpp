@@ -30,6 +30,11 @@ struct Range {
   static Range positive() { return {0.0, std::numeric_limits<double>::infinity(), true, false}; }
   static Range non_negative() { return {0.0, std::numeric_limits<double>::infinity(), false, false}; }
   static Range closed(double a, double b) { return {a, b, false, false}; }
+  // A length in metres that a scene can mean: positive, at most 1000 km (larger numbers overflow
+  // the geometry's squares and grids long before they describe a body).
+  static Range length() { return {0.0, 1e6, true, false}; }
+  // A coordinate in metres, within 1000 km of the origin (for the same reason).
+  static Range coordinate() { return {-1e6, 1e6, false, false}; }
   bool contains(double v) const;
   std::string describe() const;
 };

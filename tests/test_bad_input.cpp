@@ -1,0 +1,176 @@
+// Bad input by class: files that are not regular files or are too large for their format,
+// non-finite numbers in every reader, nesting and counts a file cannot hold, lengths no body
+// has, steps longer than the run, and a refused resume that leaves its file as it was. Each
+// asserts the one-line message (naming the file or key and what was expected) and what is left.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <hdf5.h>
+
+#include "isochor/app/run.hpp"
+#include "isochor/core/bvh.hpp"
+#include "isochor/core/input_file.hpp"
+#include "isochor/core/output_reader.hpp"
+#include "isochor/core/paint.hpp"
+#include "isochor/scene/scene.hpp"
+#include "test_util.hpp"
+
+using namespace isochor;
+
+namespace {
+
+bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+const std::string kBox = "[mesh]\nshape = \"box\"\ncells = 2\n";
+
+std::string scene_error(const std::string& text) {
+  return test::error_of([&] { parse_scene(SceneFile::parse(text, "bad.toml")); });
+}
+
+}  // namespace
+
+TEST(BadInput, FilesThatAreNotRegularFilesAreRefusedBeforeReading) {
+  const auto dir = test::temp_dir();
+  const std::string fifo = (dir / "pipe.toml").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  // A FIFO would block the reader (no writer), /dev/zero would fill memory: both refused by kind.
+  EXPECT_TRUE(has(test::error_of([&] { load_scene(fifo); }),
+                  "pipe.toml: is a FIFO (named pipe), not a regular file (expected a scene file in TOML)"));
+  EXPECT_TRUE(has(test::error_of([&] { load_scene("/dev/zero"); }),
+                  "/dev/zero: is a character device, not a regular file (expected a scene file in TOML)"));
+  EXPECT_TRUE(has(test::error_of([&] { read_bvh("/dev/urandom"); }), "/dev/urandom: is a character device"));
+  EXPECT_TRUE(has(test::error_of([&] { read_paint("/dev/zero.csv", nullptr); }), "no such file"));
+  EXPECT_TRUE(has(test::error_of([&] { RunFile f(dir.string()); }), ": is a directory (expected an isochor .h5 output)"));
+  const std::string mesh_fifo = (dir / "body.stl").string();
+  ASSERT_EQ(::mkfifo(mesh_fifo.c_str(), 0600), 0);
+  EXPECT_TRUE(has(scene_error("[mesh]\nfile = \"" + mesh_fifo + "\"\n"), "body.stl: is a FIFO (named pipe)"));
+}
+
+TEST(BadInput, AFileLargerThanItsFormatAllowsIsRefusedBeforeReading) {
+  const auto dir = test::temp_dir();
+  const std::string big = test::write_file(dir / "big.toml", std::string(3000, '#') + "\n");
+  EXPECT_TRUE(has(test::error_of([&] { check_input_file(big, "a scene file in TOML", 2000); }),
+                  "big.toml: 0.003 MB, more than the 0.002 MB that a scene file in TOML may have here"));
+  EXPECT_NO_THROW(check_input_file(big, "a scene file in TOML", 3001));
+}
+
+TEST(BadInput, NonFiniteNumbersAreRefusedInPaintAndMotion) {
+  const auto dir = test::temp_dir();
+  // A NaN weight is in no zone and not out of one either: refused, naming the vertex and column.
+  const std::string csv = test::write_file(dir / "w.csv", "x,y,z,weight\n0,0,0,1\n1,0,0,nan\n");
+  EXPECT_TRUE(has(test::error_of([&] { read_paint(csv, nullptr); }), "w.csv: vertex 1's weight is NaN"));
+  const std::string inf = test::write_file(dir / "i.csv", "x,y,z,weight\n0,0,0,inf\n");
+  EXPECT_TRUE(has(test::error_of([&] { read_paint(inf, nullptr); }), "i.csv: vertex 0's weight is infinite"));
+  const std::string head = "HIERARCHY\nROOT hips\n{\n OFFSET 0 0 0\n CHANNELS 1 Zrotation\n}\nMOTION\nFrames: 2\n";
+  EXPECT_TRUE(has(test::error_of([&] { parse_bvh(head + "Frame Time: inf\n0\n1\n", "t.bvh"); }),
+                  "t.bvh:9: expected the frame time (s) (a finite number), found \"inf\""));
+  EXPECT_TRUE(has(test::error_of([&] { parse_bvh(head + "Frame Time: 0.1\n0\nnan\n", "n.bvh"); }),
+                  "n.bvh:11: expected a channel value (a finite number), found \"nan\""));
+}
+
+TEST(BadInput, MotionFilesCannotNestOrCountBeyondWhatTheyHold) {
+  // 300 joints each inside the last: refused at the 257th level, without deep recursion.
+  std::string deep = "HIERARCHY\nROOT j0\n{\nOFFSET 0 0 0\nCHANNELS 0\n";
+  for (int k = 1; k < 300; ++k) deep += "JOINT j" + std::to_string(k) + "\n{\nOFFSET 0 0 1\nCHANNELS 0\n";
+  EXPECT_TRUE(has(test::error_of([&] { parse_bvh(deep, "deep.bvh"); }), "joints nested more than 256 deep"));
+  // A frame count that the file cannot hold is refused before any memory is taken for it.
+  const std::string huge =
+      "HIERARCHY\nROOT hips\n{\n OFFSET 0 0 0\n CHANNELS 1 Zrotation\n}\nMOTION\nFrames: 99999999999\nFrame Time: 0.1\n0\n";
+  EXPECT_TRUE(has(test::error_of([&] { parse_bvh(huge, "huge.bvh"); }),
+                  "Frames: 99999999999 frames of 1 channels need 99999999999 values, the file holds 1"));
+}
+
+TEST(BadInput, LengthsAndStepsAreCheckedAgainstWhatTheyCanMean) {
+  EXPECT_TRUE(has(scene_error(kBox + "[[collider]]\nshape = \"sphere\"\nradius = 1e200\ncenter = [0.0, 0.0, -5.0]\n"),
+                  "collider[0].radius: expected a number in (0, 1e+06]"));
+  EXPECT_TRUE(has(scene_error(kBox + "[[collider]]\nshape = \"sphere\"\nradius = 1.0\ncenter = [0.0, 0.0, -1e300]\n"),
+                  "collider[0].center: expected a list of numbers, each a number in [-1e+06, 1e+06], got -1e+300"));
+  const std::string obj = std::string(ISOCHOR_SOURCE_DIR) + "/demos/meshes/jelly_yup.obj";
+  EXPECT_TRUE(has(scene_error(kBox + "[[collider]]\nshape = \"mesh\"\nfile = \"" + obj +
+                              "\"\ncenter = [0.0, 0.0, -5.0]\nscale = 1e20\n"),
+                  "collider[0].scale: 1e+20 makes the surface 1.06e+19 m across (expected 1e-06 to 1e+06 m"));
+  // A fixed step longer than the run would take no step at all: refused, not skipped.
+  for (const char* kind : {"backward_euler", "semi_implicit", "xpbd"})
+    EXPECT_TRUE(has(scene_error(kBox + "[integrator]\nkind = \"" + std::string(kind) +
+                                "\"\ndt = 1e20\n[frames]\nrate = 100.0\nduration = 0.02\n"),
+                    "integrator.dt: 1e+20 s is longer than the run (frames.duration = 0.02 s)"))
+        << kind;
+  EXPECT_TRUE(has(scene_error("[mesh]\nshape = \"box\"\nsize = [1e-300, 1.0, 1.0]\n"),
+                  "mesh.size: 1e-300 m is too small to mesh"));
+  // Zones flattened to volume 0 cannot be held at their rest volumes from t = 0 on IDA.
+  EXPECT_TRUE(has(scene_error(kBox + "[material]\nmodel = \"cnh\"\n[initial]\nflatten = \"z\"\n"),
+                  "initial.flatten: starts every zone at volume 0, which IDA cannot hold to its rest volume at t = 0 "
+                  "(expected zones.restore_time > 0"));
+  // A surface file meshed at an edge length it cannot fit gets the shapes' estimate before Gmsh runs.
+  EXPECT_TRUE(has(scene_error("[mesh]\nfile = \"" + obj + "\"\nedge_length = 1e-5\n"),
+                  "mesh.edge_length: makes about"));
+}
+
+TEST(BadInput, ARefusedResumeLeavesItsFileAsItWas) {
+  const auto dir = test::temp_dir();
+  const std::string path = (dir / "run.h5").string(), xdmf = (dir / "run.xdmf").string();
+  const Scene sc = parse_scene(SceneFile::parse(kBox + "[frames]\nrate = 100.0\nduration = 0.05\n", "r.toml"));
+  RunOptions o;
+  o.output = path;
+  o.progress = false;
+  o.on_frame = [](int k, const Frame&) { return k < 2; };
+  EXPECT_THROW(run_scene(sc, o), RunInterrupted);
+  // Frame 2's time moved off the scene's frames: the resume is refused after the file was opened.
+  {
+    const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hid_t ds = H5Dopen2(f, "/frames/time", H5P_DEFAULT);
+    double t[3];
+    H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, t);
+    t[2] = 0.0123;
+    H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, t);
+    H5Dclose(ds);
+    H5Fclose(f);
+  }
+  const std::string h5_before = file_bytes(path), xdmf_before = file_bytes(xdmf);
+  o.mode = OutputWriter::Mode::resume;
+  o.on_frame = nullptr;
+  EXPECT_TRUE(has(test::error_of([&] { run_scene(sc, o); }), "is not a frame of the scene (cannot be resumed)"));
+  EXPECT_EQ(file_bytes(path), h5_before);
+  EXPECT_EQ(file_bytes(xdmf), xdmf_before);
+  RunFile f(path);
+  EXPECT_EQ(f.attributes().at("status"), "interrupted");
+  EXPECT_EQ(f.stat_totals().count("interrupted_at"), 1u);
+  // A file that is not HDF5 at all is refused as such, and left as it was (here: empty).
+  const std::string empty = test::write_file(dir / "empty.h5", "");
+  o.output = empty;
+  EXPECT_TRUE(has(test::error_of([&] { run_scene(sc, o); }), "empty.h5: not an HDF5 file"));
+  EXPECT_EQ(std::filesystem::file_size(empty), 0u);
+}
+
+TEST(BadInput, OutputsGoWhereTheUserSaidAndNowhereElse) {
+  const auto dir = test::temp_dir();
+  // The sidecar's path is a directory: refused before the run's file is created.
+  std::filesystem::create_directories(dir / "run.xdmf");
+  const Scene sc = parse_scene(SceneFile::parse(kBox + "[frames]\nrate = 100.0\nduration = 0.02\n", "o.toml"));
+  RunOptions o;
+  o.output = (dir / "run.h5").string();
+  o.progress = false;
+  EXPECT_TRUE(has(test::error_of([&] { run_scene(sc, o); }), "run.xdmf: is a directory (the run's XDMF sidecar"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "run.h5"));
+  // An OBJ prefix is a file name's start: one with a '/' would write outside --dir.
+  o.output = (dir / "good.h5").string();
+  run_scene(sc, o);
+  const std::string out = (dir / "obj").string();
+  EXPECT_TRUE(has(test::error_of([&] { export_obj_sequence(o.output, out, "../../x"); }),
+                  "--prefix ../../x: expected the start of a file name (no '/')"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "obj"));
+  EXPECT_EQ(export_obj_sequence(o.output, out, "f"), 3);
+  EXPECT_TRUE(std::filesystem::exists(dir / "obj" / "f_0002.obj"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "obj" / "f_0002.obj.part"));
+}
