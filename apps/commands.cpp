@@ -72,9 +72,15 @@ int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& over
   Frame f;
   f.positions = &sc.mesh.rest_positions();
   f.volumes = zone_volumes(sc.mesh, sc.mesh.rest_positions(), sc.zones);
-  w.write_frame(f);
-  w.set_status("finished");
-  w.close();
+  try {
+    w.write_frame(f);
+    w.set_status("finished");
+    w.close();
+  } catch (const Error& e) {  // a full disk or a size limit: no partial mesh file is left
+    if (w.frames_written() > 0) throw;
+    w.discard();
+    throw Error(std::string(e.what()) + "; " + out + " was removed");
+  }
   const Mesh& m = sc.mesh;
   std::printf("%s: %d nodes, %d tets, %zu surface triangles, volume %.9g", scene_path.c_str(), m.num_nodes(),
               m.num_tets(), m.surface().size(), m.rest_volume());

@@ -2,6 +2,7 @@
 // are in commands.cpp and study_mpi.cpp.
 #include <CLI/CLI.hpp>
 
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 
@@ -143,6 +144,10 @@ int dispatch(Line& l, int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A full file size limit makes writes fail with EFBIG instead of killing the process, so that
+  // every command reports it (and removes what it could not finish).
+  std::signal(SIGXFSZ, SIG_IGN);
+  hdf5_no_cleanup_at_exit();
   CLI::App app{"isochor: volume-preserving simulation of soft, nearly incompressible solids"};
   app.require_subcommand(1);
   // Bad command lines, like bad input, stop with one line.

@@ -51,7 +51,8 @@ TEST(BadInput, FilesThatAreNotRegularFilesAreRefusedBeforeReading) {
                   "/dev/zero: is a character device, not a regular file (expected a scene file in TOML)"));
   EXPECT_TRUE(has(test::error_of([&] { read_bvh("/dev/urandom"); }), "/dev/urandom: is a character device"));
   EXPECT_TRUE(has(test::error_of([&] { read_paint("/dev/zero.csv", nullptr); }), "no such file"));
-  EXPECT_TRUE(has(test::error_of([&] { RunFile f(dir.string()); }), ": is a directory (expected an isochor .h5 output)"));
+  EXPECT_TRUE(
+      has(test::error_of([&] { RunFile f(dir.string()); }), ": is a directory (expected an isochor .h5 output)"));
   const std::string mesh_fifo = (dir / "body.stl").string();
   ASSERT_EQ(::mkfifo(mesh_fifo.c_str(), 0600), 0);
   EXPECT_TRUE(has(scene_error("[mesh]\nfile = \"" + mesh_fifo + "\"\n"), "body.stl: is a FIFO (named pipe)"));
@@ -86,7 +87,8 @@ TEST(BadInput, MotionFilesCannotNestOrCountBeyondWhatTheyHold) {
   EXPECT_TRUE(has(test::error_of([&] { parse_bvh(deep, "deep.bvh"); }), "joints nested more than 256 deep"));
   // A frame count that the file cannot hold is refused before any memory is taken for it.
   const std::string huge =
-      "HIERARCHY\nROOT hips\n{\n OFFSET 0 0 0\n CHANNELS 1 Zrotation\n}\nMOTION\nFrames: 99999999999\nFrame Time: 0.1\n0\n";
+      "HIERARCHY\nROOT hips\n{\n OFFSET 0 0 0\n CHANNELS 1 Zrotation\n}\nMOTION\nFrames: 99999999999\nFrame Time: "
+      "0.1\n0\n";
   EXPECT_TRUE(has(test::error_of([&] { parse_bvh(huge, "huge.bvh"); }),
                   "Frames: 99999999999 frames of 1 channels need 99999999999 values, the file holds 1"));
 }
@@ -113,8 +115,8 @@ TEST(BadInput, LengthsAndStepsAreCheckedAgainstWhatTheyCanMean) {
                   "initial.flatten: starts every zone at volume 0, which IDA cannot hold to its rest volume at t = 0 "
                   "(expected zones.restore_time > 0"));
   // A surface file meshed at an edge length it cannot fit gets the shapes' estimate before Gmsh runs.
-  EXPECT_TRUE(has(scene_error("[mesh]\nfile = \"" + obj + "\"\nedge_length = 1e-5\n"),
-                  "mesh.edge_length: makes about"));
+  EXPECT_TRUE(
+      has(scene_error("[mesh]\nfile = \"" + obj + "\"\nedge_length = 1e-5\n"), "mesh.edge_length: makes about"));
 }
 
 TEST(BadInput, ARefusedResumeLeavesItsFileAsItWas) {

@@ -245,8 +245,14 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   if (resume) w.continue_run();
   Progress bar(sc.file.name(), static_cast<int>(all_times.size()) - 1, times.front(), times.back(),
                opt.progress ? stderr : nullptr, last_step_time);
+  // A new output that failed before its first frame is removed (nothing in it to keep or
+  // resume); otherwise the file says why it stopped. Returns what the message says of the frames.
   auto finish_failed = [&](const std::string& status, const std::vector<std::pair<std::string, double>>& numbers,
-                           const std::string& failure) {
+                           const std::string& failure) -> std::string {
+    if (!resume && w.frames_written() == 0 && status == "failed") {
+      w.discard();
+      return "no frame was written, so " + summary.output + " was removed";
+    }
     // Best effort: the file may be what failed (a full disk).
     try {
       for (const auto& [name, value] : numbers) w.set_stat(name, value);
@@ -255,6 +261,7 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
       w.close();
     } catch (...) {
     }
+    return std::to_string(summary.frames) + " frames saved in " + summary.output;
   };
   try {
     summary.stats = integrator->run(
@@ -271,10 +278,13 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
                              std::to_string(summary.frames) + " frames kept in " + summary.output,
                          e.signal, summary);
   } catch (const IntegrationError& e) {
-    finish_failed("failed", {{"failed_at_time", e.time}}, e.what());
-    throw Error(sc.file.name() + ": " + e.what() + "; " + std::to_string(summary.frames) + " frames saved in " +
-                summary.output);
-  } catch (const Error& e) {  // the output could not be written (a full disk, a size limit)
+    const std::string kept = finish_failed("failed", {{"failed_at_time", e.time}}, e.what());
+    throw Error(sc.file.name() + ": " + e.what() + "; " + kept);
+  } catch (const Error& e) {                   // the output could not be written (a full disk, a size limit)
+    if (!resume && w.frames_written() == 0) {  // the writer's message says no frame was written
+      finish_failed("failed", {}, e.what());
+      throw Error(std::string(e.what()) + "; " + summary.output + " was removed");
+    }
     finish_failed("failed", {}, e.what());
     throw;
   }

@@ -729,11 +729,16 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh, const Zone
     throw Error(path + ": cannot be created" + reason);
   }
   m.file = H(f, H5Fclose);
-  m.write_header(info);
-  m.write_mesh(mesh, zones);
-  m.write_colliders(info.scene.colliders);
-  m.create_series(zones);
-  check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
+  try {
+    m.write_header(info);
+    m.write_mesh(mesh, zones);
+    m.write_colliders(info.scene.colliders);
+    m.create_series(zones);
+    check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
+  } catch (const Error& e) {  // a full disk or a size limit before the first frame: nothing is kept
+    discard();
+    throw Error(path + ": cannot be written (" + e.what() + "); nothing was kept");
+  }
   // A frame's bytes before any is measured: positions, velocities, loads, pressures, the
   // scalars and their per-frame views.
   m.start_measuring(zones.size());
@@ -868,6 +873,8 @@ void OutputWriter::continue_run() { impl_->continue_run(); }
 
 const ResumePoint& OutputWriter::resume_point() const { return impl_->resume; }
 
+void hdf5_no_cleanup_at_exit() { H5dont_atexit(); }
+
 double output_room_bytes(const std::string& path) { return std::min(free_bytes(path), file_size_limit()); }
 
 bool output_is_being_written(const std::string& path) {
@@ -904,6 +911,19 @@ void OutputWriter::close() {
   m.file.reset();
   if (m.lock_fd >= 0) ::close(m.lock_fd);  // the file is complete: other writers may have it
   m.lock_fd = -1;
+}
+
+void OutputWriter::discard() {
+  Impl& m = *impl_;
+  if (m.resume_pending || m.frames > 0)
+    throw Error(m.path + ": holds frames (a run's output is never discarded once written)");
+  try {
+    close();
+  } catch (const Error&) {  // the file is removed either way
+  }
+  std::error_code ec;
+  std::filesystem::remove(m.path, ec);
+  std::filesystem::remove(m.xdmf_file(), ec);
 }
 
 int OutputWriter::frames_written() const { return impl_->frames; }

@@ -13,6 +13,7 @@
 #include <toml++/toml.h>
 
 #include "isochor/base/error.hpp"
+#include "isochor/core/output.hpp"
 #include "isochor/scene/scene.hpp"
 #include "isochor/app/run.hpp"
 #include "isochor/app/study.hpp"
@@ -295,6 +296,7 @@ void bind_scene(py::module_& m) {
 }  // namespace
 
 PYBIND11_MODULE(_isochor, m) {
+  hdf5_no_cleanup_at_exit();  // no effect when h5py started HDF5 first
   m.doc() = "isochor's C++ core (use the isochor package)";
   bind_error(m);
   bind_scene(m);

@@ -9,11 +9,11 @@ namespace isochor {
 
 // Largest sizes accepted, per kind of file (bytes).
 namespace input_limits {
-constexpr double kScene = 64.0 * 1024 * 1024;          // TOML scenes and studies
-constexpr double kMotion = 1024.0 * 1024 * 1024;       // BVH
-constexpr double kSurface = 2048.0 * 1024 * 1024;      // STL, OBJ
-constexpr double kPaint = 2048.0 * 1024 * 1024;        // PLY, OBJ, CSV paint
-constexpr double kMesh = 16.0 * 1024 * 1024 * 1024;    // .msh, TetGen .node/.ele
+constexpr double kScene = 64.0 * 1024 * 1024;         // TOML scenes and studies
+constexpr double kMotion = 1024.0 * 1024 * 1024;      // BVH
+constexpr double kSurface = 2048.0 * 1024 * 1024;     // STL, OBJ
+constexpr double kPaint = 2048.0 * 1024 * 1024;       // PLY, OBJ, CSV paint
+constexpr double kMesh = 16.0 * 1024 * 1024 * 1024;   // .msh, TetGen .node/.ele
 constexpr double kRun = 1024.0 * 1024 * 1024 * 1024;  // HDF5 run files
 }  // namespace input_limits
 

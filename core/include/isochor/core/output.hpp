@@ -97,6 +97,9 @@ class OutputWriter {
   void continue_run();
   // Closes the file (also done by the destructor).
   void close();
+  // Closes and removes the file and its sidecar: a new output that failed before its first frame
+  // leaves nothing behind (not for Mode::resume, whose file holds an earlier run's frames).
+  void discard();
 
   int frames_written() const;
   const std::string& path() const;
@@ -113,6 +116,12 @@ double output_room_bytes(const std::string& path);
 
 // Whether a process holds the writer's lock on this file (a run still writing it).
 bool output_is_being_written(const std::string& path);
+
+// To be called first in a program that writes run files: HDF5's own clean-up at exit is not
+// registered. A file whose flush failed (a full disk, a size limit) stays half-closed in HDF5's
+// tables, and its clean-up at exit then crashes (HDF5 1.10's H5F__close_cb); every file isochor
+// writes is flushed and closed by its writer, so nothing is lost without it.
+void hdf5_no_cleanup_at_exit();
 
 // The version and git revision compiled into this build.
 const char* isochor_version();
