@@ -195,7 +195,11 @@ double ElasticAssembly::energy(const Points& x) const {
   double E = 0.0;
   const int T = mesh_.num_tets();
 #pragma omp parallel for reduction(+ : E) schedule(static)
-  for (int k = 0; k < T; ++k) E += tet_energy(*material_, shapes_[k], gather(x, tets_[k]), nullptr, nullptr);
+  for (int k = 0; k < T; ++k) {
+    const Vec12 xe = gather(x, tets_[k]);
+    E += tet_energy(*material_, shapes_[k], xe, nullptr, nullptr) +
+         fibre_term(k, xe, nullptr, nullptr, nullptr, nullptr);
+  }
   const int S = static_cast<int>(tri_area_.size());
   for (int f = 0; f < S; ++f)
     E += epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, mesh_.surface()[f]), nullptr, nullptr);
@@ -257,31 +261,36 @@ double ElasticAssembly::evaluate(const Points& x, const ElementPass& p) const {
   // path's formulas without its 12- and 9-vectors: P = 2 W_I F + W_J cof F, node a gets V P b_a.
   const bool gradient_only = p.grad && !p.values && !p.values2 && !p.Kv;
   const double tets =
-      gradient_only
-          ? for_each_coloured(tet_colours_,
-                              [&](int e) {
-                                const Tet& t = tets_[e];
-                                const TetShape& s = shapes_[e];
-                                const Vec3 x0 = x.col(t[0]);
-                                Mat3 Ds;
-                                Ds << x.col(t[1]) - x0, x.col(t[2]) - x0, x.col(t[3]) - x0;
-                                const Mat3 F = Ds * s.Dm_inv;
-                                const Mat3 C = cofactor(F);
-                                const InvariantDerivatives w =
-                                    material_->first_invariants(F.squaredNorm(), F.col(0).dot(C.col(0)));
-                                const Mat3 G = s.rest_volume * (((2.0 * w.W_I) * F + w.W_J * C) * s.Dm_inv.transpose());
-                                Eigen::VectorXd& g = *p.grad;
-                                g.segment<3>(3 * static_cast<Index>(t[0])) -= G.col(0) + G.col(1) + G.col(2);
-                                for (int k = 1; k < 4; ++k) g.segment<3>(3 * static_cast<Index>(t[k])) += G.col(k - 1);
-                                return s.rest_volume * w.W;
-                              })
-          : for_each_coloured(tet_colours_, [&](int e) {
-              const Tet& t = tets_[e];
-              return element_pass<4>(p, t, tet_slots_.data() + 144 * static_cast<std::size_t>(e),
-                                     [&](Vec12* g, Mat12* H, const Vec12* d, Vec12* Hd) {
-                                       return tet_energy(*material_, shapes_[e], gather(x, t), g, H, d, Hd);
-                                     });
-            });
+      gradient_only ? for_each_coloured(tet_colours_,
+                                        [&](int e) {
+                                          const Tet& t = tets_[e];
+                                          const TetShape& s = shapes_[e];
+                                          const Vec3 x0 = x.col(t[0]);
+                                          Mat3 Ds;
+                                          Ds << x.col(t[1]) - x0, x.col(t[2]) - x0, x.col(t[3]) - x0;
+                                          const Mat3 F = Ds * s.Dm_inv;
+                                          const Mat3 C = cofactor(F);
+                                          const InvariantDerivatives w =
+                                              material_->first_invariants(F.squaredNorm(), F.col(0).dot(C.col(0)));
+                                          Mat3 P = (2.0 * w.W_I) * F + w.W_J * C;
+                                          double psi = w.W;
+                                          if (has_fibres()) add_fibre_stress(e, F, P, psi);
+                                          const Mat3 G = s.rest_volume * (P * s.Dm_inv.transpose());
+                                          Eigen::VectorXd& g = *p.grad;
+                                          g.segment<3>(3 * static_cast<Index>(t[0])) -= G.col(0) + G.col(1) + G.col(2);
+                                          for (int k = 1; k < 4; ++k)
+                                            g.segment<3>(3 * static_cast<Index>(t[k])) += G.col(k - 1);
+                                          return s.rest_volume * psi;
+                                        })
+                    : for_each_coloured(tet_colours_, [&](int e) {
+                        const Tet& t = tets_[e];
+                        return element_pass<4>(p, t, tet_slots_.data() + 144 * static_cast<std::size_t>(e),
+                                               [&](Vec12* g, Mat12* H, const Vec12* d, Vec12* Hd) {
+                                                 const Vec12 xe = gather(x, t);
+                                                 return tet_energy(*material_, shapes_[e], xe, g, H, d, Hd) +
+                                                        fibre_term(e, xe, g, H, d, Hd);
+                                               });
+                      });
   const double tris = for_each_coloured(tri_colours_, [&](int f) {
     const Tri& t = mesh_.surface()[f];
     return element_pass<3>(
@@ -327,7 +336,71 @@ void ElasticAssembly::pressures(const Points& x, std::vector<double>& p) const {
   p.resize(mesh_.num_tets());
   const int T = mesh_.num_tets();
 #pragma omp parallel for schedule(static)
-  for (int k = 0; k < T; ++k) p[tet_colours_.order[k]] = material_->pressure(shapes_[k].F(gather(x, tets_[k])));
+  for (int k = 0; k < T; ++k) {
+    const Mat3 F = shapes_[k].F(gather(x, tets_[k]));
+    double& pk = p[tet_colours_.order[k]] = material_->pressure(F);
+    // A fibre's stress adds -tr(sigma_f) / 3 = -tr(P_f F^T) / (3 J).
+    if (has_fibres() && fibre_muscle_[k] >= 0) {
+      Mat3 P = Mat3::Zero();
+      double psi = 0;
+      add_fibre_stress(k, F, P, psi);
+      pk -= (P * F.transpose()).trace() / (3.0 * F.determinant());
+    }
+  }
+}
+
+void ElasticAssembly::set_fibres(const FibreField& field) {
+  const int T = mesh_.num_tets();
+  if (field.empty()) {
+    muscles_.clear();
+    activation_.clear();
+    fibre_muscle_.clear();
+    fibre_dir_.clear();
+    return;
+  }
+  if (static_cast<int>(field.muscle_of.size()) != T || static_cast<int>(field.direction.size()) != T)
+    throw Error("fibre field: expected a muscle index and a direction per tet (" + std::to_string(T) + ")");
+  muscles_ = field.muscles;
+  activation_.assign(muscles_.size(), 0.0);
+  fibre_muscle_.resize(T);
+  fibre_dir_.resize(T);
+  for (int k = 0; k < T; ++k) {
+    const int e = tet_colours_.order[k];
+    fibre_muscle_[k] = field.muscle_of[e];
+    fibre_dir_[k] = field.direction[e];
+    if (fibre_muscle_[k] >= static_cast<int>(muscles_.size()))
+      throw Error("fibre field: tet " + std::to_string(e) + " names muscle " + std::to_string(fibre_muscle_[k]) +
+                  " of " + std::to_string(muscles_.size()));
+  }
+}
+
+void ElasticAssembly::set_activations(const std::vector<double>& activation) {
+  if (activation.size() != muscles_.size())
+    throw Error("activations: expected " + std::to_string(muscles_.size()) + " (one per muscle), got " +
+                std::to_string(activation.size()));
+  activation_ = activation;
+}
+
+double ElasticAssembly::fibre_term(int k, const Vec12& x, Vec12* grad, Mat12* hess, const Vec12* dir,
+                                   Vec12* hess_dir) const {
+  if (!has_fibres() || fibre_muscle_[k] < 0) return 0.0;
+  const int m = fibre_muscle_[k];
+  Vec12 g, Hd;
+  Mat12 H;
+  const double E = fibre_tet_energy(muscles_[m], activation_[m], fibre_dir_[k], shapes_[k], x, grad ? &g : nullptr,
+                                    hess ? &H : nullptr, dir, hess_dir ? &Hd : nullptr);
+  if (grad) *grad += g;
+  if (hess) *hess += H;
+  if (hess_dir) *hess_dir += Hd;
+  return E;
+}
+
+void ElasticAssembly::add_fibre_stress(int k, const Mat3& F, Mat3& P, double& psi) const {
+  const int m = fibre_muscle_[k];
+  if (m < 0) return;
+  double fibre_psi = 0;
+  P += fibre_stress_tensor(muscles_[m], activation_[m], fibre_dir_[k], F, &fibre_psi);
+  psi += fibre_psi;
 }
 
 int ElasticAssembly::inverted_tets(const Points& x) const {

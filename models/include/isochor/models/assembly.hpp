@@ -12,6 +12,7 @@
 
 #include "isochor/models/elements.hpp"
 #include "isochor/models/material.hpp"
+#include "isochor/models/muscle.hpp"
 #include "isochor/core/mesh.hpp"
 #include "isochor/integrators/sparse_pattern.hpp"
 
@@ -114,8 +115,18 @@ class ElasticAssembly {
   // Number of tets with J <= 0.
   int inverted_tets(const Points& x) const;
   const Material& material() const { return *material_; }
+  // Muscles (muscle.hpp): each fibre tet's term is added to its material's; activations per
+  // muscle, all 0 until set. A field without muscles removes them.
+  void set_fibres(const FibreField& field);
+  void set_activations(const std::vector<double>& activation);
+  const std::vector<double>& activations() const { return activation_; }
+  bool has_fibres() const { return !muscles_.empty(); }
 
  private:
+  // Tet k's fibre term (k its position in the pass's order), 0 where it has none.
+  double fibre_term(int k, const Vec12& x, Vec12* grad, Mat12* hess, const Vec12* dir, Vec12* hess_dir) const;
+  // Tet k's fibre stress, added to P (psi added to *psi).
+  void add_fibre_stress(int k, const Mat3& F, Mat3& P, double& psi) const;
   const Mesh& mesh_;
   std::shared_ptr<const Material> material_;
   DofMap dofs_;
@@ -127,6 +138,11 @@ class ElasticAssembly {
   Pattern pattern_;
   ElementSchedule tet_colours_, tri_colours_;
   std::vector<Index> tet_slots_, tri_slots_;  // 144 per tet, 81 per triangle
+  // Fibres, per tet at its position in the pass's order: muscle index (-1: none) and direction.
+  std::vector<MuscleLaw> muscles_;
+  std::vector<double> activation_;
+  std::vector<int> fibre_muscle_;
+  std::vector<Vec3> fibre_dir_;
 };
 
 // Lumped mass per node: density times a quarter of the volume of every tet around it.
