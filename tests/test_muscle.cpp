@@ -5,12 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <functional>
 #include <random>
 
 #include "isochor/base/error.hpp"
 #include "isochor/core/meshing.hpp"
 #include "isochor/models/assembly.hpp"
 #include "isochor/models/muscle.hpp"
+#include "scene_runs.hpp"
 
 using namespace isochor;
 
@@ -82,8 +84,7 @@ TEST(Muscle, TetTermMatchesCentralDifferences) {
   for (const MuscleLaw& m : {law(), law(4.0e3, 0.0, 0.9), law(0.0, 0.0, 1.0)})
     for (double squash : {1.25, 0.7, -0.8}) {
       const Vec12 X = random_tet(rng, 1.0), x = random_tet(rng, squash);
-      const TetShape s =
-          TetShape::make(X.segment<3>(0), X.segment<3>(3), X.segment<3>(6), X.segment<3>(9));
+      const TetShape s = TetShape::make(X.segment<3>(0), X.segment<3>(3), X.segment<3>(6), X.segment<3>(9));
       Vec12 g, Hd, d = Vec12::Random();
       Mat12 H;
       const double E = fibre_tet_energy(m, 0.8, a0, s, x, &g, &H, &d, &Hd);
@@ -94,8 +95,9 @@ TEST(Muscle, TetTermMatchesCentralDifferences) {
         Vec12 xp = x, xm = x, gp, gm;
         xp[i] += h;
         xm[i] -= h;
-        gfd[i] = (fibre_tet_energy(m, 0.8, a0, s, xp, &gp, nullptr) - fibre_tet_energy(m, 0.8, a0, s, xm, &gm, nullptr)) /
-                 (2 * h);
+        gfd[i] =
+            (fibre_tet_energy(m, 0.8, a0, s, xp, &gp, nullptr) - fibre_tet_energy(m, 0.8, a0, s, xm, &gm, nullptr)) /
+            (2 * h);
         Hfd.col(i) = (gp - gm) / (2 * h);
       }
       EXPECT_NE(E, 0.0);
@@ -172,4 +174,216 @@ TEST(Muscle, AssemblyWithFibresMatchesFiniteDifferences) {
   // Removing the muscles gives back the plain body.
   a.set_fibres(FibreField{});
   EXPECT_DOUBLE_EQ(a.energy(x), plain.energy(x));
+}
+
+// ---- Bundles in a scene: the one-dimensional answers of a homogeneous fibre-aligned bar ----
+
+namespace {
+
+Scene bundle_scene(const std::string& extra, const std::vector<std::string>& overrides = {}) {
+  const std::string text = std::string(test::kRollerBar) + R"(
+[[muscle]]
+name = "bundle"
+select = { kind = "all" }
+direction = [1.0, 0.0, 0.0]
+sigma_max = 2000.0
+optimal_stretch = 1.05
+passive_k1 = 300.0
+passive_k2 = 0.5
+)" + extra;
+  return parse_scene(SceneFile::parse(text, "bundle.toml", overrides));
+}
+
+// Runs a scene and calls f(t, system, lambda) at every frame, the system set to the frame's state.
+template <class F>
+void each_frame(const Scene& sc, F&& f) {
+  test::run_frames(sc, [&](double t, SceneSystem& sys, const VectorXd&, const VectorXd& lambda) { f(t, sys, lambda); });
+}
+
+constexpr double kMu = 1000.0, kSigma = 2000.0, kOptimal = 1.05, kK1 = 300.0, kK2 = 0.5, kArea = 0.25;
+
+// The bar's nominal stress along x at stretch l, written out from the papers' formulas: the
+// incompressible neo-Hookean mu (l - l^-2), Blemker's active sigma_max a f_L(l / l_ofl), and the
+// HGO passive fibre 2 l k1 (l^2 - 1) exp(k2 (l^2 - 1)^2) in tension.
+double bar_stress(double l, double a) {
+  const double u = l / kOptimal;
+  double fL = 0;
+  if (u >= 0.4 && u <= 0.6) fL = 9 * (u - 0.4) * (u - 0.4);
+  if (u > 0.6 && u < 1.4) fL = 1 - 4 * (1 - u) * (1 - u);
+  if (u >= 1.4 && u <= 1.6) fL = 9 * (u - 1.6) * (u - 1.6);
+  const double d = l * l - 1;
+  const double passive = d > 0 ? 2 * l * kK1 * d * std::exp(kK2 * d * d) : 0.0;
+  return kMu * (l - 1 / (l * l)) + kSigma * a * fL + passive;
+}
+
+// The free bar's stretch at activation a: the root of bar_stress in (0.45, 1] by bisection.
+double free_stretch(double a) {
+  double lo = 0.45 * kOptimal, hi = 1.0;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (bar_stress(mid, a) > 0 ? hi : lo) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+// A free bar of muscle (rollers on three symmetry planes, nothing on its end) activated from 0 to
+// a = 0.8 over the increments shortens to the stretch where the matrix, active and passive
+// stresses balance (bisection of the 1-D law), thickens by lambda^-1/2 sideways, and keeps its
+// volume exactly.
+TEST(MuscleBundle, FreeBundleShortensToItsOneDimensionalEquilibrium) {
+  const Scene sc = bundle_scene("activation_keys = { times = [0.0, 1.0], values = [0.0, 0.8] }\n");
+  const std::vector<int>& end = sc.mesh.node_sets.at("xmax");
+  const std::vector<int>& side = sc.mesh.node_sets.at("ymax");
+  double worst_stretch = 0, worst_lateral = 0, worst_volume = 0, last = 1;
+  each_frame(sc, [&](double t, SceneSystem& sys, const VectorXd&) {
+    const double expected = free_stretch(0.8 * t);
+    for (int n : end) worst_stretch = std::max(worst_stretch, std::abs(sys.positions()(0, n) - expected));
+    for (int n : side)
+      worst_lateral = std::max(worst_lateral, std::abs(sys.positions()(1, n) - 0.5 / std::sqrt(expected)));
+    const std::vector<double> v = sys.volumes();
+    worst_volume = std::max(worst_volume, std::abs(v[0] - 0.25) / 0.25);
+    last = expected;
+  });
+  std::printf("a = 0.8: stretch %.6f; positions within %.2e (end) and %.2e (side) m; volume within %.1e\n", last,
+              worst_stretch, worst_lateral, worst_volume);
+  EXPECT_LT(last, 0.9);  // it does shorten, by more than a tenth
+  EXPECT_LT(worst_stretch, 1e-8);
+  EXPECT_LT(worst_lateral, 1e-8);
+  EXPECT_LT(worst_volume, 1e-9);  // statics stops at a scaled residual of 1e-9 (statics.hpp: residual_tol)
+}
+
+// An isometric bar (both ends held along x) stretched to l with activation a: the end face's
+// reaction is the whole nominal stress times the rest area, active part sigma_max a f_L included.
+TEST(MuscleBundle, IsometricEndForceIsSigmaMaxTimesActivationTimesForceLength) {
+  for (double stretch : {0.9, 1.0, 1.25}) {
+    const Scene sc = bundle_scene(
+        "activation = 0.6\n[[boundary]]\nselect = { kind = \"set\", name = \"xmax\" }\n"
+        "components = [\"x\"]\nkind = \"ramp\"\nt1 = 1.0\ndisplacement = [" +
+        std::to_string(stretch - 1.0) + ", 0.0, 0.0]\n");
+    const int count = static_cast<int>(sc.mesh.node_sets.at("xmax").size());
+    double pull = 0;
+    each_frame(sc, [&](double t, SceneSystem&, const VectorXd& lambda) {
+      if (t == 1.0) pull = -lambda.tail(count).sum();  // the end face's rows come last
+    });
+    const double expected = bar_stress(stretch, 0.6) * kArea;
+    std::printf("stretch %.2f: end force %.9f N, formula %.9f N\n", stretch, pull, expected);
+    EXPECT_NEAR(pull, expected, 1e-8 * std::abs(expected));
+  }
+}
+
+// With activation_scale = 0 the same bar stays as it was (passive), and the activation written
+// with every frame is the keyframes' (linear in the increments) times the scale.
+TEST(MuscleBundle, ActivationScaleZeroLeavesTheBarPassive) {
+  const Scene sc =
+      bundle_scene("activation_keys = { times = [0.0, 1.0], values = [0.0, 0.8] }\n", {"muscles.activation_scale=0"});
+  double moved = 0;
+  each_frame(sc, [&](double, SceneSystem& sys, const VectorXd&) {
+    moved = std::max(moved, (sys.positions() - sc.mesh.rest_positions()).cwiseAbs().maxCoeff());
+  });
+  EXPECT_LT(moved, 1e-12);
+  const Scene half =
+      bundle_scene("activation_keys = { times = [0.0, 1.0], values = [0.0, 0.8] }\n", {"muscles.activation_scale=0.5"});
+  EXPECT_DOUBLE_EQ(half.activations(0.5)[0], 0.5 * 0.4);
+}
+
+// ---- The Laplace fibre field ----
+
+namespace {
+// A box's nodes x in [1, 2], y in [0, 1] mapped to a quarter annulus: radius x, angle y pi / 2.
+Mesh quarter_annulus(long cells) {
+  const Mesh box = make_box(Eigen::Vector3d(1, 1, 0.2), {cells, 2 * cells, 1}, Eigen::Vector3d(1.5, 0.5, 0.1), 5);
+  Points X = box.rest_positions();
+  for (int n = 0; n < X.cols(); ++n) {
+    const double r = X(0, n), th = X(1, n) * M_PI / 2;
+    X(0, n) = r * std::cos(th);
+    X(1, n) = r * std::sin(th);
+  }
+  return Mesh(X, box.tets());
+}
+
+std::vector<int> all_tets(const Mesh& m) {
+  std::vector<int> t(m.num_tets());
+  for (int e = 0; e < m.num_tets(); ++e) t[e] = e;
+  return t;
+}
+
+std::vector<int> nodes_where(const Mesh& m, const std::function<bool(const Vec3&)>& f) {
+  std::vector<int> out;
+  for (int n = 0; n < m.num_nodes(); ++n)
+    if (f(m.rest_positions().col(n))) out.push_back(n);
+  return out;
+}
+}  // namespace
+
+// Between two opposite faces of a box, u = x / L is harmonic and linear, so the P1 solution is
+// exact: every fibre is the x axis.
+TEST(LaplaceFibres, BoxFromFaceToFaceIsTheAxis) {
+  const Mesh box = make_box(Eigen::Vector3d(2, 0.5, 0.4), {6, 2, 2}, Eigen::Vector3d::Zero(), 5);
+  const auto fibres = laplace_fibres(box, all_tets(box), box.node_sets.at("xmin"), box.node_sets.at("xmax"));
+  double worst = 0;
+  for (const Vec3& a : fibres) worst = std::max(worst, (a - Vec3::UnitX()).norm());
+  EXPECT_LT(worst, 1e-12);
+  // From insertion to origin the other way round.
+  const auto back = laplace_fibres(box, all_tets(box), box.node_sets.at("xmax"), box.node_sets.at("xmin"));
+  EXPECT_LT((back.front() + Vec3::UnitX()).norm(), 1e-12);
+  EXPECT_THROW(laplace_fibres(box, all_tets(box), {}, box.node_sets.at("xmax")), Error);
+}
+
+// On a quarter annulus from the edge at angle 0 to the edge at pi / 2, the harmonic u is the angle
+// over pi / 2 and its gradient the circumferential direction: the fibres are unit vectors that go
+// round from origin to insertion, and their mean angle from e_theta falls about as h (P1 gradients
+// converge at first order) when the mesh is refined twice.
+TEST(LaplaceFibres, QuarterAnnulusRunsRoundFromOriginToInsertion) {
+  double previous = 0;
+  for (long cells : {2L, 4L}) {
+    const Mesh m = quarter_annulus(cells);
+    const auto origin = nodes_where(m, [](const Vec3& x) { return std::abs(x.y()) < 1e-9; });
+    const auto insertion = nodes_where(m, [](const Vec3& x) { return std::abs(x.x()) < 1e-9; });
+    const auto fibres = laplace_fibres(m, all_tets(m), origin, insertion);
+    double mean_angle = 0, worst_unit = 0;
+    for (int e = 0; e < m.num_tets(); ++e) {
+      Vec3 c = Vec3::Zero();
+      for (int k = 0; k < 4; ++k) c += m.rest_positions().col(m.tets()[e][k]) / 4;
+      const Vec3 e_theta = Vec3(-c.y(), c.x(), 0).normalized();
+      worst_unit = std::max(worst_unit, std::abs(fibres[e].norm() - 1));
+      mean_angle += std::acos(std::min(1.0, fibres[e].dot(e_theta))) / m.num_tets();
+    }
+    std::printf("%ld cells across: mean angle from e_theta %.4f rad\n", cells, mean_angle);
+    EXPECT_LT(worst_unit, 1e-12);
+    EXPECT_LT(mean_angle, 0.25);  // every fibre goes round, none across
+    if (previous > 0) EXPECT_LT(mean_angle, previous / 1.6);
+    previous = mean_angle;
+  }
+}
+
+// Bad [[muscle]] keys stop with one line naming the key.
+TEST(MuscleBundle, BadKeysNameTheKey) {
+  const auto message = [](const std::string& extra, const std::vector<std::string>& overrides = {}) {
+    try {
+      bundle_scene(extra, overrides);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("activation = 1.5\n").find("muscle[0].activation: expected a number in [0, 1]"), std::string::npos)
+      << message("activation = 1.5\n");
+  EXPECT_NE(message("zone = \"nowhere\"\n").find("muscle[0].zone: expected exactly one of zone"), std::string::npos);
+  EXPECT_NE(message("fibres = \"file\"\nfile = \"no_such_fibres.csv\"\n").find("muscle[0].file: "), std::string::npos)
+      << message("fibres = \"file\"\nfile = \"no_such_fibres.csv\"\n");
+  EXPECT_NE(message("[[muscle]]\nname = \"bundle\"\nselect = { kind = \"all\" }\ndirection = [1.0, 0.0, 0.0]\n")
+                .find("muscle[1].name: muscle \"bundle\" is defined twice"),
+            std::string::npos);
+  EXPECT_NE(message("[[muscle]]\nname = \"other\"\nselect = { kind = \"all\" }\ndirection = [1.0, 0.0, 0.0]\n")
+                .find("is also in muscle \"bundle\""),
+            std::string::npos);
+  EXPECT_NE(message("activation_joint = { bone = \"forearm\", angles = [0.0, 90.0], values = [0.0, 1.0] }\n")
+                .find("muscle[0].activation_joint.bone: the scene has no [skeleton]"),
+            std::string::npos);
+  EXPECT_NE(message("activation_keys = { times = [0.0, 1.0], values = [0.0, 2.0] }\n")
+                .find("activation_keys.values: expected activations in [0, 1]"),
+            std::string::npos);
+  EXPECT_NE(message("fibres = \"laplace\"\n").find("muscle[0].origin: missing"), std::string::npos);
 }

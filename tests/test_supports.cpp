@@ -14,9 +14,11 @@
 #include "isochor/core/meshing.hpp"
 #include "isochor/scene/scene.hpp"
 #include "isochor/scene/scene_system.hpp"
+#include "scene_runs.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;
+using isochor::test::run_frames;
 
 namespace {
 
@@ -28,19 +30,6 @@ std::string replaced(std::string text, const std::string& from, const std::strin
   const auto at = text.find(from);
   EXPECT_NE(at, std::string::npos) << from;
   return text.replace(at, from.size(), to);
-}
-
-// Runs a scene and calls f(t, system, q, lambda) at every frame, the system set to the frame's
-// state.
-template <class F>
-void run_frames(const Scene& sc, F&& f) {
-  auto sys = make_scene_system(sc);
-  auto integrator = make_integrator(sc, *sys);
-  integrator->run(sc.frames.times(), [&](int, double t, const VectorXd& q, const VectorXd& v, const VectorXd& lambda,
-                                         const RunStats::FrameSample&) {
-    sys->set_state(t, q, v);
-    f(t, *sys, q, lambda);
-  });
 }
 
 // The support's reaction along +x on a face held in x: its rows' multipliers (the constraint force
@@ -127,34 +116,7 @@ namespace {
 // A bar 1 x 0.5 x 0.5 m on three roller planes (x = 0, y = 0, z = 0), CNH with one global zone,
 // statics: any stretch is homogeneous and isochoric, so the exact solution of incompressible
 // neo-Hooke holds on any mesh.
-const char* kBar = R"(
-[mesh]
-shape = "box"
-cells = [3, 2, 2]
-size = [1.0, 0.5, 0.5]
-center = [0.5, 0.25, 0.25]
-[material]
-model = "cnh"
-mu = 1000.0
-lambda = 5000.0
-[zones]
-global = true
-[forces]
-gravity = [0.0, 0.0, 0.0]
-[[boundary]]
-select = { kind = "set", name = "xmin" }
-components = ["x"]
-[[boundary]]
-select = { kind = "set", name = "ymin" }
-components = ["y"]
-[[boundary]]
-select = { kind = "set", name = "zmin" }
-components = ["z"]
-[integrator]
-kind = "static"
-[frames]
-count = 11
-)";
+const char* const kBar = test::kRollerBar;
 constexpr double kMu = 1000.0, kArea = 0.25;
 }  // namespace
 

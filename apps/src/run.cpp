@@ -76,9 +76,10 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
   const auto start = std::chrono::steady_clock::now();
   const bool tets = sys.has_tets();
   return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), contact = Points(),
-          poses = std::vector<double>(), scales = std::vector<double>(), velocities = Points(),
-          multipliers = std::vector<double>()](int j, double t, const VectorXd& q, const VectorXd& v,
-                                               const VectorXd& lambda, const RunStats::FrameSample& s) mutable {
+          poses = std::vector<double>(), scales = std::vector<double>(), activations = std::vector<double>(),
+          velocities = Points(), multipliers = std::vector<double>()](int j, double t, const VectorXd& q,
+                                                                      const VectorXd& v, const VectorXd& lambda,
+                                                                      const RunStats::FrameSample& s) mutable {
     if (first >= 0 && j == 0) return;
     const int k = std::max(first, 0) + j;
     sys.set_state(t, q, v);
@@ -108,6 +109,10 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
       f.collider_poses = &poses;
       sys.collider_scales(scales);
       f.collider_scales = &scales;
+    }
+    if (!sc.muscles.empty()) {
+      activations = sc.activations(t);
+      f.activations = &activations;
     }
     if (tets) f.stats.push_back({"inverted_tets", static_cast<double>(sys.inverted_tets())});
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

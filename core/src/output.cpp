@@ -275,7 +275,7 @@ struct OutputWriter::Impl {
   bool pressure = false;
   bool zone_index = false;  // /mesh/zone exists (a cell attribute "zone" in the sidecar)
   std::unique_ptr<Series> time, positions, velocities, multipliers, volume, energy, pressure_series, collider_pose,
-      collider_scale;
+      collider_scale, activation;
   // Per-node vectors of a frame, when the scene has them: "load" and "contact" (kNodeVectors).
   std::map<std::string, std::unique_ptr<Series>> node_series;
   std::map<std::string, std::unique_ptr<Series>> stats;
@@ -292,13 +292,18 @@ struct OutputWriter::Impl {
   void write_header(const RunInfo& info);
   void write_mesh(const Mesh& mesh, const Zones& zones);
   void write_colliders(const std::vector<ColliderRecord>& colliders);
+  void write_muscles(const SceneRecord& scene);
+  // A per-frame row series that the first frame may start (collider poses and scales,
+  // activations): appended at frame k, its row `row` numbers.
+  void append_optional(std::unique_ptr<Series>& series, const char* name, const std::vector<double>& values,
+                       std::vector<hsize_t> row, hsize_t k);
   void create_series(const Zones& zones);
 
   // Every per-frame series of the file.
   std::vector<Series*> all_series() {
-    std::vector<Series*> all{time.get(),          positions.get(), velocities.get(),      multipliers.get(),
-                             volume.get(),        energy.get(),    pressure_series.get(), collider_pose.get(),
-                             collider_scale.get()};
+    std::vector<Series*> all{time.get(),           positions.get(), velocities.get(),      multipliers.get(),
+                             volume.get(),         energy.get(),    pressure_series.get(), collider_pose.get(),
+                             collider_scale.get(), activation.get()};
     for (auto& [name, series] : node_series) all.push_back(series.get());
     for (auto& [name, series] : stats) all.push_back(series.get());
     all.erase(std::remove(all.begin(), all.end(), nullptr), all.end());
@@ -504,6 +509,8 @@ struct OutputWriter::Impl {
       collider_pose = std::make_unique<Series>(frames_group, "collider_pose", H5T_NATIVE_DOUBLE);
     if (H5Lexists(frames_group, "collider_scale", H5P_DEFAULT) > 0)
       collider_scale = std::make_unique<Series>(frames_group, "collider_scale", H5T_NATIVE_DOUBLE);
+    if (H5Lexists(frames_group, "activation", H5P_DEFAULT) > 0)
+      activation = std::make_unique<Series>(frames_group, "activation", H5T_NATIVE_DOUBLE);
     volume = std::make_unique<Series>(frames_group, "volume", H5T_NATIVE_DOUBLE);
     energy = std::make_unique<Series>(frames_group, "energy", H5T_NATIVE_DOUBLE);
     if (positions->row.at(0) != static_cast<hsize_t>(nodes) || volume->row.at(0) != 1 + zones)
@@ -675,6 +682,29 @@ void OutputWriter::Impl::write_colliders(const std::vector<ColliderRecord>& coll
   }
 }
 
+// /muscles: the names (attribute `names`, the columns of /frames/activation), each tet's muscle
+// (`tet_muscle`, -1: none) and its rest fibre direction (`tet_fibre`, tets x 3).
+void OutputWriter::Impl::write_muscles(const SceneRecord& scene) {
+  if (scene.muscles.empty()) return;
+  H g = group(file, "muscles");
+  std::string names;
+  for (const std::string& n : scene.muscles) names += (names.empty() ? "" : ",") + n;
+  string_attribute(g, "names", names);
+  write_array(g, "tet_muscle", H5T_NATIVE_INT, {scene.tet_muscle.size()}, scene.tet_muscle.data());
+  write_array(g, "tet_fibre", H5T_NATIVE_DOUBLE, {static_cast<hsize_t>(scene.tet_fibre.cols()), 3},
+              scene.tet_fibre.data());
+}
+
+void OutputWriter::Impl::append_optional(std::unique_ptr<Series>& series, const char* name,
+                                         const std::vector<double>& values, std::vector<hsize_t> row, hsize_t k) {
+  if (!series) {
+    if (k > 0) throw Error(path + ": /frames/" + name + " appeared after the first frame");
+    series = std::make_unique<Series>(frames_group, name, row, H5T_NATIVE_DOUBLE);
+  }
+  if (row != series->row) throw Error(path + ": a frame's " + name + " changed in size");
+  series->append(k, values.data());
+}
+
 // /zones, /frames (its series and the sidecar's views) and /stats.
 void OutputWriter::Impl::create_series(const Zones& zones) {
   H g = group(file, "zones");
@@ -733,6 +763,7 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh, const Zone
     m.write_header(info);
     m.write_mesh(mesh, zones);
     m.write_colliders(info.scene.colliders);
+    m.write_muscles(info.scene);
     m.create_series(zones);
     check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
   } catch (const Error& e) {  // a full disk or a size limit before the first frame: nothing is kept
@@ -802,26 +833,12 @@ void OutputWriter::Impl::append_frame(const Frame& f, hsize_t k) {
       throw Error(m.path + ": a frame's multipliers changed in number");
     m.multipliers->append(k, f.multipliers->data());
   }
-  if (f.collider_poses && !f.collider_poses->empty()) {
-    const hsize_t colliders = f.collider_poses->size() / 12;
-    if (!m.collider_pose) {
-      if (k > 0) throw Error(m.path + ": collider poses appeared after the first frame");
-      m.collider_pose = std::make_unique<Series>(m.frames_group, "collider_pose", std::vector<hsize_t>{colliders, 12},
-                                                 H5T_NATIVE_DOUBLE);
-    }
-    if (colliders != m.collider_pose->row[0]) throw Error(m.path + ": a frame's colliders changed in number");
-    m.collider_pose->append(k, f.collider_poses->data());
-  }
-  if (f.collider_scales && !f.collider_scales->empty()) {
-    const hsize_t colliders = f.collider_scales->size();
-    if (!m.collider_scale) {
-      if (k > 0) throw Error(m.path + ": collider scales appeared after the first frame");
-      m.collider_scale = std::make_unique<Series>(m.frames_group, "collider_scale", std::vector<hsize_t>{colliders},
-                                                  H5T_NATIVE_DOUBLE);
-    }
-    if (colliders != m.collider_scale->row[0]) throw Error(m.path + ": a frame's colliders changed in number");
-    m.collider_scale->append(k, f.collider_scales->data());
-  }
+  if (f.collider_poses && !f.collider_poses->empty())
+    m.append_optional(m.collider_pose, "collider_pose", *f.collider_poses, {f.collider_poses->size() / 12, 12}, k);
+  if (f.collider_scales && !f.collider_scales->empty())
+    m.append_optional(m.collider_scale, "collider_scale", *f.collider_scales, {f.collider_scales->size()}, k);
+  if (f.activations && !f.activations->empty())
+    m.append_optional(m.activation, "activation", *f.activations, {f.activations->size()}, k);
   m.volume->append(k, f.volumes.data());
   m.energy->append(k, f.energy.data());
   m.add_frame_view("/frames/positions", m.frames, 3, "position");
@@ -900,6 +917,7 @@ void OutputWriter::close() {
   m.multipliers.reset();
   m.collider_pose.reset();
   m.collider_scale.reset();
+  m.activation.reset();
   m.volume.reset();
   m.energy.reset();
   m.pressure_series.reset();

@@ -1,3 +1,4 @@
+#include "isochor/core/csv.hpp"
 #include "isochor/core/input_file.hpp"
 #include "isochor/core/paint.hpp"
 
@@ -238,49 +239,15 @@ PaintedPoints read_obj_paint(const std::string& path) {
   return out;
 }
 
-std::vector<std::string> split_csv(const std::string& line) {
-  std::vector<std::string> f;
-  std::string cell;
-  std::istringstream s(line);
-  while (std::getline(s, cell, ',')) {
-    const auto a = cell.find_first_not_of(" \t\r"), b = cell.find_last_not_of(" \t\r");
-    f.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
-  }
-  return f;
-}
-
 PaintedPoints read_csv_paint(const std::string& path, const Points* nodes) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot be read (expected a CSV file)");
-  std::string line;
-  long line_no = 1;
-  if (!std::getline(in, line)) throw Error(path + ":1: empty (expected a header row: x,y,z,... or node,...)");
+  CsvTable table = read_csv_table(path, "a CSV paint file");
   PaintedPoints out;
   out.path = path;
-  out.names = split_csv(line);
+  out.names = std::move(table.names);
+  out.values = std::move(table.columns);
   const bool by_node = !out.names.empty() && out.names[0] == "node";
   if (!by_node && (out.names.size() < 3 || out.names[0] != "x" || out.names[1] != "y" || out.names[2] != "z"))
     throw Error(path + ":1: expected a header row starting with x,y,z or with node");
-  out.values.resize(out.names.size());
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    const auto f = split_csv(line);
-    if (f.size() != out.names.size())
-      throw Error(path + ":" + std::to_string(line_no) + ": expected " + std::to_string(out.names.size()) +
-                  " columns, got " + std::to_string(f.size()));
-    for (std::size_t k = 0; k < f.size(); ++k) {
-      double v;
-      try {
-        std::size_t used;
-        v = std::stod(f[k], &used);
-        if (used != f[k].size()) throw 0;
-      } catch (...) {
-        throw Error(path + ":" + std::to_string(line_no) + ": " + out.names[k] + ": \"" + f[k] + "\" is not a number");
-      }
-      out.values[k].push_back(v);
-    }
-  }
   const std::size_t n = out.values[0].size();
   out.x.resize(3, static_cast<Eigen::Index>(n));
   for (std::size_t i = 0; i < n; ++i) {

@@ -116,6 +116,12 @@ class Run:
                                            np.asarray(a.get("rest_pose", np.r_[np.eye(3).ravel(), 0, 0, 0]), float),
                                            c["vertices"][()] if "vertices" in c else None,
                                            c["triangles"][()] if "triangles" in c else None))
+        # Muscles: their names (the columns of activation), each tet's muscle (-1: none) and fibre.
+        mu = h.get("muscles")
+        names = _text(mu.attrs.get("names", "")) if mu is not None else ""
+        self.muscles: List[str] = str(names).split(",") if names else []
+        self.tet_muscle: np.ndarray = mu["tet_muscle"][()] if mu is not None else np.full(len(self.tets), -1)
+        self.tet_fibre: np.ndarray = mu["tet_fibre"][()] if mu is not None else np.zeros((len(self.tets), 3))
 
     # The per-frame node arrays, read when first asked for.
     def _series(self, name: str) -> Optional[np.ndarray]:
@@ -151,6 +157,11 @@ class Run:
     def contact(self) -> Optional[np.ndarray]:
         """(F,N,3) the colliders' force on every node (N), when the scene had colliders."""
         return self._series("contact")
+
+    @functools.cached_property
+    def activation(self) -> Optional[np.ndarray]:
+        """(F,K) each muscle's activation (0..1) at every frame, in the order of `muscles`."""
+        return self._series("activation")
 
     def has(self, name: str) -> bool:
         """Whether the run has the per-frame series /frames/NAME (load, contact, pressure, ...)."""

@@ -1,4 +1,5 @@
 #include "isochor/scene/mesh_system.hpp"
+#include "isochor/scene/muscle_setup.hpp"
 #include "isochor/scene/supports_setup.hpp"
 
 #include <algorithm>
@@ -39,6 +40,7 @@ MeshSystem::MeshSystem(const Scene& scene)
     throw Error(scene.file.name() + ": every node is driven (by [[boundary]] or a bone): nothing to simulate");
   elastic_ = std::make_unique<ElasticAssembly>(
       scene.mesh, material_, dofs_, EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
+  if (!scene.muscles.empty()) elastic_->set_fibres(scene_fibre_field(scene));
   node_mass_ = lumped_mass(scene.mesh, scene.material.density);
   const Eigen::VectorXd area = surface_areas(scene.mesh);
   external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.colliders, dofs_,
@@ -186,6 +188,7 @@ void MeshSystem::set_positions(double t, const VectorXd& q) {
     scene_at_time(scene_, t, x_, xdot_, *external_);
     pressure_loads_->set_time(t);
     for (auto& set : sets_) set->set_time(t);
+    if (elastic_->has_fibres()) elastic_->set_activations(scene_.activations(t));
     state_t_ = t;
   }
 }

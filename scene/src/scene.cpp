@@ -1,4 +1,5 @@
 #include "isochor/scene/scene.hpp"
+#include "isochor/scene/muscle_setup.hpp"
 #include "isochor/scene/skeleton_setup.hpp"
 #include "isochor/core/paint.hpp"
 #include "isochor/scene/integrator_registry.hpp"
@@ -69,6 +70,8 @@ std::vector<double> Scene::breakpoints() const {
     c.motion.breakpoints(t);
     c.resize.breakpoints(t);
   }
+  for (const MuscleSpec& m : muscles)
+    if (m.activation.source == ActivationCurve::Source::time) m.activation.curve.breakpoints(t);
   if (gravity_ramp > 0) t.push_back(gravity_ramp);
   if (zone_restore_time > 0 && keep_zones && !zones.empty()) t.push_back(frames.times().front() + zone_restore_time);
   for (const NodeLoad& l : loads) l.history.breakpoints(t);
@@ -78,15 +81,18 @@ std::vector<double> Scene::breakpoints() const {
   return t;
 }
 
-Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what) {
+Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what,
+                       const std::string& knots, double knot_scale) {
   Driver d;
   const std::string interp = b.string("interpolation", "linear", {"linear", "cubic"});
   d.kind = interp == "linear" ? Driver::Kind::keyframes_linear : Driver::Kind::keyframes_cubic;
-  d.times = b.numbers("times");
+  d.times = b.numbers(knots);
   const std::vector<double> flat = b.numbers(key);
-  if (d.times.size() < 2) b.fail("times", "expected at least 2 keyframe times (s)");
+  const std::string unit = knots == "times" ? " (s)" : "";
+  if (d.times.size() < 2) b.fail(knots, "expected at least 2 keyframe " + knots + unit);
   for (std::size_t i = 1; i < d.times.size(); ++i)
-    if (d.times[i] <= d.times[i - 1]) b.fail("times", "expected increasing times");
+    if (d.times[i] <= d.times[i - 1]) b.fail(knots, "expected increasing " + knots);
+  for (double& t : d.times) t *= knot_scale;
   const std::size_t n = static_cast<std::size_t>(per_time) * d.times.size();
   if (flat.size() != n)
     b.fail(key, "expected " + what + " per keyframe time, " + std::to_string(n) + " numbers in all, got " +
@@ -809,7 +815,9 @@ Scene parse_scene(SceneFile file) {
            {},
            {},
            {},
-           {}};
+           {},
+           {},
+           1.0};
   const Section root = sc.file.root();
   Section mesh = root.table("mesh");
   if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
@@ -833,6 +841,7 @@ Scene parse_scene(SceneFile file) {
   sc.initial_velocity = initial.vec3("velocity", Eigen::Vector3d::Zero());
   parse_flatten(initial, sc);
   parse_integrator(root, sc);
+  parse_muscles(root, sc);
   // IDA starts from a consistent state: zones flattened to volume 0 cannot meet their rest
   // volumes at t = 0 (it would fail there with IDA_CONV_FAIL and no hint).
   if (sc.initial_positions.size() && !sc.zones.empty() && sc.zone_restore_time == 0 &&

@@ -1,6 +1,7 @@
 // What the run file records of a scene besides the body (core/output.hpp: SceneRecord): the up
 // direction a viewer turns upward and every collider's shape, so that tools read them from the
 // file instead of parsing the scene's text.
+#include "isochor/scene/muscle_setup.hpp"
 #include "isochor/scene/scene.hpp"
 
 namespace isochor {
@@ -65,6 +66,14 @@ SceneRecord scene_record(const Scene& sc) {
   }
   r.up = {up.x(), up.y(), up.z()};
   for (const Collider& C : sc.colliders) r.colliders.push_back(collider_record(C));
+  if (!sc.muscles.empty()) {
+    const FibreField f = scene_fibre_field(sc);
+    for (const Scene::MuscleSpec& m : sc.muscles) r.muscles.push_back(m.name);
+    r.tet_muscle = f.muscle_of;
+    r.tet_fibre.resize(3, sc.mesh.num_tets());
+    for (int e = 0; e < sc.mesh.num_tets(); ++e)
+      r.tet_fibre.col(e) = f.muscle_of[e] >= 0 ? f.direction[e] : Eigen::Vector3d::Zero();
+  }
   return r;
 }
 

@@ -8,7 +8,7 @@ namespace isochor {
 namespace {
 // G(u) = integral of f_L from 0.4 to u, piece by piece.
 double force_length_antiderivative(double u) {
-  constexpr double G06 = 0.024;                                 // 3 (0.6 - 0.4)^3
+  constexpr double G06 = 0.024;                                // 3 (0.6 - 0.4)^3
   constexpr double G14 = G06 + 0.8 - 4.0 / 3.0 * 2.0 * 0.064;  // + (1.4 - 0.6) + 4/3 ((1 - 1.4)^3 - 0.4^3)
   if (u <= 0.4) return 0.0;
   if (u <= 0.6) return 3.0 * std::pow(u - 0.4, 3);
@@ -36,7 +36,8 @@ ForceLength force_length(double u) {
 FibreEnergy fibre_energy(const MuscleLaw& m, double activation, double I4) {
   FibreEnergy e{0.0, 0.0, 0.0};
   // Active: A(lambda) = sigma_max lambda_ofl (G(lambda / lambda_ofl) - G(1 / lambda_ofl)), A' = sigma_max f_L,
-  // A'' = sigma_max f_L' / lambda_ofl; in I4 = lambda^2: psi' = A' / (2 lambda), psi'' = (A'' lambda - A') / (4 lambda^3).
+  // A'' = sigma_max f_L' / lambda_ofl; in I4 = lambda^2: psi' = A' / (2 lambda), psi'' = (A'' lambda - A') / (4
+  // lambda^3).
   const double lambda = std::sqrt(std::max(I4, 0.0));
   if (activation != 0.0 && lambda > 0.0) {
     const double L = m.optimal_stretch, s = m.sigma_max * activation;

@@ -28,6 +28,11 @@ struct SceneRecord {
   std::array<double, 3> up{0, 0, 1};      // unit
   std::string up_source;                  // why that is up ("the ground's normal", "against gravity", ...)
   std::vector<ColliderRecord> colliders;  // the scene's order: the ground, the planes, the [[collider]]s
+  // Muscles (/muscles): their names (the columns of /frames/activation), each tet's muscle (-1:
+  // none) and rest fibre direction (3 x tets); empty without muscles.
+  std::vector<std::string> muscles;
+  std::vector<int> tet_muscle;
+  Points tet_fibre;
 };
 
 // Named sets of tets: /zones, and the columns of /frames/volume after "total".
@@ -55,6 +60,8 @@ struct Frame {
   const std::vector<double>* collider_poses = nullptr;
   // Each collider's factor on its radius (Collider::resize; 1: its own), in the same order.
   const std::vector<double>* collider_scales = nullptr;
+  // Each muscle's activation (0..1), in the order of SceneRecord::muscles.
+  const std::vector<double>* activations = nullptr;
   std::vector<std::pair<std::string, double>> stats;  // per-frame series under /stats
 };
 

@@ -18,6 +18,7 @@
 #pragma once
 #include <vector>
 
+#include "isochor/models/drivers.hpp"
 #include "isochor/models/elements.hpp"
 
 namespace isochor {
@@ -57,5 +58,28 @@ struct FibreField {
   std::vector<Vec3> direction;
   bool empty() const { return muscles.empty(); }
 };
+
+class Skeleton;
+
+// A muscle's activation in time: a constant, keyframes in time, or a table of a skeleton joint's
+// angle (the curve's times then hold the angles, rad), each times `scale`, clamped to [0, 1].
+struct ActivationCurve {
+  enum class Source { constant, time, joint };
+  Source source = Source::constant;
+  double value = 0.0;  // constant
+  Driver curve;        // keyframes: the activation in x of its values
+  int bone = -1;       // joint: the bone whose joint angle keys the curve
+  int axis = 0;        // joint: which of its angles (0 for a pin)
+  double at(double t, const Skeleton* skeleton, double scale) const;
+  // The joint angle that keys the curve at t (rad).
+  double joint_angle(double t, const Skeleton& skeleton) const;
+};
+
+// The Laplace fibre field of a fusiform muscle: u solves the Laplace equation on `tets` (linear
+// tets) with u = 0 on `origin` and 1 on `insertion` (nodes); each tet's fibre is grad u / |grad u|,
+// and where grad u vanishes, the direction from the origin's centroid to the insertion's.
+// Returns the direction per tet of `tets`, in their order.
+std::vector<Vec3> laplace_fibres(const Mesh& mesh, const std::vector<int>& tets, const std::vector<int>& origin,
+                                 const std::vector<int>& insertion);
 
 }  // namespace isochor

@@ -8,6 +8,7 @@
 
 #include "isochor/models/drivers.hpp"
 #include "isochor/models/forces.hpp"
+#include "isochor/models/muscle.hpp"
 #include "isochor/integrators/backward_euler.hpp"
 #include "isochor/integrators/hong_step.hpp"
 #include "isochor/integrators/ida_integrator.hpp"
@@ -109,12 +110,24 @@ struct Scene {
   FramesSpec frames;
   OutputSpec output;
   std::shared_ptr<Skeleton> skeleton;  // [skeleton]: bones that drive their bound nodes; null without
+  // [[muscle]]: fibres and activation per muscle (muscle_setup.hpp); [muscles] activation_scale.
+  struct MuscleSpec {
+    std::string name;
+    std::vector<int> tets;                // sorted
+    std::vector<Eigen::Vector3d> fibres;  // unit rest direction per tet of `tets`
+    MuscleLaw law;
+    ActivationCurve activation;
+  };
+  std::vector<MuscleSpec> muscles;
+  double activation_scale = 1.0;
 
   // Every node driven by [[boundary]] or bound to a bone, and their positions and velocities at t.
   std::vector<int> driven_nodes() const;
   void drive(double t, Points& x, Eigen::VectorXd* xdot) const;
   // The factor on gravity at time t (forces.gravity_ramp).
   double gravity_scale(double t) const;
+  // Each muscle's activation at time t (activation_scale applied, clamped to [0, 1]).
+  std::vector<double> activations(double t) const;
   // Sorted distinct times where what the scene prescribes is not smooth in time: drivers', bones'
   // and moving colliders' breakpoints (drivers.hpp), the end of the gravity ramp.
   std::vector<double> breakpoints() const;
@@ -127,8 +140,10 @@ Scene parse_scene(SceneFile file);
 SceneRecord scene_record(const Scene& sc);
 
 // Keyframes of a driver or joint: `times`, `per_time` numbers of `key` per time (scaled by `scale`,
-// into x, y, z of the values) and `interpolation`; `what` names the numbers in errors.
-Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what);
+// into x, y, z of the values) and `interpolation`; `what` names the numbers in errors. The knots
+// may be another key than `times` (an activation keyed by joint angles), scaled by `knot_scale`.
+Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what,
+                       const std::string& knots = "times", double knot_scale = 1.0);
 
 // Lamé parameters from Young's modulus and Poisson's ratio.
 std::pair<double, double> lame_from_young(double E, double nu);

@@ -1,0 +1,160 @@
+#include "isochor/scene/muscle_setup.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "isochor/base/error.hpp"
+#include "isochor/core/csv.hpp"
+#include "isochor/core/selection.hpp"
+
+namespace isochor {
+
+namespace {
+
+// The muscle's tets: `zone` (a zone of [zones] by name) or `select` (a selection of tets).
+std::vector<int> muscle_tets(const Section& m, const Scene& sc) {
+  if (m.has("zone") == m.has("select"))
+    m.fail("zone", "expected exactly one of zone (a zone's name) or select (a selection of tets)");
+  if (m.has("select")) return select_tets(sc.mesh, Selection::parse(m.table("select")));
+  const std::string zone = m.string("zone", "");
+  std::string known;
+  for (const auto& [name, tets] : sc.zones) {
+    if (name == zone) return tets;
+    known += (known.empty() ? "" : ", ") + name;
+  }
+  m.fail("zone", "no zone \"" + zone + "\" (the scene's zones: " + (known.empty() ? "none" : known) + ")");
+  return {};
+}
+
+// Per tet of `tets`, from a CSV file with columns tet, ax, ay, az (rows of other tets ignored).
+std::vector<Eigen::Vector3d> fibres_from_file(const Section& m, const Scene& sc, const std::vector<int>& tets) {
+  const std::string path = sc.file.resolve_path(m.string("file", ""));
+  std::map<int, Eigen::Vector3d> by_tet;
+  try {
+    const CsvTable t = read_csv_table(path, "a fibre file (CSV: tet,ax,ay,az)");
+    const std::vector<double>*tet = t.column("tet"), *ax = t.column("ax"), *ay = t.column("ay"), *az = t.column("az");
+    if (!tet || !ax || !ay || !az) throw Error(path + ":1: expected the columns tet, ax, ay, az");
+    for (std::size_t r = 0; r < tet->size(); ++r) {
+      const double e = (*tet)[r];
+      const Eigen::Vector3d a((*ax)[r], (*ay)[r], (*az)[r]);
+      if (e != std::floor(e) || e < 0 || e >= sc.mesh.num_tets())
+        throw Error(path + ": row " + std::to_string(r + 2) + ": tet " + std::to_string(e) +
+                    " is not a tet of the mesh (expected 0.." + std::to_string(sc.mesh.num_tets() - 1) + ")");
+      if (!a.allFinite() || a.norm() < 1e-12)
+        throw Error(path + ": row " + std::to_string(r + 2) + ": expected a finite, non-zero direction");
+      by_tet[static_cast<int>(e)] = a.normalized();
+    }
+  } catch (const Error& e) {
+    m.fail("file", e.what());
+  }
+  std::vector<Eigen::Vector3d> out;
+  for (int e : tets) {
+    const auto it = by_tet.find(e);
+    if (it == by_tet.end()) m.fail("file", path + " has no fibre for tet " + std::to_string(e) + " of the muscle");
+    out.push_back(it->second);
+  }
+  return out;
+}
+
+std::vector<Eigen::Vector3d> parse_fibres(const Section& m, const Scene& sc, const std::vector<int>& tets) {
+  const std::string kind = m.string("fibres", "constant", {"constant", "laplace", "file"});
+  if (kind == "file") return fibres_from_file(m, sc, tets);
+  if (kind == "laplace") {
+    for (const char* key : {"origin", "insertion"})
+      if (!m.has(key)) m.fail(key, "missing, expected a selection of nodes (fibres = \"laplace\")");
+    const std::vector<int> origin = select_nodes(sc.mesh, Selection::parse(m.table("origin")));
+    const std::vector<int> insertion = select_nodes(sc.mesh, Selection::parse(m.table("insertion")));
+    try {
+      return laplace_fibres(sc.mesh, tets, origin, insertion);
+    } catch (const Error& e) {
+      m.fail("origin", e.what());
+    }
+  }
+  const std::optional<Eigen::Vector3d> a = m.vec3_opt("direction");
+  if (!a || a->norm() < 1e-12) m.fail("direction", "expected a non-zero fibre direction [x, y, z] (fibres = \"constant\")");
+  return std::vector<Eigen::Vector3d>(tets.size(), a->normalized());
+}
+
+ActivationCurve parse_activation(const Section& m, const Scene& sc) {
+  ActivationCurve a;
+  const int given = m.has("activation_keys") + m.has("activation_joint");
+  if (given > 1) m.fail("activation_joint", "expected one of activation_keys or activation_joint");
+  a.value = m.number("activation", 0.0, Range::closed(0.0, 1.0));
+  if (given && m.has("activation")) m.fail("activation", "not with activation_keys or activation_joint");
+  const char* key = m.has("activation_keys") ? "activation_keys" : "activation_joint";
+  if (!given) return a;
+  const Section k = m.table(key);
+  const double knot_scale = m.has("activation_keys") ? 1.0 : M_PI / 180.0;
+  a.curve = parse_keyframes(k, "values", 1, 1.0, "one activation", m.has("activation_keys") ? "times" : "angles",
+                            knot_scale);
+  for (const Eigen::Vector3d& v : a.curve.values)
+    if (v.x() < 0 || v.x() > 1) k.fail("values", "expected activations in [0, 1]");
+  a.source = ActivationCurve::Source::time;
+  if (m.has("activation_keys")) return a;
+  a.source = ActivationCurve::Source::joint;
+  const std::string bone = k.string("bone", "");
+  if (!sc.skeleton) k.fail("bone", "the scene has no [skeleton]");
+  const auto& bones = sc.skeleton->bones();
+  for (std::size_t b = 0; b < bones.size(); ++b)
+    if (bones[b].name == bone) a.bone = static_cast<int>(b);
+  if (a.bone < 0) k.fail("bone", "no bone \"" + bone + "\" in [skeleton]");
+  const int angles = bones[a.bone].angles;
+  if (angles == 0) k.fail("bone", "bone \"" + bone + "\" has a weld joint: it has no angle");
+  a.axis = static_cast<int>(k.integer("axis", 0, 0, angles - 1));
+  return a;
+}
+
+}  // namespace
+
+void parse_muscles(const Section& root, Scene& sc) {
+  sc.activation_scale = root.table("muscles").number("activation_scale", 1.0, Range::closed(0.0, 1.0));
+  std::vector<int> owner(sc.mesh.num_tets(), -1);
+  for (const Section& m : root.tables("muscle")) {
+    Scene::MuscleSpec spec;
+    spec.name = m.string("name", "");
+    if (spec.name.empty() || spec.name.find_first_of("/.,") != std::string::npos)
+      m.fail("name", "expected a muscle name without '/', '.' or ','");
+    for (const auto& other : sc.muscles)
+      if (other.name == spec.name) m.fail("name", "muscle \"" + spec.name + "\" is defined twice");
+    if (sc.material.model == MaterialModel::mass_spring || sc.integrator.kind == IntegratorKind::xpbd)
+      m.fail("name", "muscles need a tet material on IDA, statics or backward Euler (not mass_spring or xpbd)");
+    spec.tets = muscle_tets(m, sc);
+    for (int e : spec.tets) {
+      if (owner[e] >= 0)
+        m.fail("zone", "tet " + std::to_string(e) + " is also in muscle \"" + sc.muscles[owner[e]].name +
+                           "\" (a tet belongs to one muscle)");
+      owner[e] = static_cast<int>(sc.muscles.size());
+    }
+    spec.fibres = parse_fibres(m, sc, spec.tets);
+    spec.law.sigma_max = m.number("sigma_max", spec.law.sigma_max, Range::non_negative());
+    spec.law.optimal_stretch = m.number("optimal_stretch", 1.0, Range::closed(0.1, 10.0));
+    spec.law.k1 = m.number("passive_k1", 0.0, Range::non_negative());
+    spec.law.k2 = m.number("passive_k2", 0.0, Range::closed(0.0, 100.0));
+    spec.activation = parse_activation(m, sc);
+    sc.muscles.push_back(std::move(spec));
+  }
+}
+
+FibreField scene_fibre_field(const Scene& sc) {
+  FibreField f;
+  if (sc.muscles.empty()) return f;
+  f.muscle_of.assign(sc.mesh.num_tets(), -1);
+  f.direction.assign(sc.mesh.num_tets(), Vec3::UnitX());
+  for (std::size_t m = 0; m < sc.muscles.size(); ++m) {
+    f.muscles.push_back(sc.muscles[m].law);
+    for (std::size_t k = 0; k < sc.muscles[m].tets.size(); ++k) {
+      f.muscle_of[sc.muscles[m].tets[k]] = static_cast<int>(m);
+      f.direction[sc.muscles[m].tets[k]] = sc.muscles[m].fibres[k];
+    }
+  }
+  return f;
+}
+
+std::vector<double> Scene::activations(double t) const {
+  std::vector<double> a;
+  for (const MuscleSpec& m : muscles) a.push_back(m.activation.at(t, skeleton.get(), activation_scale));
+  return a;
+}
+
+}  // namespace isochor
