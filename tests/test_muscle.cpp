@@ -387,3 +387,82 @@ TEST(MuscleBundle, BadKeysNameTheKey) {
             std::string::npos);
   EXPECT_NE(message("fibres = \"laplace\"\n").find("muscle[0].origin: missing"), std::string::npos);
 }
+
+// ---- Material regions ----
+
+// Two layers side by side along y (y < 0.25 at mu = 1 kPa, y > 0.25 at mu = 3 kPa and twice the
+// density), stretched along x by their end face: each layer is in uniaxial tension at the same
+// stretch with the same lateral contraction lambda^-1/2, so the end force is the layers' sum,
+// (mu_1 + mu_2) / 2 A (lambda - lambda^-2), and the mass is each layer's density times its volume.
+// The layers hold different pressures (each its own sigma_yy = 0), so each is its own zone: one
+// zone over both would give them one pressure, and the penalty would make up the difference by
+// letting J leave 1.
+TEST(MaterialRegions, LayersInParallelCarryTheSumOfTheirStresses) {
+  const double stretch = 1.5;
+  const Scene sc = parse_scene(SceneFile::parse(std::string(test::kRollerBar) + R"(
+[[zones.zone]]
+name = "soft"
+select = { kind = "box", min = [-1.0, -1.0, -1.0], max = [2.0, 0.25, 1.0] }
+[[zones.zone]]
+name = "stiff"
+select = { kind = "box", min = [-1.0, 0.25, -1.0], max = [2.0, 1.0, 1.0] }
+[[material.region]]
+select = { kind = "box", min = [-1.0, 0.25, -1.0], max = [2.0, 1.0, 1.0] }
+mu = 3000.0
+density = 2000.0
+[[boundary]]
+select = { kind = "set", name = "xmax" }
+components = ["x"]
+kind = "ramp"
+t1 = 1.0
+displacement = [0.5, 0.0, 0.0]
+)",
+                                                "layers.toml", {"zones.global=false"}));
+  ASSERT_EQ(sc.material.regions.size(), 1u);
+  EXPECT_EQ(sc.material.regions[0].lambda, 5000.0);  // the body's, not given
+  const int count = static_cast<int>(sc.mesh.node_sets.at("xmax").size());
+  double pull = 0, mass = 0;
+  test::run_frames(sc, [&](double t, SceneSystem& sys, const VectorXd&, const VectorXd& lambda) {
+    if (t == 1.0) pull = -lambda.tail(count).sum();
+    mass = sys.mass().sum() / 3.0;
+  });
+  const double expected = (1000.0 + 3000.0) / 2 * 0.25 * (stretch - 1 / (stretch * stretch));
+  std::printf("end force %.9f N, formula %.9f N\n", pull, expected);
+  EXPECT_NEAR(pull, expected, 1e-8 * expected);
+  // Every node here is free (rollers only): the lumped masses sum to the body's mass.
+  EXPECT_NEAR(mass, 1000.0 * 0.125 + 2000.0 * 0.125, 1e-9);
+}
+
+// The assembly with a material per tet: its energy is the sum of each tet's energy under its own
+// material, and its gradient the energy's central differences.
+TEST(MaterialRegions, AssemblyTakesEachTetsMaterial) {
+  const Mesh mesh = make_box(Eigen::Vector3d(1, 0.8, 0.6), {3, 2, 2}, Eigen::Vector3d::Zero(), 5);
+  const DofMap dofs = DofMap::make(mesh.num_nodes(), mesh.node_sets.at("zmin"));
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.1, 0.1);
+  Points x = mesh.rest_positions();
+  for (int i = 0; i < x.size(); ++i) x.data()[i] += u(rng);
+  const std::vector<std::shared_ptr<const Material>> m = {make_cnh(1.0, 5.0, 1.0, 0.1), make_cnh(4.0, 20.0, 1.0, 0.1)};
+  std::vector<int> of(mesh.num_tets());
+  double expected = 0;
+  for (int e = 0; e < mesh.num_tets(); ++e) {
+    of[e] = e % 2;
+    const Tet& t = mesh.tets()[e];
+    const Points& X = mesh.rest_positions();
+    expected += tet_energy(*m[of[e]], TetShape::make(X.col(t[0]), X.col(t[1]), X.col(t[2]), X.col(t[3])), gather(x, t),
+                           nullptr, nullptr);
+  }
+  ElasticAssembly a(mesh, m[0], dofs);
+  a.set_tet_materials(m, of);
+  EXPECT_NEAR(a.energy(x), expected, 1e-12 * expected);
+  Eigen::VectorXd g;
+  a.gradient(x, g);
+  const double h = 1e-6;
+  for (int i = 0; i < x.size(); i += 5) {
+    Points xp = x, xm = x;
+    xp.data()[i] += h;
+    xm.data()[i] -= h;
+    EXPECT_NEAR(g[i], (a.energy(xp) - a.energy(xm)) / (2 * h), 1e-6 * (1 + std::abs(g[i])));
+  }
+  EXPECT_THROW(a.set_tet_materials(m, std::vector<int>(mesh.num_tets(), 2)), Error);
+}

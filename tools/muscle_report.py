@@ -8,7 +8,8 @@ Per frame: the muscle's activation (/frames/activation), the area of its cross-s
 plane normal to the axis through --at (default: the muscle's rest centroid along the axis; the
 deformed tets cut by that plane, each cut a triangle or a quadrilateral), the largest outward
 displacement of its surface nodes from the axis (distance from the axis at the frame minus at
-rest), and |V - V0| / V0 of its tets' volume. With --chart, a picture of area and bulge against
+rest), the volume-weighted mean fibre stretch |F a0| over its tets, and |V - V0| / V0 of its
+tets' volume. With --chart, a picture of area and bulge against
 time for every run.
 """
 import argparse
@@ -46,13 +47,21 @@ def tets_volume(x, tets):
     return np.einsum("ij,ij->i", b - a, np.cross(c - a, e - a)).sum() / 6.0
 
 
+def fibre_stretch(X, x, tets, fibre, weight):
+    """The volume-weighted mean of |F a0| over the tets (F of each linear tet)."""
+    Dm = np.stack([X[tets[:, i]] - X[tets[:, 0]] for i in (1, 2, 3)], axis=2)
+    Ds = np.stack([x[tets[:, i]] - x[tets[:, 0]] for i in (1, 2, 3)], axis=2)
+    F = Ds @ np.linalg.inv(Dm)
+    return float((np.linalg.norm(np.einsum("tij,tj->ti", F, fibre), axis=1) * weight).sum() / weight.sum())
+
+
 def report(path, muscle, p0, d, at):
-    """Rows (t, activation, area, largest outward, volume drift) of one run."""
+    """Rows (t, activation, area, largest outward, fibre stretch, volume drift) of one run."""
     with open_run(path, "muscle_report.py") as run:
         if muscle not in run.muscles:
             raise SystemExit(f"{path}: no muscle \"{muscle}\" (muscles: {', '.join(run.muscles) or 'none'})")
         m = run.muscles.index(muscle)
-        tets = run.tets[run.tet_muscle == m]
+        tets, fibre, weight = run.tets[run.tet_muscle == m], run.tet_fibre[run.tet_muscle == m], run.rest_volumes[run.tet_muscle == m]
         X = run.rest_positions
         nodes = np.intersect1d(np.unique(tets), np.unique(run.surface))
         plane = p0 + d * (at if at is not None else (X[np.unique(tets)] - p0).mean(axis=0) @ d)
@@ -67,7 +76,8 @@ def report(path, muscle, p0, d, at):
         for k in range(run.num_frames):
             x = run.frame_positions(k)
             rows.append((run.times[k], act[k, m] if act is not None else 0.0, cut_area(x, tets, plane, d),
-                         (radial(x[nodes]) - radial(X[nodes])).max(), abs(tets_volume(x, tets) / V0 - 1)))
+                         (radial(x[nodes]) - radial(X[nodes])).max(), fibre_stretch(X, x, tets, fibre, weight),
+                         abs(tets_volume(x, tets) / V0 - 1)))
     return np.array(rows), (plane - p0) @ d
 
 
@@ -103,9 +113,9 @@ def main():
     for path in a.runs:
         rows, at = report(path, a.muscle, p0, d, a.at)
         print(f"{path}: muscle {a.muscle}, cut at {at:.4f} m along the axis")
-        print("      t  activation  area (cm2)  largest outward (mm)  volume drift")
+        print("      t  activation  area (cm2)  largest outward (mm)  fibre stretch  volume drift")
         for r in rows:
-            print(f"  {r[0]:5.2f}  {r[1]:10.3f}  {r[2] * 1e4:10.3f}  {r[3] * 1e3:20.2f}  {r[4]:12.1e}")
+            print(f"  {r[0]:5.2f}  {r[1]:10.3f}  {r[2] * 1e4:10.3f}  {r[3] * 1e3:20.2f}  {r[4]:13.3f}  {r[5]:12.1e}")
         results.append((path, rows))
     if a.chart:
         chart(a.chart, results, a.muscle)

@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <chrono>
+#include <sstream>
 #include <cmath>
 #include <csignal>
 #include <cstdlib>
@@ -111,7 +112,7 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
       f.collider_scales = &scales;
     }
     if (!sc.muscles.empty()) {
-      activations = sc.activations(t);
+      activations = sys.activations();
       f.activations = &activations;
     }
     if (tets) f.stats.push_back({"inverted_tets", static_cast<double>(sys.inverted_tets())});
@@ -226,6 +227,21 @@ bool resume_from(const ResumePoint& rp, SceneSystem& sys, RunSummary& summary, S
   return true;
 }
 
+// RunOptions::activation in place of the scene's curves, each value checked.
+void drive_muscles(const Scene& sc, SceneSystem& sys, const std::function<std::vector<double>(double)>& activation) {
+  if (sc.muscles.empty()) throw Error(sc.file.name() + ": an activation function, but the scene has no [[muscle]]");
+  sys.set_activation_function([&activation, n = sc.muscles.size()](double t) {
+    std::vector<double> a = activation(t);
+    std::ostringstream why;
+    if (a.size() != n)
+      why << a.size() << " values at t = " << t << " s (expected one per muscle, " << n << ")";
+    else if (auto bad = std::find_if(a.begin(), a.end(), [](double v) { return !(v >= 0 && v <= 1); }); bad != a.end())
+      why << *bad << " at t = " << t << " s (expected activations in [0, 1])";
+    if (!why.str().empty()) throw Error("the activation function gave " + why.str());
+    return a;
+  });
+}
+
 }  // namespace
 
 RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
@@ -236,6 +252,7 @@ RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
   // The systems are built before the file is touched, so that a scene they refuse leaves no
   // output behind; a resumed run's start is handed to them once the file has said where it is.
   const std::unique_ptr<SceneSystem> sys = make_scene_system(sc);
+  if (opt.activation) drive_muscles(sc, *sys, opt.activation);
   const std::unique_ptr<Integrator> integrator = make_integrator(sc, *sys);
   if (!resume) check_output_room(sc, *sys, summary.output);
   // (The mass-spring model has no zones: its scene is refused with any.)

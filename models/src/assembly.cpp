@@ -127,10 +127,10 @@ ElementSchedule colour_elements(int num_nodes, const std::vector<std::vector<int
   return s;
 }
 
-Eigen::VectorXd lumped_mass(const Mesh& mesh, double density) {
+Eigen::VectorXd lumped_mass(const Mesh& mesh, double density, const std::vector<double>* tet_density) {
   Eigen::VectorXd m = Eigen::VectorXd::Zero(mesh.num_nodes());
   for (int e = 0; e < mesh.num_tets(); ++e)
-    for (int v : mesh.tets()[e]) m[v] += density * mesh.rest_volumes()[e] / 4.0;
+    for (int v : mesh.tets()[e]) m[v] += (tet_density ? (*tet_density)[e] : density) * mesh.rest_volumes()[e] / 4.0;
   return m;
 }
 
@@ -197,7 +197,7 @@ double ElasticAssembly::energy(const Points& x) const {
 #pragma omp parallel for reduction(+ : E) schedule(static)
   for (int k = 0; k < T; ++k) {
     const Vec12 xe = gather(x, tets_[k]);
-    E += tet_energy(*material_, shapes_[k], xe, nullptr, nullptr) +
+    E += tet_energy(material_at(k), shapes_[k], xe, nullptr, nullptr) +
          fibre_term(k, xe, nullptr, nullptr, nullptr, nullptr);
   }
   const int S = static_cast<int>(tri_area_.size());
@@ -271,7 +271,7 @@ double ElasticAssembly::evaluate(const Points& x, const ElementPass& p) const {
                                           const Mat3 F = Ds * s.Dm_inv;
                                           const Mat3 C = cofactor(F);
                                           const InvariantDerivatives w =
-                                              material_->first_invariants(F.squaredNorm(), F.col(0).dot(C.col(0)));
+                                              material_at(e).first_invariants(F.squaredNorm(), F.col(0).dot(C.col(0)));
                                           Mat3 P = (2.0 * w.W_I) * F + w.W_J * C;
                                           double psi = w.W;
                                           if (has_fibres()) add_fibre_stress(e, F, P, psi);
@@ -287,7 +287,7 @@ double ElasticAssembly::evaluate(const Points& x, const ElementPass& p) const {
                         return element_pass<4>(p, t, tet_slots_.data() + 144 * static_cast<std::size_t>(e),
                                                [&](Vec12* g, Mat12* H, const Vec12* d, Vec12* Hd) {
                                                  const Vec12 xe = gather(x, t);
-                                                 return tet_energy(*material_, shapes_[e], xe, g, H, d, Hd) +
+                                                 return tet_energy(material_at(e), shapes_[e], xe, g, H, d, Hd) +
                                                         fibre_term(e, xe, g, H, d, Hd);
                                                });
                       });
@@ -338,7 +338,7 @@ void ElasticAssembly::pressures(const Points& x, std::vector<double>& p) const {
 #pragma omp parallel for schedule(static)
   for (int k = 0; k < T; ++k) {
     const Mat3 F = shapes_[k].F(gather(x, tets_[k]));
-    double& pk = p[tet_colours_.order[k]] = material_->pressure(F);
+    double& pk = p[tet_colours_.order[k]] = material_at(k).pressure(F);
     // A fibre's stress adds -tr(sigma_f) / 3 = -tr(P_f F^T) / (3 J).
     if (has_fibres() && fibre_muscle_[k] >= 0) {
       Mat3 P = Mat3::Zero();
@@ -347,6 +347,27 @@ void ElasticAssembly::pressures(const Points& x, std::vector<double>& p) const {
       pk -= (P * F.transpose()).trace() / (3.0 * F.determinant());
     }
   }
+}
+
+void ElasticAssembly::set_tet_materials(std::vector<std::shared_ptr<const Material>> materials,
+                                        const std::vector<int>& material_of) {
+  const int T = mesh_.num_tets();
+  if (materials.empty()) {
+    materials_.clear();
+    tet_material_.clear();
+    return;
+  }
+  if (static_cast<int>(material_of.size()) != T)
+    throw Error("tet materials: expected one index per tet (" + std::to_string(T) + ")");
+  tet_material_.resize(T);
+  for (int k = 0; k < T; ++k) {
+    const int e = tet_colours_.order[k], m = material_of[e];
+    if (m < 0 || m >= static_cast<int>(materials.size()))
+      throw Error("tet materials: tet " + std::to_string(e) + " names material " + std::to_string(m) + " of " +
+                  std::to_string(materials.size()));
+    tet_material_[k] = m;
+  }
+  materials_ = std::move(materials);
 }
 
 void ElasticAssembly::set_fibres(const FibreField& field) {

@@ -65,7 +65,8 @@ std::vector<Vec3> laplace_fibres(const Mesh& mesh, const std::vector<int>& tets,
     if (auto it = m.local.find(v); it != m.local.end()) fixed[it->second] = 0.0, in_origin.push_back(v);
   for (int v : insertion)
     if (auto it = m.local.find(v); it != m.local.end()) {
-      if (fixed[it->second] == 0.0) throw Error("node " + std::to_string(v) + " is in both the origin and the insertion");
+      if (fixed[it->second] == 0.0)
+        throw Error("node " + std::to_string(v) + " is in both the origin and the insertion");
       fixed[it->second] = 1.0;
       in_insertion.push_back(v);
     }

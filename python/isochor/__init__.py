@@ -86,6 +86,7 @@ class Frame:
     pressure: Optional[np.ndarray]  # (T,) per-tet pressure, Pa (None without tets)
     multipliers: np.ndarray  # the constraints' multipliers
     loads: Optional[np.ndarray]  # (N,3) applied loads (N), when the scene has [[load]]
+    activation: Optional[np.ndarray]  # each muscle's activation (Scene.muscles' order), with [[muscle]]s
     stats: dict              # the per-frame series (steps, newton_iterations, step_size, ...)
 
     def zone_volume(self, name: str) -> float:
@@ -126,7 +127,8 @@ def _as_scene(s: Union[Scene, str, os.PathLike, Mapping[str, Any]], overrides: O
 
 def run(s: Union[Scene, str, os.PathLike, Mapping[str, Any]], output: Union[str, os.PathLike, None] = None, *,
         overrides: Overrides = None, overwrite: bool = False, resume: bool = False, progress: bool = False,
-        on_frame: Optional[Callable[[Frame], Optional[bool]]] = None) -> RunResult:
+        on_frame: Optional[Callable[[Frame], Optional[bool]]] = None,
+        activation: Optional[Callable[[float], Any]] = None) -> RunResult:
     """Runs a scene (a Scene, a scene file or a dict) into `output` (default: the scene's
     output.path), as `isochor run` does. An existing output is an error unless `overwrite`
     (replace it) or `resume` (continue it from its last complete frame).
@@ -134,6 +136,12 @@ def run(s: Union[Scene, str, os.PathLike, Mapping[str, Any]], output: Union[str,
     on_frame(frame) is called after each frame is written; returning False stops the run there
     (the file keeps the frames, status "interrupted"; the result says stopped). An exception in
     the callback, or Ctrl-C, stops the run the same way and is raised again.
+
+    activation(t) replaces the scene's muscle activations: it returns a mapping from muscle names
+    to activations in [0, 1] (muscles it leaves out keep the scene's curve) or a sequence with one
+    per muscle (Scene.muscles' order). It is called at every new time the solver evaluates, so a
+    value that on_frame sets between frames (kept where activation reads it) acts from that frame
+    on. An exception it raises stops the run there and is raised again.
     """
     if overwrite and resume:
         raise ValueError("run(): overwrite excludes resume")
@@ -145,7 +153,27 @@ def run(s: Union[Scene, str, os.PathLike, Mapping[str, Any]], output: Union[str,
             return on_frame(Frame(zone_names=zone_names, **d))
     mode = "resume" if resume else "overwrite" if overwrite else "create"
     out = "" if output is None else os.fspath(output)
-    return RunResult(**_core().run(sc, out, mode, progress, callback))
+    return RunResult(**_core().run(sc, out, mode, progress, callback, _activation_list(sc, activation)))
+
+
+def _activation_list(sc, activation):
+    """activation(t) as the core takes it: a list with one value per muscle."""
+    if activation is None:
+        return None
+    names = list(sc.muscles)
+    if not names:
+        raise Error(f"{sc.name}: an activation function, but the scene has no [[muscle]]")
+
+    def listed(t):
+        a = activation(t)
+        if isinstance(a, Mapping):
+            unknown = [k for k in a if k not in names]
+            if unknown:
+                raise KeyError(f"activation: no muscle {unknown[0]!r} (muscles: {', '.join(names)})")
+            scene_values = sc.activations(t)
+            return [float(a.get(n, scene_values[i])) for i, n in enumerate(names)]
+        return [float(v) for v in a]
+    return listed
 
 
 def study_cases(path: Union[str, os.PathLike], overrides: Overrides = None) -> list:

@@ -155,6 +155,7 @@ py::dict frame_dict(int index, const Frame& f) {
   d["pressure"] = f.pressure ? py::object(vector_array(*f.pressure)) : py::object(py::none());
   d["multipliers"] = f.multipliers ? vector_array(*f.multipliers) : py::array_t<double>(0);
   d["loads"] = f.loads ? py::object(points_array(*f.loads)) : py::object(py::none());
+  d["activation"] = f.activations ? py::object(vector_array(*f.activations)) : py::object(py::none());
   py::dict stats;
   for (const auto& [name, value] : f.stats) stats[py::str(name)] = value;
   d["stats"] = stats;
@@ -188,8 +189,8 @@ py::dict summary_dict(const RunSummary& r, bool stopped, const std::string& stop
 // Runs the scene with the GIL released; the callback (and a check for Ctrl-C) takes it at every
 // frame. An exception raised by the callback (KeyboardInterrupt included) stops the run at that
 // frame, which the file keeps (status "interrupted"), and is raised again here.
-py::dict run(const Scene& scene, const std::string& output, const std::string& mode, bool progress,
-             py::object on_frame) {
+py::dict run(const Scene& scene, const std::string& output, const std::string& mode, bool progress, py::object on_frame,
+             py::object activation) {
   RunOptions opt;
   opt.output = output;
   opt.progress = progress;
@@ -228,6 +229,21 @@ py::dict run(const Scene& scene, const std::string& output, const std::string& m
       return false;
     }
   };
+  // The activation function (a list per call, one value per muscle): an exception it raises stops
+  // the run as a solver failure would, and is raised again here.
+  if (!activation.is_none())
+    opt.activation = [&](double t) {
+      py::gil_scoped_acquire gil;
+      try {
+        return activation(t).cast<std::vector<double>>();
+      } catch (py::error_already_set& e) {
+        raised.emplace(std::move(e));
+      } catch (const py::cast_error&) {
+        PyErr_SetString(PyExc_TypeError, "activation(t) returned something other than numbers");
+        raised.emplace();
+      }
+      throw Error("the activation function raised an exception at t = " + std::to_string(t));
+    };
   RunSummary r;
   std::string stop_reason;
   try {
@@ -242,6 +258,11 @@ py::dict run(const Scene& scene, const std::string& output, const std::string& m
     if (!stopped_by_callback) throw;
     stop_reason = e.what();
     r = e.summary;
+  } catch (const Error&) {
+    if (!raised) throw;
+    py::error_already_set err = std::move(*raised);
+    raised.reset();
+    throw err;
   }
   return summary_dict(r, !stop_reason.empty(), stop_reason);
 }
@@ -290,7 +311,14 @@ void bind_scene(py::module_& m) {
       .def_property_readonly("gravity",
                              [](const Scene& s) { return std::vector<double>(s.gravity.data(), s.gravity.data() + 3); })
       .def_property_readonly("integrator", [](const Scene& s) { return std::string(to_string(s.integrator.kind)); })
-      .def_property_readonly("material", [](const Scene& s) { return std::string(to_string(s.material.model)); });
+      .def_property_readonly("material", [](const Scene& s) { return std::string(to_string(s.material.model)); })
+      .def("activations", &Scene::activations, py::arg("t"),
+           "Each muscle's activation at time t as the scene gives it (activation_scale applied)")
+      .def_property_readonly("muscles", [](const Scene& s) {
+        std::vector<std::string> names;
+        for (const Scene::MuscleSpec& m : s.muscles) names.push_back(m.name);
+        return names;
+      });
 }
 
 }  // namespace
@@ -311,7 +339,7 @@ PYBIND11_MODULE(_isochor, m) {
         py::arg("name") = "<dict>", py::arg("directory") = "");
   m.def("overrides", &overrides_of, py::arg("overrides"), "The `--set` strings of a dict or list of overrides");
   m.def("run", &run, py::arg("scene"), py::arg("output") = "", py::arg("mode") = "create", py::arg("progress") = false,
-        py::arg("on_frame") = py::none());
+        py::arg("on_frame") = py::none(), py::arg("activation") = py::none());
 
   m.def(
       "study_cases",

@@ -1,5 +1,5 @@
 #include "isochor/scene/mesh_system.hpp"
-#include "isochor/scene/muscle_setup.hpp"
+#include "isochor/scene/body_setup.hpp"
 #include "isochor/scene/supports_setup.hpp"
 
 #include <algorithm>
@@ -41,7 +41,9 @@ MeshSystem::MeshSystem(const Scene& scene)
   elastic_ = std::make_unique<ElasticAssembly>(
       scene.mesh, material_, dofs_, EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
   if (!scene.muscles.empty()) elastic_->set_fibres(scene_fibre_field(scene));
-  node_mass_ = lumped_mass(scene.mesh, scene.material.density);
+  const TetMaterials regions = scene_tet_materials(scene);
+  elastic_->set_tet_materials(regions.materials, regions.material_of);
+  node_mass_ = lumped_mass(scene.mesh, scene.material.density, regions.density.empty() ? nullptr : &regions.density);
   const Eigen::VectorXd area = surface_areas(scene.mesh);
   external_ = std::make_unique<ExternalPotential>(node_mass_, scene.gravity, scene.colliders, dofs_,
                                                   elastic_->pattern(), area, scene.skeleton);
@@ -188,7 +190,7 @@ void MeshSystem::set_positions(double t, const VectorXd& q) {
     scene_at_time(scene_, t, x_, xdot_, *external_);
     pressure_loads_->set_time(t);
     for (auto& set : sets_) set->set_time(t);
-    if (elastic_->has_fibres()) elastic_->set_activations(scene_.activations(t));
+    if (elastic_->has_fibres()) elastic_->set_activations(activation_fn_ ? activation_fn_(t) : scene_.activations(t));
     state_t_ = t;
   }
 }

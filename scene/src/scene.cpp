@@ -1,5 +1,5 @@
 #include "isochor/scene/scene.hpp"
-#include "isochor/scene/muscle_setup.hpp"
+#include "isochor/scene/body_setup.hpp"
 #include "isochor/scene/skeleton_setup.hpp"
 #include "isochor/core/paint.hpp"
 #include "isochor/scene/integrator_registry.hpp"
@@ -136,21 +136,25 @@ const char* name_of(const std::vector<std::pair<std::string, E>>& table, E e) {
   return "?";
 }
 
+}  // namespace
+
+std::pair<double, double> parse_lame(const Section& s, double mu, double lambda) {
+  const bool lame = s.has("mu") || s.has("lambda"), young = s.has("E") || s.has("nu");
+  if (lame && young) s.fail(s.has("E") ? "E" : "nu", "give either mu and lambda or E and nu, not both");
+  if (!young) return {s.number("mu", mu, Range::positive()), s.number("lambda", lambda, Range::non_negative())};
+  const double E = s.number("E", 1e5, Range::positive());
+  const double nu = s.number("nu", 0.45, {-1.0, 0.5, true, false});
+  if (nu == 0.5) return {lame_from_young(E, nu).first, std::numeric_limits<double>::infinity()};  // XPBD only
+  return lame_from_young(E, nu);
+}
+
+namespace {
+
 MaterialSpec parse_material(const Section& s) {
   MaterialSpec m;
   m.model = parse_choice(s, "model", m.model, kModels);
   m.density = s.number("density", m.density, Range::positive());
-  const bool lame = s.has("mu") || s.has("lambda"), young = s.has("E") || s.has("nu");
-  if (lame && young) s.fail(s.has("E") ? "E" : "nu", "give either mu and lambda or E and nu, not both");
-  if (young) {
-    const double E = s.number("E", 1e5, Range::positive());
-    const double nu = s.number("nu", 0.45, {-1.0, 0.5, true, false});
-    std::tie(m.mu, m.lambda) = lame_from_young(E, nu);
-    if (nu == 0.5) m.lambda = std::numeric_limits<double>::infinity();  // incompressible: XPBD only
-  } else {
-    m.mu = s.number("mu", 1e4, Range::positive());
-    m.lambda = s.number("lambda", 9e4, Range::non_negative());
-  }
+  std::tie(m.mu, m.lambda) = parse_lame(s, 1e4, 9e4);
   m.beta = s.number("beta", m.beta, Range::non_negative());
   m.epsilon = s.number("epsilon", m.epsilon, {0.0, 1.0, true, false});
   m.epidermis_lambda = s.number("epidermis_lambda", 0.0, Range::non_negative());
@@ -825,6 +829,7 @@ Scene parse_scene(SceneFile file) {
   sc.material = parse_material(root.table("material"));
   sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.file, sc.material.model == MaterialModel::cnh);
   sc.keep_zones = root.table("zones").boolean("keep", true);
+  parse_material_regions(root.table("material"), sc);
   sc.zone_restore_time = root.table("zones").number("restore_time", 0.0, Range::non_negative());
   const std::vector<int> driven_by = parse_boundaries(root, sc);
   sc.skeleton = parse_skeleton(root.table("skeleton"), sc.file, sc.mesh, driven_by);

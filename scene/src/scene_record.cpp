@@ -1,7 +1,7 @@
 // What the run file records of a scene besides the body (core/output.hpp: SceneRecord): the up
 // direction a viewer turns upward and every collider's shape, so that tools read them from the
 // file instead of parsing the scene's text.
-#include "isochor/scene/muscle_setup.hpp"
+#include "isochor/scene/body_setup.hpp"
 #include "isochor/scene/scene.hpp"
 
 namespace isochor {

@@ -15,6 +15,7 @@ import pytest
 
 import isochor
 from paths import EXE, JELLY, SOURCE, SWING  # noqa: F401
+from scenes import BUNDLE
 
 SHORT = {"frames.duration": 0.05}  # 6 frames of the 144-tet swinging block
 
@@ -256,3 +257,38 @@ def test_a_callback_that_returns_neither_a_boolean_nor_none_stops_with_a_type_er
         isochor.run(SWING, out, on_frame=lambda f: "yes")
     with isochor.open(out) as r:  # the frame written before the callback ran is kept
         assert r.status == "interrupted" and r.num_frames == 1
+
+
+def test_an_activation_function_acts_as_the_scenes_keyframes_would(tmp_path):
+    # The keyframes 0 -> 0.8 over the pseudo-time and a function giving the same values: the
+    # same solves, so the same positions; the file records what the function gave.
+    s = isochor.scene(BUNDLE)
+    assert s.muscles == ["bundle"] and s.activations(0.5) == [0.4]
+    keyed = isochor.run(s, tmp_path / "keyed.h5")
+    called = isochor.run(s, tmp_path / "called.h5", activation=lambda t: {"bundle": 0.8 * t})
+    with isochor.open(keyed.output) as a, isochor.open(called.output) as b:
+        np.testing.assert_allclose(b.positions, a.positions, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(b.activation[:, 0], 0.8 * b.times, rtol=1e-14)
+        assert b.muscles == ["bundle"] and (b.tet_muscle == 0).all()
+        assert b.positions[-1][:, 0].max() < 0.9  # it shortened
+    # Set between frames: on_frame raises the value from frame 2 on; frames 0-2 stay at rest.
+    level = {"a": 0.0}
+
+    def on_frame(f):
+        if f.index == 2:
+            level["a"] = 0.5
+    stepped = isochor.run(s, tmp_path / "stepped.h5", on_frame=on_frame, activation=lambda t: [level["a"]])
+    with isochor.open(stepped.output) as r:
+        assert r.activation[:, 0].tolist() == [0, 0, 0, 0.5, 0.5, 0.5]
+        np.testing.assert_allclose(r.positions[2], r.rest_positions, atol=1e-12)
+        assert r.positions[3][:, 0].max() < 0.95
+
+
+def test_bad_activations_stop_the_run_with_a_reason(tmp_path):
+    s = isochor.scene(BUNDLE)
+    with pytest.raises(isochor.Error, match=r"gave 1.5 at t = .*expected activations in \[0, 1\]"):
+        isochor.run(s, tmp_path / "a.h5", activation=lambda t: [1.5])
+    with pytest.raises(KeyError, match="no muscle 'biceps'"):
+        isochor.run(s, tmp_path / "b.h5", activation=lambda t: {"biceps": 0.5})
+    with pytest.raises(ZeroDivisionError):
+        isochor.run(s, tmp_path / "c.h5", activation=lambda t: [1 / 0])

@@ -31,6 +31,10 @@ struct RunOptions {
   // even when output.pressure is off); returning false stops the run there as an interrupt does
   // (status "interrupted", signal 0, RunInterrupted).
   std::function<bool(int, const Frame&)> on_frame;
+  // Replaces the scene's muscle activations: called with each new time the solver evaluates (the
+  // frames' times among them), one value per muscle in [0, 1]. What it returns at a frame is what
+  // /frames/activation records.
+  std::function<std::vector<double>(double)> activation;
 };
 
 // A run stopped by a signal (SIGINT, SIGTERM) at a step boundary: the frames so far are in the

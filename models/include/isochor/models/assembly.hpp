@@ -115,6 +115,9 @@ class ElasticAssembly {
   // Number of tets with J <= 0.
   int inverted_tets(const Points& x) const;
   const Material& material() const { return *material_; }
+  // Materials per region: tet e (mesh order) takes materials[material_of[e]]; empty lists give
+  // every tet the constructor's material back.
+  void set_tet_materials(std::vector<std::shared_ptr<const Material>> materials, const std::vector<int>& material_of);
   // Muscles (muscle.hpp): each fibre tet's term is added to its material's; activations per
   // muscle, all 0 until set. A field without muscles removes them.
   void set_fibres(const FibreField& field);
@@ -123,6 +126,10 @@ class ElasticAssembly {
   bool has_fibres() const { return !muscles_.empty(); }
 
  private:
+  // Tet k's material (k its position in the pass's order).
+  const Material& material_at(int k) const {
+    return tet_material_.empty() ? *material_ : *materials_[tet_material_[k]];
+  }
   // Tet k's fibre term (k its position in the pass's order), 0 where it has none.
   double fibre_term(int k, const Vec12& x, Vec12* grad, Mat12* hess, const Vec12* dir, Vec12* hess_dir) const;
   // Tet k's fibre stress, added to P (psi added to *psi).
@@ -138,6 +145,9 @@ class ElasticAssembly {
   Pattern pattern_;
   ElementSchedule tet_colours_, tri_colours_;
   std::vector<Index> tet_slots_, tri_slots_;  // 144 per tet, 81 per triangle
+  // Materials per region (set_tet_materials), per tet at its position in the pass's order.
+  std::vector<std::shared_ptr<const Material>> materials_;
+  std::vector<int> tet_material_;
   // Fibres, per tet at its position in the pass's order: muscle index (-1: none) and direction.
   std::vector<MuscleLaw> muscles_;
   std::vector<double> activation_;
@@ -145,8 +155,9 @@ class ElasticAssembly {
   std::vector<Vec3> fibre_dir_;
 };
 
-// Lumped mass per node: density times a quarter of the volume of every tet around it.
-Eigen::VectorXd lumped_mass(const Mesh& mesh, double density);
+// Lumped mass per node: density times a quarter of the volume of every tet around it (with
+// tet_density, each tet's own density).
+Eigen::VectorXd lumped_mass(const Mesh& mesh, double density, const std::vector<double>* tet_density = nullptr);
 // Each node's rest surface area: a third of the area of every surface triangle it is a corner of
 // (0 inside); the per-area contact law's weights.
 Eigen::VectorXd surface_areas(const Mesh& mesh);

@@ -81,6 +81,11 @@ class MeshSystem : public SceneSystem {
   void collider_poses(std::vector<double>& out) const override { external_->pose_numbers(out); }
   void collider_scales(std::vector<double>& out) const override { external_->scale_numbers(out); }
   const DofMap& dofs() const override { return dofs_; }
+  std::vector<double> activations() const override { return elastic_->activations(); }
+  void set_activation_function(std::function<std::vector<double>(double)> f) override {
+    activation_fn_ = std::move(f);
+    state_t_ = std::numeric_limits<double>::quiet_NaN();
+  }
 
  private:
   const Scene& scene_;
@@ -101,6 +106,7 @@ class MeshSystem : public SceneSystem {
   double force_scale_ = 1.0;
   bool project_hessian_ = false;
   bool damping_on_ = true;  // set_damping_forces
+  std::function<std::vector<double>(double)> activation_fn_;
   // State cache: positions and velocities of every node.
   Points x_;
   Eigen::VectorXd xdot_, grad_, kv_;

@@ -36,6 +36,13 @@ struct MaterialSpec {
   double spring_stiffness = 1000.0;  // mass_spring: N/m, every spring
   double spring_damping = 0.0;       // mass_spring: N s/m, dashpot along every spring
   bool volume_constraint = true;     // mass_spring: keep the enclosed volume
+  // [[material.region]]: tets with their own constants (the body's model); a tet in several
+  // regions takes the last one's.
+  struct Region {
+    std::vector<int> tets;
+    double mu = 0, lambda = 0, density = 0;
+  };
+  std::vector<Region> regions;
 };
 
 enum class IntegratorKind { ida, statics, backward_euler, semi_implicit, xpbd, mass_spring };
@@ -110,7 +117,7 @@ struct Scene {
   FramesSpec frames;
   OutputSpec output;
   std::shared_ptr<Skeleton> skeleton;  // [skeleton]: bones that drive their bound nodes; null without
-  // [[muscle]]: fibres and activation per muscle (muscle_setup.hpp); [muscles] activation_scale.
+  // [[muscle]]: fibres and activation per muscle (body_setup.hpp); [muscles] activation_scale.
   struct MuscleSpec {
     std::string name;
     std::vector<int> tets;                // sorted
@@ -144,6 +151,9 @@ SceneRecord scene_record(const Scene& sc);
 // may be another key than `times` (an activation keyed by joint angles), scaled by `knot_scale`.
 Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what,
                        const std::string& knots = "times", double knot_scale = 1.0);
+
+// A table's elastic constants: mu and lambda (defaults as given) or E and nu, not both.
+std::pair<double, double> parse_lame(const Section& s, double mu, double lambda);
 
 // Lamé parameters from Young's modulus and Poisson's ratio.
 std::pair<double, double> lame_from_young(double E, double nu);

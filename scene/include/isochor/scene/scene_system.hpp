@@ -3,6 +3,7 @@
 // MeshSystem (tet materials) and MassSpringSystem (Hong et al.'s springs) are the two.
 #pragma once
 #include <array>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -42,6 +43,10 @@ class SceneSystem : public ConstrainedSystem {
   virtual void collider_poses(std::vector<double>& /*out*/) const {}
   // Each collider's radius factor at the current time (Frame::collider_scales).
   virtual void collider_scales(std::vector<double>& /*out*/) const {}
+  // Each muscle's activation at the current time ([[muscle]]), and a function of time that
+  // replaces the scene's activations (one value per muscle, in [0, 1]; empty: the scene's).
+  virtual std::vector<double> activations() const { return {}; }
+  virtual void set_activation_function(std::function<std::vector<double>(double)> /*f*/) {}
   // A resumed run's start (null: the scene's rest state and initial velocity): initial_state()
   // returns it for the unknowns.
   void set_start(const StartState* start) { start_ = start; }

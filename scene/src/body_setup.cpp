@@ -1,4 +1,4 @@
-#include "isochor/scene/muscle_setup.hpp"
+#include "isochor/scene/body_setup.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,13 +7,14 @@
 #include "isochor/base/error.hpp"
 #include "isochor/core/csv.hpp"
 #include "isochor/core/selection.hpp"
+#include "isochor/scene/mesh_system.hpp"
 
 namespace isochor {
 
 namespace {
 
-// The muscle's tets: `zone` (a zone of [zones] by name) or `select` (a selection of tets).
-std::vector<int> muscle_tets(const Section& m, const Scene& sc) {
+// A region's tets: `zone` (a zone of [zones] by name) or `select` (a selection of tets).
+std::vector<int> region_tets(const Section& m, const Scene& sc) {
   if (m.has("zone") == m.has("select"))
     m.fail("zone", "expected exactly one of zone (a zone's name) or select (a selection of tets)");
   if (m.has("select")) return select_tets(sc.mesh, Selection::parse(m.table("select")));
@@ -72,7 +73,8 @@ std::vector<Eigen::Vector3d> parse_fibres(const Section& m, const Scene& sc, con
     }
   }
   const std::optional<Eigen::Vector3d> a = m.vec3_opt("direction");
-  if (!a || a->norm() < 1e-12) m.fail("direction", "expected a non-zero fibre direction [x, y, z] (fibres = \"constant\")");
+  if (!a || a->norm() < 1e-12)
+    m.fail("direction", "expected a non-zero fibre direction [x, y, z] (fibres = \"constant\")");
   return std::vector<Eigen::Vector3d>(tets.size(), a->normalized());
 }
 
@@ -86,8 +88,8 @@ ActivationCurve parse_activation(const Section& m, const Scene& sc) {
   if (!given) return a;
   const Section k = m.table(key);
   const double knot_scale = m.has("activation_keys") ? 1.0 : M_PI / 180.0;
-  a.curve = parse_keyframes(k, "values", 1, 1.0, "one activation", m.has("activation_keys") ? "times" : "angles",
-                            knot_scale);
+  a.curve =
+      parse_keyframes(k, "values", 1, 1.0, "one activation", m.has("activation_keys") ? "times" : "angles", knot_scale);
   for (const Eigen::Vector3d& v : a.curve.values)
     if (v.x() < 0 || v.x() > 1) k.fail("values", "expected activations in [0, 1]");
   a.source = ActivationCurve::Source::time;
@@ -107,6 +109,39 @@ ActivationCurve parse_activation(const Section& m, const Scene& sc) {
 
 }  // namespace
 
+void parse_material_regions(const Section& material, Scene& sc) {
+  for (const Section& r : material.tables("region")) {
+    if (sc.material.model == MaterialModel::mass_spring || sc.integrator.kind == IntegratorKind::xpbd)
+      r.fail("zone",
+             "material regions need a tet material on IDA, statics or backward Euler (not mass_spring or xpbd)");
+    MaterialSpec::Region region;
+    region.tets = region_tets(r, sc);
+    std::tie(region.mu, region.lambda) = parse_lame(r, sc.material.mu, sc.material.lambda);
+    if (!std::isfinite(region.lambda)) r.fail("nu", "expected nu < 0.5 (nu = 0.5 is for XPBD's incompressible limit)");
+    region.density = r.number("density", sc.material.density, Range::positive());
+    sc.material.regions.push_back(std::move(region));
+  }
+}
+
+TetMaterials scene_tet_materials(const Scene& sc) {
+  TetMaterials t;
+  if (sc.material.regions.empty()) return t;
+  t.materials.push_back(make_material(sc.material));
+  t.material_of.assign(sc.mesh.num_tets(), 0);
+  t.density.assign(sc.mesh.num_tets(), sc.material.density);
+  for (const MaterialSpec::Region& r : sc.material.regions) {
+    MaterialSpec m = sc.material;
+    m.mu = r.mu;
+    m.lambda = r.lambda;
+    t.materials.push_back(make_material(m));
+    for (int e : r.tets) {
+      t.material_of[e] = static_cast<int>(t.materials.size()) - 1;
+      t.density[e] = r.density;
+    }
+  }
+  return t;
+}
+
 void parse_muscles(const Section& root, Scene& sc) {
   sc.activation_scale = root.table("muscles").number("activation_scale", 1.0, Range::closed(0.0, 1.0));
   std::vector<int> owner(sc.mesh.num_tets(), -1);
@@ -119,7 +154,7 @@ void parse_muscles(const Section& root, Scene& sc) {
       if (other.name == spec.name) m.fail("name", "muscle \"" + spec.name + "\" is defined twice");
     if (sc.material.model == MaterialModel::mass_spring || sc.integrator.kind == IntegratorKind::xpbd)
       m.fail("name", "muscles need a tet material on IDA, statics or backward Euler (not mass_spring or xpbd)");
-    spec.tets = muscle_tets(m, sc);
+    spec.tets = region_tets(m, sc);
     for (int e : spec.tets) {
       if (owner[e] >= 0)
         m.fail("zone", "tet " + std::to_string(e) + " is also in muscle \"" + sc.muscles[owner[e]].name +
