@@ -196,3 +196,32 @@ TEST(MeshFiles, BadSurfacesAndFilesAreNamedInErrors) {
   msg = test::error_of([&] { mesh_closed_surface(test::write_file(d / "bad.obj", "v 0 0 0\nf 1 2 3\n"), 0.0); });
   EXPECT_NE(msg.find("bad.obj:2: vertex 2 is not defined"), std::string::npos) << msg;
 }
+
+// A Gmsh .geo script as a mesh source: demos/meshes/cook.geo (Cook's membrane, one element thick)
+// has the panel's volume, the shoelace area of (0,0), (48,44), (48,60), (0,44), 1440, times its
+// thickness h = 48 / N (planar faces: exact up to rounding); its physical groups become the zone
+// and the node sets on their planes; edge_length overrides the script's size. A script with a
+// syntax error or without a volume stops with one line, and Gmsh still works after it.
+TEST(MeshFiles, GeoScriptIsMeshedWithItsPhysicalGroups) {
+  const std::string cook = std::string(ISOCHOR_SOURCE_DIR) + "/demos/meshes/cook.geo";
+  const Mesh m = read_geo(cook, 0.0);
+  const double h = 48.0 / 8;
+  EXPECT_NEAR(m.rest_volume(), 1440.0 * h, 1e-9 * 1440.0 * h);
+  ASSERT_EQ(m.zones.count("membrane"), 1u);
+  EXPECT_EQ(static_cast<int>(m.zones.at("membrane").size()), m.num_tets());
+  for (const auto& [set, axis, value] :
+       {std::tuple{"clamp", 0, 0.0}, {"load", 0, 48.0}, {"front", 2, 0.0}, {"back", 2, h}}) {
+    ASSERT_EQ(m.node_sets.count(set), 1u) << set;
+    for (int n : m.node_sets.at(set)) EXPECT_NEAR(m.rest_positions()(axis, n), value, 1e-9) << set;
+  }
+  const Mesh fine = read_geo(cook, 3.0);
+  EXPECT_GT(fine.num_tets(), 2 * m.num_tets());
+  EXPECT_NEAR(fine.rest_volume(), 1440.0 * h, 1e-9 * 1440.0 * h);
+  const fs::path d = test::temp_dir();
+  const std::string bad = test::write_file(d / "bad.geo", "Point(1) = {0, 0, 0;\n");
+  EXPECT_NE(test::error_of([&] { read_geo(bad, 0.0); }).find("bad.geo"), std::string::npos);
+  const std::string flat =
+      test::write_file(d / "flat.geo", "Point(1) = {0, 0, 0, 1};\nPoint(2) = {1, 0, 0, 1};\nLine(1) = {1, 2};\n");
+  EXPECT_NE(test::error_of([&] { read_geo(flat, 0.0); }).find("defines no volume"), std::string::npos);
+  EXPECT_EQ(read_geo(cook, 0.0).num_tets(), m.num_tets());  // the same mesh again, Gmsh not locked
+}

@@ -294,6 +294,35 @@ void check_readable(const std::string& path, const std::string& expected, double
   if (!in) throw Error(path + ": cannot be read (expected " + expected + ")");
 }
 
+// The model's tets with its physical groups: 3-D groups become zones, groups of any dimension
+// node sets (an unnamed group is physical_<dim>d_<tag>).
+RawMesh with_physical_groups(Extracted e) {
+  std::map<std::string, std::vector<int>> zones, sets;
+  gmsh::vectorpair groups;
+  gmsh::model::getPhysicalGroups(groups, -1);
+  for (const auto& [dim, tag] : groups) {
+    std::string name;
+    gmsh::model::getPhysicalName(dim, tag, name);
+    if (name.empty()) name = "physical_" + std::to_string(dim) + "d_" + std::to_string(tag);
+    std::vector<std::size_t> ntags;
+    std::vector<double> coord;
+    gmsh::model::mesh::getNodesForPhysicalGroup(dim, tag, ntags, coord);
+    auto& set = sets[name];
+    for (std::size_t t : ntags) set.push_back(e.node_index.at(t));
+    if (dim == 3) {
+      std::vector<int> entities;
+      gmsh::model::getEntitiesForPhysicalGroup(dim, tag, entities);
+      auto& zone = zones[name];
+      for (int ent : entities) {
+        std::vector<std::size_t> etags, enodes;
+        gmsh::model::mesh::getElementsByType(4, etags, enodes, ent);
+        for (std::size_t t : etags) zone.push_back(e.tet_index.at(t));
+      }
+    }
+  }
+  return RawMesh{std::move(e), std::move(zones), std::move(sets)};
+}
+
 }  // namespace
 
 Mesh make_sphere(double radius, double edge_length, long target_tets, const Eigen::Vector3d& c, double inner_radius) {
@@ -415,31 +444,37 @@ Mesh read_msh(const std::string& path) {
       gmsh::open(path);
       std::string err = GmshSession::first_error();
       if (!err.empty()) throw Error(path + ": is not a readable Gmsh mesh: " + err);
-      Extracted e = extract_tets(path);
-      std::map<std::string, std::vector<int>> zones, sets;
-      gmsh::vectorpair groups;
-      gmsh::model::getPhysicalGroups(groups, -1);
-      for (const auto& [dim, tag] : groups) {
-        std::string name;
-        gmsh::model::getPhysicalName(dim, tag, name);
-        if (name.empty()) name = "physical_" + std::to_string(dim) + "d_" + std::to_string(tag);
-        std::vector<std::size_t> ntags;
-        std::vector<double> coord;
-        gmsh::model::mesh::getNodesForPhysicalGroup(dim, tag, ntags, coord);
-        auto& set = sets[name];
-        for (std::size_t t : ntags) set.push_back(e.node_index.at(t));
-        if (dim == 3) {
-          std::vector<int> entities;
-          gmsh::model::getEntitiesForPhysicalGroup(dim, tag, entities);
-          auto& zone = zones[name];
-          for (int ent : entities) {
-            std::vector<std::size_t> etags, enodes;
-            gmsh::model::mesh::getElementsByType(4, etags, enodes, ent);
-            for (std::size_t t : etags) zone.push_back(e.tet_index.at(t));
-          }
-        }
+      return with_physical_groups(extract_tets(path));
+    });
+  });
+  return finish(std::move(raw.e), path, std::move(raw.zones), std::move(raw.sets));
+}
+
+Mesh read_geo(const std::string& path, double edge_length) {
+  check_readable(path, "a Gmsh .geo script", input_limits::kScene);
+  const std::string expected = "Gmsh could not read or mesh the .geo script";
+  // In a child process: a syntax error leaves Gmsh locked for the rest of the process (read_msh).
+  RawMesh raw = in_child(path, expected, [&] {
+    GmshSession session("geo");
+    return guarded(path, expected, [&] {
+      if (edge_length > 0) {
+        gmsh::option::setNumber("Mesh.MeshSizeMin", edge_length);
+        gmsh::option::setNumber("Mesh.MeshSizeMax", edge_length);
+        gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
       }
-      return RawMesh{std::move(e), std::move(zones), std::move(sets)};
+      gmsh::open(path);
+      std::string err = GmshSession::first_error();
+      if (!err.empty()) throw Error(path + ": is not a readable .geo script: " + err);
+      // A script that meshes itself (Mesh 3;) leaves tets; otherwise its volumes are meshed here.
+      std::vector<std::size_t> t, n;
+      gmsh::model::mesh::getElementsByType(4, t, n);
+      if (t.empty()) {
+        gmsh::vectorpair volumes;
+        gmsh::model::getEntities(volumes, 3);
+        if (volumes.empty()) throw Error(path + ": the script defines no volume (expected a 3-D geometry)");
+        generate_3d(path);
+      }
+      return with_physical_groups(extract_tets(path));
     });
   });
   return finish(std::move(raw.e), path, std::move(raw.zones), std::move(raw.sets));

@@ -56,6 +56,27 @@ Mesh mesh_surface_file(const Section& s, const std::string& path) {
   return mesh_closed_surface(path, h);
 }
 
+// [mesh] file = "...": by its extension.
+Mesh mesh_from_file(const Section& s, const SceneFile& file, const Eigen::Vector3d& center) {
+  const std::string name = s.string("file", "");
+  const std::string path = file.resolve_path(name);
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(c));
+  Mesh m;
+  if (ext == ".msh")
+    m = read_msh(path);
+  else if (ext == ".node" || ext == ".ele")
+    m = read_tetgen(path);
+  else if (ext == ".obj" || ext == ".stl")
+    m = mesh_surface_file(s, path);
+  else if (ext == ".geo")
+    m = read_geo(path, s.number("edge_length", 0.0, Range::non_negative()));
+  else
+    s.fail("file", "\"" + name + "\" has an unknown extension, expected .msh, .geo, .node, .ele, .obj or .stl");
+  if (center != Eigen::Vector3d::Zero()) s.fail("center", "applies to shapes only, not to a mesh file");
+  return m;
+}
+
 }  // namespace
 
 Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
@@ -66,23 +87,7 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
         "shape",
         "missing, expected shape = \"box\" | \"capsule\" | \"cylinder\" | \"sphere\" | \"two_tets\" or file = \"...\"");
   const Eigen::Vector3d center = s.vec3("center", Eigen::Vector3d::Zero(), Range::coordinate());
-  if (has_file) {
-    const std::string name = s.string("file", "");
-    const std::string path = file.resolve_path(name);
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(c));
-    Mesh m;
-    if (ext == ".msh")
-      m = read_msh(path);
-    else if (ext == ".node" || ext == ".ele")
-      m = read_tetgen(path);
-    else if (ext == ".obj" || ext == ".stl")
-      m = mesh_surface_file(s, path);
-    else
-      s.fail("file", "\"" + name + "\" has an unknown extension, expected .msh, .node, .ele, .obj or .stl");
-    if (center != Eigen::Vector3d::Zero()) s.fail("center", "applies to shapes only, not to a mesh file");
-    return m;
-  }
+  if (has_file) return mesh_from_file(s, file, center);
   const std::string shape = s.string("shape", "", {"box", "capsule", "cylinder", "sphere", "two_tets"});
   if (shape == "box") {
     const auto cells = s.int3("cells", {4, 4, 4}, 1, 1000);

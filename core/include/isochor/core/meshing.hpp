@@ -38,6 +38,10 @@ Mesh make_capsule(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double rad
 // Gmsh .msh (v2 or v4): tets; 3-D physical groups become zones, physical groups of any
 // dimension become node sets.
 Mesh read_msh(const std::string& path);
+// A Gmsh .geo script (points, curves, surfaces, volumes, extrusions, the OpenCASCADE kernel's
+// solids): its volumes meshed by Gmsh (edge_length > 0: that size everywhere; 0: the script's own
+// sizes), physical groups as for read_msh.
+Mesh read_geo(const std::string& path, double edge_length);
 // TetGen .node/.ele (`path` is either file or the common base name): 0- or 1-based; region
 // attributes become zones region_<value>; non-zero boundary markers become node sets marker_<m>.
 Mesh read_tetgen(const std::string& path);
