@@ -97,6 +97,8 @@ int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& over
 
 int cmd_run(const RunCommand& c, int argc, char** argv) {
   Scene sc = load_scene(c.scene_path, c.overrides);
+  if (const std::string note = material_note(sc.material); !note.empty() && !c.quiet)
+    std::fprintf(stderr, "%s: %s\n", c.scene_path.c_str(), note.c_str());
   install_signal_handlers();
   RunOptions opt;
   opt.output = c.out_path;

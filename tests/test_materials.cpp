@@ -131,6 +131,26 @@ TEST(Materials, LinearisationMatchesLinearElasticityAtRest) {
   }
 }
 
+TEST(Materials, SnhInIncompressibleUniaxialTensionIsStifferThanNeoHooke) {
+  // At J = 1 a stretch l along x with l^-1/2 across is incompressible uniaxial stress once a
+  // pressure cancels the lateral stress: the nominal stress is (sigma_xx - sigma_yy) / l. SNH's
+  // isochoric part mu'/2 (I - 3) - mu'/2 log(I + 1), I = l^2 + 2 / l, gives
+  // dW/dl = mu' I / (I + 1) (l - l^-2) with mu' = 4/3 mu: neo-Hooke's mu (l - l^-2) times
+  // (4/3) I / (I + 1), 1 at rest and 10/9 at l = 2 (the note isochor run prints for snh).
+  const double mu = 1.3;
+  const auto snh = make_snh(mu, 7.0), unh = make_unh(mu, 7.0);
+  for (double l : {1.2, 1.5, 2.0}) {
+    const Mat3 F = Eigen::Vector3d(l, 1 / std::sqrt(l), 1 / std::sqrt(l)).asDiagonal();
+    const auto nominal = [&](const Material& m) {
+      const Mat3 sigma = m.P(F) * F.transpose();  // J = 1
+      return (sigma(0, 0) - sigma(1, 1)) / l;
+    };
+    const double I = l * l + 2 / l;
+    EXPECT_NEAR(nominal(*unh), mu * (l - 1 / (l * l)), 1e-12);
+    EXPECT_NEAR(nominal(*snh) / nominal(*unh), 4.0 / 3.0 * I / (I + 1), 1e-12) << l;
+  }
+}
+
 TEST(Penalty, ClosedFormsOfTheCnhPaper) {
   for (double beta : {0.0, 1.0, 9.0})
     for (double J : {-0.5, 0.0, 0.3, 1.0, 1.7}) {

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -867,6 +868,24 @@ Scene parse_scene(SceneFile file) {
 }
 
 const char* to_string(MaterialModel m) { return name_of(kModels, m); }
+
+std::string material_note(const MaterialSpec& m) {
+  if (m.model != MaterialModel::snh) return "";
+  // Incompressible uniaxial tension: (4/3) I / (I + 1) times neo-Hooke's nominal stress,
+  // I = l^2 + 2 / l (tests/test_materials.cpp: SnhInIncompressibleUniaxialTension...).
+  auto stiffer = [](double l) {
+    const double I = l * l + 2 / l;
+    return 100.0 * (4.0 / 3.0 * I / (I + 1) - 1.0);
+  };
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "material.model = \"snh\" is Smith et al. 2018's stable neo-Hookean, run with mu' = 4/3 mu = %g Pa "
+                "and lambda' = lambda + 5/6 mu = %g Pa: its small-strain shear modulus is mu = %g Pa, but in "
+                "incompressible uniaxial tension it is stiffer than neo-Hooke with that mu, by %.1f%% at stretch 1.2, "
+                "%.1f%% at 1.5 and %.1f%% at 2 (docs/scenes.md)",
+                4.0 / 3.0 * m.mu, m.lambda + 5.0 / 6.0 * m.mu, m.mu, stiffer(1.2), stiffer(1.5), stiffer(2.0));
+  return line;
+}
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
   return parse_scene(SceneFile::load(path, overrides));

@@ -152,6 +152,10 @@ SceneRecord scene_record(const Scene& sc);
 Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what,
                        const std::string& knots = "times", double knot_scale = 1.0);
 
+// What a material means beyond its name, for a user who reads mu as neo-Hooke's: one line for
+// "snh" (Smith et al.'s re-parametrisation and its uniaxial curve), empty for the others.
+std::string material_note(const MaterialSpec& m);
+
 // A table's elastic constants: mu and lambda (defaults as given) or E and nu, not both.
 std::pair<double, double> parse_lame(const Section& s, double mu, double lambda);
 
