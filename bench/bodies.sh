@@ -11,24 +11,16 @@
 #     its muscles as zones.
 #   bench/bodies.sh [build] [rounds]
 set -euo pipefail
-build=${1:-build}
-rounds=${2:-3}
-cd "$(dirname "$0")/.."
-mkdir -p out/bench
-run() {  # name scene overrides...
-  local name=$1 scene=$2
-  shift 2
-  OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$build/isochor" run "$scene" --overwrite -q -o "out/bench/$name.h5" "$@" > /dev/null
-}
+source "$(dirname "$0")/lib.sh"
 for r in $(seq 1 "$rounds"); do
-  run "waist_cnh_r$r" demos/waistband_dynamic.toml
+  bench_run "waist_cnh_r$r" demos/waistband_dynamic.toml
   for nu in 0.4545 0.499; do
-    run "waist_unh${nu}_r$r" demos/waistband_dynamic.toml --set material.model=unh --set material.nu=$nu --set zones.keep=false
+    bench_run "waist_unh${nu}_r$r" demos/waistband_dynamic.toml --set material.model=unh --set material.nu=$nu --set zones.keep=false
   done
-  run "squeeze_cnh_r$r" demos/squeeze_cylinders.toml
-  run "squeeze_snh_r$r" demos/squeeze_cylinders.toml --set material.model=snh --set material.lambda=400.0 --set zones.global=false
-  run "torso_ball_r$r" demos/ball_on_torso.toml
-  run "arm_muscles_r$r" demos/arm_muscles.toml --set frames.duration=1.0
+  bench_run "squeeze_cnh_r$r" demos/squeeze_cylinders.toml
+  bench_run "squeeze_snh_r$r" demos/squeeze_cylinders.toml --set material.model=snh --set material.lambda=400.0 --set zones.global=false
+  bench_run "torso_ball_r$r" demos/ball_on_torso.toml
+  bench_run "arm_muscles_r$r" demos/arm_muscles.toml --set frames.duration=1.0
 done
 /usr/bin/python3 - "$rounds" <<'PY'
 import sys, h5py, numpy as np

@@ -70,6 +70,26 @@ TEST(Scramble, FlattenPutsEveryNodeInThePlaneInsideTheBoxAndIsSeeded) {
   for (Index i = 2; i < q.size(); i += 3) EXPECT_EQ(q[i], 3.0);
 }
 
+TEST(Scramble, SpreadMixesTheRandomPointWithTheSquashedRestPosition) {
+  // spread = 0: the mesh squashed flat (its rest positions projected into the plane); spread = s:
+  // (1 - s) of the way from the random point of spread = 1 to that projection, per node.
+  const Scene s = scene();
+  const Points& X = s.mesh.rest_positions();
+  const Points& random = s.initial_positions;
+  const Points flat = scene({"initial.spread=0.0"}).initial_positions;
+  const Points mixed = scene({"initial.spread=0.25"}).initial_positions;
+  for (Eigen::Index n = 0; n < X.cols(); ++n) {
+    EXPECT_EQ(flat(2, n), 3.0);
+    EXPECT_EQ(mixed(2, n), 3.0);
+    for (int d = 0; d < 2; ++d) {
+      EXPECT_EQ(flat(d, n), X(d, n));
+      EXPECT_NEAR(mixed(d, n), 0.25 * random(d, n) + 0.75 * X(d, n), 1e-14);
+    }
+  }
+  EXPECT_THROW(scene({"initial.spread=1.5"}), Error);
+  EXPECT_THROW(scene({"initial.spread=-0.1"}), Error);
+}
+
 TEST(Scramble, RestoreTimeRampsTheZoneTargetFromTheStartToTheRestVolume) {
   // A start with half the rest volume (the box squashed to half its height), restored over 0.4 s.
   Scene s = scene({"initial.flatten=none", "zones.restore_time=0.4"});

@@ -23,6 +23,12 @@ def write_whole(path, write, mode="w"):
         sys.exit(f"{path}: cannot be written ({e.strerror or e})")
 
 
+def write_png(path, fig, dpi=110):
+    """Saves a matplotlib figure as PNG through write_whole, and says so."""
+    write_whole(path, lambda f: fig.savefig(f, dpi=dpi, format="png"), "wb")
+    print(f"wrote {path}")
+
+
 def open_run(path, tool=""):
     """The run at `path`; one line naming the file and exit 1 when it is missing or not a run."""
     if not os.path.exists(path):
@@ -31,3 +37,14 @@ def open_run(path, tool=""):
         return Run(path)
     except Error as e:
         sys.exit(f"{tool + ': ' if tool else ''}{e}")
+
+
+def labelled_runs(args, tool):
+    """(label, path) for each LABEL=RUN.h5 argument; one line and exit 1 for one without a label."""
+    runs = []
+    for r in args:
+        label, eq, path = r.rpartition("=")  # a label may hold "=", a path seldom does
+        if not eq or not label or not path:
+            sys.exit(f"{tool}: {r}: expected LABEL=RUN.h5")
+        runs.append((label, path))
+    return runs

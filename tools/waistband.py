@@ -2,21 +2,23 @@
 """Measure waistband runs (demos/waistband.toml) and draw them side by side (the CNH paper's Figure 1).
 
     /usr/bin/python3 tools/waistband.py LABEL=RUN.h5 [LABEL=RUN.h5 ...] [--out docs/images/waistband.png]
-        [--markdown FILE.md] [--band-z 0.40] [--band-height 0.05]
+        [--markdown FILE.md] [--band-z 0.40] [--band-height 0.05] [--garment Z0,Z1]
 
 For each run, at its last frame against its first: the total and per-zone volume change (every
 zone in /frames/volume, constrained or only measured), the waist circumference in the planes
 just above the band, at its middle and just below it (the length of the surface's cross-section),
 and the bulge: the largest outward radial displacement of a surface node above and below the band
 (within 10 cm of it). The picture shows each body's cross-section in the plane y = 0 (front view:
-rest dashed, last frame solid), the band at its last radius, and a zoom on the waist.
+rest dashed, last frame solid), the band at its last radius, and a zoom on the waist. A run with
+no band (demos/waistband_tight.toml: a garment's pressure) is measured at --band-z alike, and
+--garment Z0,Z1 marks the garment's span in the picture instead of the band.
 """
 import argparse
 import sys
 
 import numpy as np
 
-from run_file import open_run
+from run_file import labelled_runs, open_run
 
 
 def slice_segments(x, tris, axis, level):
@@ -77,12 +79,13 @@ def main():
     ap.add_argument("--markdown", default="")
     ap.add_argument("--band-z", type=float, default=0.40)
     ap.add_argument("--band-height", type=float, default=0.05)
+    ap.add_argument("--garment", default="", help="Z0,Z1: the garment's span (m), drawn instead of a band")
     a = ap.parse_args()
+    garment = [float(v) for v in a.garment.split(",")] if a.garment else None
+    if garment is not None and len(garment) != 2:
+        sys.exit(f"waistband.py: --garment {a.garment}: expected Z0,Z1")
     runs = []
-    for r in a.runs:
-        if "=" not in r:
-            sys.exit(f"{r}: expected LABEL=RUN.h5")
-        label, path = r.rsplit("=", 1)
+    for label, path in labelled_runs(a.runs, "waistband.py"):
         m, f = measure(path, a.band_z, a.band_height)
         runs.append((label, path, m, f))
     zones = [c for c in runs[0][2]["volume"]]
@@ -110,15 +113,19 @@ def main():
         axes = np.array(axes).reshape(2, len(runs))
         for j, (label, path, m, f) in enumerate(runs):
             X, x, S = f.frame_positions(0), f.frame_positions(-1), f.surface
-            R, L, wall, c = band_radius(f)
+            c = np.array([0.0, 0.0, a.band_z])
             for row in range(2):
                 ax = axes[row, j]
                 for pos, style in ((X, dict(color="0.6", ls="--", lw=0.8)), (x, dict(color="tab:blue", lw=1.4))):
                     for s in slice_segments(pos, S, 1, 0.0):
                         ax.plot(s[:, 0], s[:, 2], **style)
-                for sign in (-1, 1):
-                    x0 = sign * R if sign > 0 else -R - wall
-                    ax.add_patch(Rectangle((x0, c[2] - L / 2), wall, L, color="tab:red", alpha=0.6))
+                if garment is not None:
+                    ax.axhspan(garment[0], garment[1], color="tab:red", alpha=0.08, lw=0)
+                else:
+                    R, L, wall, c = band_radius(f)
+                    for sign in (-1, 1):
+                        x0 = sign * R if sign > 0 else -R - wall
+                        ax.add_patch(Rectangle((x0, c[2] - L / 2), wall, L, color="tab:red", alpha=0.6))
                 ax.set_aspect("equal")
                 if row == 0:
                     ax.set_title(f"{label}\nvolume {100 * m['volume']['total']:+.2g}%", fontsize=10)
@@ -129,7 +136,9 @@ def main():
                     ax.set_title(f"waist: bulge {1000 * m['bulge_above']:.1f} / {1000 * m['bulge_below']:.1f} mm", fontsize=9)
                     ax.set_xlabel("x (m)")
                 ax.set_ylabel("z (m)")
-        fig.suptitle("A band tightening by 10% around the waist: cross-sections at y = 0 (rest dashed, last frame solid)", fontsize=11)
+        what = ("A garment's pressure (shaded span)" if garment is not None
+                else "A band tightening by 10% around the waist")
+        fig.suptitle(f"{what}: cross-sections at y = 0 (rest dashed, last frame solid)", fontsize=11)
         fig.tight_layout()
         fig.savefig(a.out, dpi=110)
         print(f"wrote {a.out}")

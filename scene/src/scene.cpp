@@ -229,11 +229,15 @@ Driver parse_boundary(const Section& b, const Mesh& mesh) {
 
 // initial.flatten: the XPBD paper's scrambled start. Every node is moved into the plane through the
 // mesh's centre normal to the axis, at a uniformly random point of the mesh's bounding box in the
-// other two axes (std::mt19937_64 seeded by initial.seed: the same start on every run).
+// other two axes (std::mt19937_64 seeded by initial.seed: the same start on every run). With
+// initial.spread = s < 1, a node goes to (1 - s) of the way from that random point to its rest
+// position projected into the plane (s = 0: the body squashed flat; the random points drawn are
+// the same for every s).
 void parse_flatten(const Section& in, Scene& sc) {
   const std::string axis = in.string("flatten", "none", {"none", "x", "y", "z"});
   const auto seed = in.integer("seed", 1, 0, 2147483647L);
-  if (axis == "none") return;  // a seed is kept for a --set initial.flatten variant
+  const double spread = in.number("spread", 1.0, Range::closed(0.0, 1.0));
+  if (axis == "none") return;  // a seed and spread are kept for a --set initial.flatten variant
   const int a = axis[0] - 'x';
   const Points& X = sc.mesh.rest_positions();
   const Eigen::Vector3d lo = X.rowwise().minCoeff(), hi = X.rowwise().maxCoeff();
@@ -243,7 +247,8 @@ void parse_flatten(const Section& in, Scene& sc) {
   for (Eigen::Index n = 0; n < X.cols(); ++n)
     for (int d = 0; d < 3; ++d) {
       const double u = d == a ? 0.5 : unit(rng);
-      sc.initial_positions(d, n) = lo[d] + u * (hi[d] - lo[d]);
+      const double random = lo[d] + u * (hi[d] - lo[d]);
+      sc.initial_positions(d, n) = d == a ? random : spread * random + (1 - spread) * X(d, n);
     }
 }
 
