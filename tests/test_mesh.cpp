@@ -173,6 +173,10 @@ TEST(Mesh, RestShapeErrorIsZeroForARigidMotionAndMeasuresTheRest) {
   // Scaled by 1.1 about the centroid: the farthest node (a corner, half a diagonal out) is 0.05 diag away.
   const Points scaled = 1.1 * X;
   EXPECT_NEAR(rest_shape_error(X, scaled), 0.05, 1e-12);
+  // Its rms: 0.1 times the nodes' rms distance from the centroid (X's centroid is 0), over diag.
+  const double rms = std::sqrt(X.colwise().squaredNorm().mean());
+  EXPECT_NEAR(rest_shape_distance(X, scaled).rms, 0.1 * rms / diag, 1e-12);
+  EXPECT_EQ(rest_shape_distance(X, scaled).largest, rest_shape_error(X, scaled));
   // A mirror image is not a rigid motion.
   Points mirrored = X;
   mirrored.row(0) *= -1;

@@ -172,6 +172,11 @@ TEST(Progress, TheEstimateFollowsTheRecentRate) {
   std::deque<std::pair<double, double>> steady{{0.0, 0.0}, {30.0, 0.3}, {60.0, 0.6}};
   EXPECT_NEAR(remaining_seconds(steady, 1.0), 40.0, 1e-9);
   EXPECT_LT(remaining_seconds({{0.0, 0.0}}, 1.0), 0.0);  // no rate yet
+  // Steps that have all but stopped (2 us of 2 s in 4 min): a bound, not an int's overflow.
+  EXPECT_EQ(duration_text(remaining_seconds({{0.0, 0.0}, {240.0, 2e-6}}, 2.0)), "over 1000h");
+  EXPECT_EQ(duration_text(12.34), "12.3s");
+  EXPECT_EQ(duration_text(245.0), "4m05s");
+  EXPECT_EQ(duration_text(3.6e6 - 60), "999h59m");
 }
 
 // Between frames, a log gets a line at least every 30 s with the time the steps have reached.

@@ -76,6 +76,42 @@ TEST(Scene, LameFromYoungMatchesTheDefinitions) {
   EXPECT_NEAR(lambda, 2 * 16000.0 * 0.45 / 0.1, 1e-7);
 }
 
+TEST(Scene, AnotherMethodsOptionsAreRefusedUnlessTheKindIsSwitchedOnTheCommandLine) {
+  const std::string text = R"(
+[mesh]
+shape = "box"
+size = [0.1, 0.1, 0.1]
+cells = 1
+[material]
+mu = 1000.0
+lambda = 1000.0
+[integrator]
+kind = "backward_euler"
+hessian = "hybrid"
+substeps_on_failure = 4
+)";
+  auto scene = [&](const std::string& body, std::vector<std::string> set) {
+    return parse_scene(SceneFile::parse(body, "s.toml", std::move(set)));
+  };
+  EXPECT_TRUE(scene(text, {}).integrator.backward_euler.exact_near_solution);
+  // A variant of the scene on IDA or XPBD leaves backward Euler's options unused ...
+  EXPECT_EQ(scene(text, {"integrator.kind=ida"}).integrator.kind, IntegratorKind::ida);
+  EXPECT_EQ(scene(text, {"integrator.kind=xpbd"}).integrator.kind, IntegratorKind::xpbd);
+  // ... but an option given with the kind on the command line, or beside it in the file, is refused.
+  EXPECT_THROW(scene(text, {"integrator.kind=ida", "integrator.line_search=false"}), Error);
+  std::string ida = text;
+  ida.replace(ida.find("\"backward_euler\""), 16, "\"ida\"");
+  try {
+    scene(ida, {});
+    ADD_FAILURE() << "expected integrator.hessian refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("s.toml:11: integrator.hessian: is an option of"), std::string::npos)
+        << e.what();
+  }
+  // semi-implicit takes one update per step: a hybrid Hessian has nothing to switch within.
+  EXPECT_THROW(scene(text, {"integrator.kind=semi_implicit"}), Error);
+}
+
 TEST(Scene, ZonesFromSelectionsAndFrames) {
   fs::path d = test::temp_dir();
   std::string p = test::write_file(d / "z.toml", R"(

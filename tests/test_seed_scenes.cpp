@@ -58,6 +58,51 @@ TEST(SeedScenes, TheArmadillosZonesHoldWhileTheCylindersCloseIn) {
 
 TEST(SeedScenesLong, TheArmadillosZonesHoldThroughTheWholeSqueeze) { squeeze_armadillo(1.5, 0.08); }
 
+// The surface nodes' columns of x.
+Points surface_of(const Mesh& mesh, const Points& x) {
+  Points s(3, static_cast<Eigen::Index>(mesh.surface_nodes().size()));
+  for (std::size_t i = 0; i < mesh.surface_nodes().size(); ++i)
+    s.col(static_cast<Eigen::Index>(i)) = x.col(mesh.surface_nodes()[i]);
+  return s;
+}
+
+int inverted_tets(const Mesh& mesh, const Points& x) {
+  int n = 0;
+  for (const Tet& t : mesh.tets()) n += tet_signed_volume(x.col(t[0]), x.col(t[1]), x.col(t[2]), x.col(t[3])) <= 0;
+  return n;
+}
+
+// demos/dragon_unfold.toml (CNH, backward Euler) to time t on `mesh`: the dragon flattened into a
+// plane (every tet flat) comes back. At the end the surface is within the tolerance of
+// its rest shape after the best rigid fit (root mean square over the surface nodes, 1% of the
+// diagonal: tools/recovery.py's measure), no tet is inverted, and once its target has reached
+// the rest volume (zones.restore_time = 0.2 s) the zone holds it to 1e-8.
+void unfold_dragon(const std::string& mesh, double t) {
+  const auto dir = test::temp_dir();
+  Scene sc = load_scene(demo("dragon_unfold.toml"), {"mesh.file=" + mesh, "frames.duration=" + std::to_string(t)});
+  const Points& X = sc.mesh.rest_positions();
+  EXPECT_EQ(inverted_tets(sc.mesh, sc.initial_positions), sc.mesh.num_tets());  // flat: no tet has volume
+  RunFile f(run_scene(sc, (dir / "dragon.h5").string(), false).output);
+  ASSERT_EQ(f.times().back(), t);
+  const Points end = f.positions(f.num_frames() - 1);
+  EXPECT_GT(rest_shape_distance(surface_of(sc.mesh, X), surface_of(sc.mesh, f.positions(0))).rms, 0.1);
+  EXPECT_LE(rest_shape_distance(surface_of(sc.mesh, X), surface_of(sc.mesh, end)).rms, 0.01);
+  EXPECT_EQ(inverted_tets(sc.mesh, end), 0);
+  const auto v = f.volumes();
+  const auto times = f.times();
+  const double rest = tets_volume(X, sc.mesh.tets());
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    if (times[k] < 0.2) continue;  // the target still ramps from the flat start's volume
+    EXPECT_NEAR(v[k][1] / rest, 1.0, 1e-8) << "t = " << times[k];
+  }
+}
+
+TEST(SeedScenes, TheCoarseDragonUnfoldsToItsRestShape) {
+  unfold_dragon("meshes/dragon_coarse.obj", 1.0);  // 2.3K tets; within 1% from 0.7 s
+}
+
+TEST(SeedScenesLong, TheDragonUnfoldsToItsRestShape) { unfold_dragon("meshes/dragon.obj", 3.0); }
+
 // The length of the plane z = level's cut through the surface.
 double circumference(const Mesh& mesh, const Points& x, double level) {
   double length = 0;

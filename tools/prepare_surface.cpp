@@ -129,8 +129,8 @@ int main(int argc, char** argv) {
     fail(o.out + ": the result intersects itself (wrap it with --wrap, or keep more faces)");
   if (!CGAL::IO::write_polygon_mesh(o.out, s, CGAL::parameters::stream_precision(9)))
     fail(o.out + ": cannot be written");
-  std::printf("%s: %zu faces%s -> %s: %zu faces, %zu vertices, closed, no self-intersection\n", o.in.c_str(),
-              faces_in, crossed ? " (intersecting itself)" : "", o.out.c_str(), s.number_of_faces(),
-              s.number_of_vertices());
+  std::printf("%s: %zu faces%s -> %s: %zu faces, %zu vertices, closed, no self-intersection\n", o.in.c_str(), faces_in,
+              crossed ? " (intersecting itself)" : "", o.out.c_str(), static_cast<std::size_t>(s.number_of_faces()),
+              static_cast<std::size_t>(s.number_of_vertices()));
   return 0;
 }

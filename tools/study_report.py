@@ -201,7 +201,7 @@ def stability(rows, d):
         return None
     cols = min(3, len(methods))
     nrows = (len(methods) + cols - 1) // cols
-    shape_study = any(r["method"].startswith("scramble") for r in rows)
+    shape_study = any(r["method"].startswith(("scramble", "unfold")) for r in rows)  # scrambled starts
     fig, axes = plt.subplots(nrows, cols, figsize=(4.6 * cols, 3.6 * nrows), squeeze=False)
     for ax in axes.flat[len(methods):]:
         ax.set_axis_off()

@@ -133,7 +133,9 @@ def main():
                 else:
                     ax.set_xlim(0.06, 0.17)
                     ax.set_ylim(c[2] - 0.12, c[2] + 0.12)
-                    ax.set_title(f"waist: bulge {1000 * m['bulge_above']:.1f} / {1000 * m['bulge_below']:.1f} mm", fontsize=9)
+                    ax.set_title(f"waist: circumference {100 * m['circ_at'][1]:.1f} cm (rest {100 * m['circ_at'][0]:.1f})"
+                                 if garment is not None else
+                                 f"waist: bulge {1000 * m['bulge_above']:.1f} / {1000 * m['bulge_below']:.1f} mm", fontsize=9)
                     ax.set_xlabel("x (m)")
                 ax.set_ylabel("z (m)")
         what = ("A garment's pressure (shaded span)" if garment is not None

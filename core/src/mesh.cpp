@@ -231,7 +231,7 @@ std::vector<Tri> boundary_faces(const std::vector<Tet>& tets, const std::vector<
   return out;
 }
 
-double rest_shape_error(const Points& X, const Points& x) {
+ShapeDistance rest_shape_distance(const Points& X, const Points& x) {
   if (X.cols() != x.cols() || X.cols() == 0) throw Error("rest_shape_error: expected two point sets of one size");
   const Eigen::Vector3d cX = X.rowwise().mean(), cx = x.rowwise().mean();
   const Eigen::Matrix3d H = (x.colwise() - cx) * (X.colwise() - cX).transpose();
@@ -239,8 +239,11 @@ double rest_shape_error(const Points& X, const Points& x) {
   Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
   D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
   const Eigen::Matrix3d R = svd.matrixV() * D * svd.matrixU().transpose();  // R (x - cx) ~ X - cX
-  const double worst = ((R * (x.colwise() - cx)).colwise() + cX - X).colwise().norm().maxCoeff();
-  return worst / (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
+  const Eigen::VectorXd d = ((R * (x.colwise() - cx)).colwise() + cX - X).colwise().norm();
+  const double diag = (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
+  return {std::sqrt(d.squaredNorm() / static_cast<double>(d.size())) / diag, d.maxCoeff() / diag};
 }
+
+double rest_shape_error(const Points& X, const Points& x) { return rest_shape_distance(X, x).largest; }
 
 }  // namespace isochor

@@ -6,9 +6,9 @@
 
 namespace isochor {
 
-namespace {
-std::string seconds(double s) {
+std::string duration_text(double s) {
   char buf[32];
+  if (!(s < 3.6e6)) return "over 1000h";
   if (s < 120)
     std::snprintf(buf, sizeof buf, "%.1fs", s);
   else if (s < 7200)
@@ -17,7 +17,6 @@ std::string seconds(double s) {
     std::snprintf(buf, sizeof buf, "%dh%02dm", static_cast<int>(s) / 3600, static_cast<int>(s) / 60 % 60);
   return buf;
 }
-}  // namespace
 
 double remaining_seconds(const std::deque<std::pair<double, double>>& samples, double t_end) {
   if (samples.size() < 2) return -1;
@@ -49,8 +48,8 @@ void Progress::print(double wall, const char* what, double sim_time) {
   last_ = std::chrono::steady_clock::now();
   const double rest = remaining_seconds(samples_, t_end_);
   std::fprintf(out_, "%s%s: %s%d of %d, t = %.6g s, wall %s, %s%s", tty_ ? "\r" : "", label_.c_str(), what, done_,
-               total_, sim_time, seconds(wall).c_str(),
-               rest < 0 ? "estimating" : ("about " + seconds(rest) + " left").c_str(), tty_ ? "\033[K" : "\n");
+               total_, sim_time, duration_text(wall).c_str(),
+               rest < 0 ? "estimating" : ("about " + duration_text(rest) + " left").c_str(), tty_ ? "\033[K" : "\n");
   std::fflush(out_);
   shown_ = true;
 }

@@ -98,6 +98,11 @@ bool Section::has(std::string_view key) const {
   return table_ && table_->contains(key);
 }
 
+bool Section::overridden(std::string_view key) const {
+  const toml::node* n = table_ ? table_->get(key) : nullptr;
+  return n && n->source().path && *n->source().path == kOverride;
+}
+
 std::string Section::where(std::string_view key) const {
   const toml::node* n = table_ ? table_->get(key) : nullptr;
   if (!n) n = table_;

@@ -14,28 +14,28 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
   o.max_steps = parse_max_steps(in);
   o.rescale_volume = in.boolean("rescale_volume", false);
   if (o.rescale_volume && kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
-    in.fail("rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
+    refuse_option(in, "rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
   o.linear_solver = parse_linear_solver(in, LinearSolverKind::reduced);
   o.automatic_linear_solver = kind == IntegratorKind::backward_euler && linear_solver_is_auto(in);
   o.linear_tol = in.number("linear_tol", 0.0, {0.0, 1e-2, false, true});
   const std::string hessian = in.string("hessian", "exact", {"exact", "projected", "hybrid"});
   o.project_hessian = hessian != "exact";
   o.exact_near_solution = hessian == "hybrid";
-  if (o.exact_near_solution && kind != IntegratorKind::backward_euler)
+  if (o.exact_near_solution && kind == IntegratorKind::semi_implicit)
     in.fail("hessian",
             "\"hybrid\" switches within backward Euler's Newton iteration (the semi-implicit step takes one update)");
-  if (in.has("hessian") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
-    in.fail("hessian", "is an option of the backward_euler and semi_implicit integrators");
+  if (kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
+    refuse_option(in, "hessian", "is an option of the backward_euler and semi_implicit integrators");
   // Options of backward Euler's Newton iteration alone (semi-implicit takes one update).
   o.max_newton = static_cast<int>(in.integer("max_newton", 30, 1, 100000));
   o.line_search = in.boolean("line_search", true);
   o.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 0, 0, 30));
-  if (in.has("line_search") && kind != IntegratorKind::backward_euler)
-    in.fail("line_search", "is an option of the backward_euler integrator");
-  if (in.has("substeps_on_failure") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::statics)
-    in.fail("substeps_on_failure", "is an option of the backward_euler and static integrators");
-  if (in.has("max_newton") && kind != IntegratorKind::backward_euler && kind != IntegratorKind::ida)
-    in.fail("max_newton", "is an option of the backward_euler and ida integrators");
+  if (kind != IntegratorKind::backward_euler)
+    refuse_option(in, "line_search", "is an option of the backward_euler integrator");
+  if (kind != IntegratorKind::backward_euler && kind != IntegratorKind::statics)
+    refuse_option(in, "substeps_on_failure", "is an option of the backward_euler and static integrators");
+  if (kind != IntegratorKind::backward_euler && kind != IntegratorKind::ida)
+    refuse_option(in, "max_newton", "is an option of the backward_euler and ida integrators");
 }
 
 std::unique_ptr<Integrator> make_backward_euler(const Scene& scene, SceneSystem& system) {

@@ -22,5 +22,9 @@ double parse_dt(const Section& in);
 LinearSolverKind parse_linear_solver(const Section& in, LinearSolverKind automatic);
 // Whether integrator.linear_solver is "auto" (or unset).
 bool linear_solver_is_auto(const Section& in);
+// An option that the integrator of this kind does not take: set, it stops the scene with
+// `message`, unless integrator.kind came from --set and the option from the file (a scene written
+// for one method, run as a variant of another, leaves its own method's options unused).
+void refuse_option(const Section& in, std::string_view key, const std::string& message);
 
 }  // namespace isochor

@@ -43,6 +43,10 @@ static std::string linear_solver_name(const Section& in) {
 
 bool linear_solver_is_auto(const Section& in) { return linear_solver_name(in) == "auto"; }
 
+void refuse_option(const Section& in, std::string_view key, const std::string& message) {
+  if (in.has(key) && !(in.overridden("kind") && !in.overridden(key))) in.fail(key, message);
+}
+
 LinearSolverKind parse_linear_solver(const Section& in, LinearSolverKind automatic) {
   const std::string s = linear_solver_name(in);
   if (s == "amg" && !amg_available())

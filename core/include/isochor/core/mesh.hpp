@@ -84,6 +84,12 @@ double tets_volume(const Points& x, const std::vector<Tet>& tets);
 // Kabsch; a reflection is not a rigid motion), to its rest position, over the diagonal of X's
 // bounding box. 0 for a rigidly moved copy; the scrambled starts (initial.flatten) measure recovery.
 double rest_shape_error(const Points& X, const Points& x);
+// The same fit's root-mean-square and largest node distance, both over X's diagonal (the
+// scrambled starts' recovery: tools/recovery.py measures the surface nodes so).
+struct ShapeDistance {
+  double rms = 0, largest = 0;
+};
+ShapeDistance rest_shape_distance(const Points& X, const Points& x);
 
 struct SurfaceCheck {
   bool closed = false;           // every edge in exactly two triangles

@@ -23,6 +23,10 @@ namespace isochor {
 // Negative when there is no rate yet.
 double remaining_seconds(const std::deque<std::pair<double, double>>& samples, double t_end);
 
+// A duration as the progress line writes it: 12.3s, 4m05s, 3h07m; over 1000 hours (a run whose
+// steps have all but stopped), "over 1000h" rather than a number that overflows.
+std::string duration_text(double seconds);
+
 class Progress {
  public:
   Progress(std::string label, int total_frames, double t0, double t_end, std::FILE* out = stderr,

@@ -46,6 +46,8 @@ class Section {
   // The dotted path of this table ("" for the root, "mesh", "zones.zone[2]").
   const std::string& path() const { return path_; }
   bool has(std::string_view key) const;
+  // Whether the key's value came from a --set override rather than the file.
+  bool overridden(std::string_view key) const;
   bool exists() const { return table_ != nullptr; }
 
   double number(std::string_view key, double fallback, Range range = {}) const;
