@@ -239,8 +239,11 @@ bool try_lock(int fd) {
 // Bytes free on the file system of `path`'s nearest existing directory, and the file size
 // limit (ulimit -f); infinity where unknown or unlimited.
 double free_bytes(const std::string& path) {
-  std::filesystem::path dir = std::filesystem::absolute(path).parent_path();
   std::error_code ec;
+  std::filesystem::path dir = std::filesystem::absolute(path, ec).parent_path();
+  if (ec)  // a relative path, and the working directory was deleted under the program
+    throw Error(path + ": cannot be placed (" + ec.message() +
+                "; a relative path needs the working directory, which no longer exists: give an absolute path)");
   while (!dir.empty() && !std::filesystem::exists(dir, ec) && dir != dir.parent_path()) dir = dir.parent_path();
   struct statvfs fs {};
   if (::statvfs(dir.c_str(), &fs) != 0) return std::numeric_limits<double>::infinity();
