@@ -199,18 +199,22 @@ TEST(Statics, GravityRampAppliesTheLoadInIncrements) {
   EXPECT_GT(tip[4], 1e-5);
 }
 
+// A 0.2 x 0.2 x 1 m column of 2 x 2 x 8 cells standing on z = 0; its bottom is the node set zmin.
+const char* const kColumn = R"(
+[mesh]
+shape = "box"
+size = [0.2, 0.2, 1.0]
+cells = [2, 2, 8]
+center = [0.0, 0.0, 0.5]
+)";
+
 // A load increment that KINSOL cannot solve in one piece (a bar stretched to 3 times its length
 // in one frame) is solved by halving it (integrator.substeps_on_failure, 5 levels by default for
 // statics); an equilibrium of a stable stretch is unique, so the result is the one reached in
 // 20 increments, to the solver's tolerance.
 TEST(Statics, AFailedLoadIncrementIsHalvedToTheSameEquilibrium) {
   const auto dir = test::temp_dir();
-  const std::string text = R"(
-[mesh]
-shape = "box"
-size = [0.2, 0.2, 1.0]
-cells = [2, 2, 8]
-center = [0.0, 0.0, 0.5]
+  const std::string text = std::string(kColumn) + R"(
 [material]
 model = "snh"
 E = 1.0e5
@@ -269,4 +273,57 @@ TEST(Statics, CookMembraneFromAGeoScriptApproachesTheReference) {
     previous = err;
   }
   EXPECT_LT(previous, 0.015);
+}
+
+// initial.from: a dynamic run that starts from a static equilibrium stays there (an equilibrium
+// is a fixed point of the dynamics), where the same run from the rest state falls, about g t^2 / 2
+// at the tip; a run of another mesh and a frame that is not there are refused, naming the key.
+TEST(Statics, ADynamicRunFromAStaticEquilibriumStaysThere) {
+  const auto dir = test::temp_dir();
+  const std::string text = std::string(kColumn) + R"(
+[material]
+model = "cnh"
+E = 1.0e7
+nu = 0.45
+[forces]
+gravity = [-9.81, 0.0, 0.0]
+[[boundary]]
+select = { kind = "set", name = "zmin" }
+[integrator]
+rtol = 1e-7
+atol = 1e-10
+)";
+  auto scene = [&](const std::string& extra, std::vector<std::string> set = {}) {
+    return parse_scene(SceneFile::parse(text + extra, "column.toml", std::move(set), dir.string()));
+  };
+  const std::string stat = (dir / "static.h5").string();
+  run_scene(scene("[frames]\ncount = 2\n", {"integrator.kind=static"}), stat, false);
+  const RunFile s(stat);
+  const Points X = s.rest_positions(), sag = s.positions(s.num_frames() - 1);
+  const double tip = (sag - X).row(0).cwiseAbs().maxCoeff();
+  EXPECT_GT(tip, 0.01);  // the column bends under its weight
+  const std::string dynamics = "[frames]\nrate = 100.0\nduration = 0.05\n";
+  auto moved = [&](const Scene& sc, const std::string& name) {
+    const RunFile f(run_scene(sc, (dir / name).string(), false).output);
+    return (f.positions(f.num_frames() - 1) - f.positions(0)).cwiseAbs().maxCoeff();
+  };
+  const Scene from = scene(dynamics, {"initial.from=\"static.h5\""});
+  EXPECT_LT((from.initial_positions - sag).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LT(moved(from, "from_static.h5"), 1e-3 * tip);
+  EXPECT_GT(moved(scene(dynamics), "from_rest.h5"), 0.5 * 9.81 * 0.05 * 0.05 * 0.5);  // falls from rest
+  const std::string frame = test::error_of([&] { scene(dynamics, {"initial.from=\"static.h5\"", "initial.frame=5"}); });
+  EXPECT_NE(frame.find("initial.frame: 5 is not a frame of static.h5 (expected -2 .. 1)"), std::string::npos) << frame;
+  const std::string other = test::error_of([&] {
+    scene(dynamics + "", {"initial.from=\"static.h5\"", "mesh.cells=[2, 2, 4]"});
+  });
+  EXPECT_NE(other.find("initial.from: static.h5 is a run of another mesh"), std::string::npos) << other;
+  const std::string missing = test::error_of([&] { scene(dynamics, {"initial.from=\"nope.h5\""}); });
+  EXPECT_NE(missing.find("initial.from: "), std::string::npos) << missing;
+  // A compressible model's equilibrium has lost some volume: IDA cannot start CNH's zones there.
+  run_scene(scene("[frames]\ncount = 2\n", {"integrator.kind=static", "material.model=unh", "zones.keep=false"}),
+            (dir / "unh.h5").string(), false);
+  const std::string zones = test::error_of([&] { scene(dynamics, {"initial.from=\"unh.h5\""}); });
+  EXPECT_NE(zones.find("initial.from: the zone global starts"), std::string::npos) << zones;
+  EXPECT_NE(zones.find("expected zones.restore_time > 0"), std::string::npos) << zones;
+  EXPECT_NO_THROW(scene(dynamics, {"initial.from=\"unh.h5\"", "zones.restore_time=0.01"}));
 }

@@ -12,12 +12,14 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <memory>
 #include <random>
 #include <set>
 
 #include "isochor/models/constraints.hpp"
 #include "isochor/base/error.hpp"
 #include "isochor/core/meshing.hpp"
+#include "isochor/core/output_reader.hpp"
 #include "isochor/core/selection.hpp"
 
 namespace isochor {
@@ -250,6 +252,68 @@ void parse_flatten(const Section& in, Scene& sc) {
       const double random = lo[d] + u * (hi[d] - lo[d]);
       sc.initial_positions(d, n) = d == a ? random : spread * random + (1 - spread) * X(d, n);
     }
+}
+
+// initial.from = "RUN.h5": every node's position and velocity at frame initial.frame (from the
+// end when negative; -1, the last, by default) of another run of the same mesh (its node count and
+// rest positions): a dynamic run from a static equilibrium, or on from another run's state with
+// another method or scene. Driven nodes follow their drivers from t = 0 as always.
+void parse_start_from(const Section& in, Scene& sc) {
+  const std::string from = in.string("from", "");
+  const long frame = in.integer("frame", -1, -1000000000L, 1000000000L);
+  if (from.empty()) {
+    if (in.has("frame")) in.fail("frame", "picks a frame of initial.from (expected initial.from = \"RUN.h5\")");
+    return;
+  }
+  if (sc.initial_positions.cols())
+    in.fail("from", "a run's state and initial.flatten both set the start (expected one)");
+  if (in.has("velocity"))
+    in.fail("velocity", "the run's velocities start the nodes (expected initial.from or initial.velocity)");
+  const std::string path = sc.file.resolve_path(from);
+  // The run file's own errors (missing, not a run, no velocities) named with the key.
+  auto read = [&](auto what) {
+    try {
+      return what();
+    } catch (const Error& e) {
+      in.fail("from", e.what());
+    }
+  };
+  const auto run = read([&] { return std::make_unique<RunFile>(path); });
+  const int frames = read([&] { return run->num_frames(); });
+  const long k = frame < 0 ? frames + frame : frame;
+  if (k < 0 || k >= frames)
+    in.fail("frame", std::to_string(frame) + " is not a frame of " + from + " (expected -" + std::to_string(frames) +
+                         " .. " + std::to_string(frames - 1) + ")");
+  const Points& X = sc.mesh.rest_positions();
+  const Points R = read([&] { return run->rest_positions(); });
+  const double size = (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
+  if (R.cols() != X.cols() || (R - X).cwiseAbs().maxCoeff() > 1e-9 * size)
+    in.fail("from", from + " is a run of another mesh (" + std::to_string(R.cols()) + " nodes against the scene's " +
+                        std::to_string(X.cols()) + ", or other rest positions; expected a run of this scene's mesh)");
+  sc.initial_positions = read([&] { return run->positions(static_cast<int>(k)); });
+  sc.initial_velocities = read([&] { return run->velocities(static_cast<int>(k)); });
+}
+
+// IDA starts from a consistent state: a start whose zones are not at their rest volumes (every
+// zone flat after initial.flatten; a run of another model after initial.from) cannot meet them at
+// t = 0 (it would fail there with IDA_CONV_FAIL and no hint) without zones.restore_time.
+void check_start_volumes(const Section& initial, const Scene& sc) {
+  const char* restore = " (expected zones.restore_time > 0: the volumes restored over that time)";
+  if (!initial.has("from"))
+    initial.fail(
+        "flatten",
+        std::string("starts every zone at volume 0, which IDA cannot hold to its rest volume at t = 0") + restore);
+  for (const auto& [name, tets] : sc.zones) {
+    std::vector<Tet> zone;
+    for (int t : tets) zone.push_back(sc.mesh.tets()[static_cast<std::size_t>(t)]);
+    const double rest = tets_volume(sc.mesh.rest_positions(), zone), start = tets_volume(sc.initial_positions, zone);
+    if (std::abs(start / rest - 1) > 1e-8) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "the zone %s starts %.3g%% off its rest volume, which IDA cannot hold at t = 0",
+                    name.c_str(), 100 * (start / rest - 1));
+      initial.fail("from", buf + std::string(restore));
+    }
+  }
 }
 
 // [[load]]: a point load on a node set (the force split among the nodes, or on each), a
@@ -820,6 +884,7 @@ Scene parse_scene(SceneFile file) {
            Eigen::Vector3d::Zero(),
            {},
            {},
+           {},
            0.0,
            true,
            {},
@@ -851,15 +916,14 @@ Scene parse_scene(SceneFile file) {
   const Section initial = root.table("initial");
   sc.initial_velocity = initial.vec3("velocity", Eigen::Vector3d::Zero());
   parse_flatten(initial, sc);
+  parse_start_from(initial, sc);
   parse_integrator(root, sc);
   parse_muscles(root, sc);
   // IDA starts from a consistent state: zones flattened to volume 0 cannot meet their rest
   // volumes at t = 0 (it would fail there with IDA_CONV_FAIL and no hint).
-  if (sc.initial_positions.size() && !sc.zones.empty() && sc.zone_restore_time == 0 &&
+  if (sc.initial_positions.size() && !sc.zones.empty() && sc.keep_zones && sc.zone_restore_time == 0 &&
       sc.integrator.kind == IntegratorKind::ida)
-    root.table("initial").fail("flatten",
-                               "starts every zone at volume 0, which IDA cannot hold to its rest volume at t = 0 "
-                               "(expected zones.restore_time > 0: the volumes restored over that time)");
+    check_start_volumes(root.table("initial"), sc);
   parse_frames(root, sc);
   check_initial_contact(root, sc);
 

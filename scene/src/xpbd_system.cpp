@@ -77,7 +77,9 @@ void XpbdMeshSystem::initial_state(double t0, Eigen::VectorXd& x, Eigen::VectorX
   x = Eigen::Map<const Eigen::VectorXd>(X.data(), X.size());
   v.resize(x.size());
   for (int n = 0; n < scene_.mesh.num_nodes(); ++n)
-    v.segment<3>(3 * n) = start ? Eigen::Vector3d(start->velocities.col(n)) : scene_.initial_velocity;
+    v.segment<3>(3 * n) = start                              ? Eigen::Vector3d(start->velocities.col(n))
+                          : scene_.initial_velocities.cols() ? Eigen::Vector3d(scene_.initial_velocities.col(n))
+                                                             : scene_.initial_velocity;
   prescribe(t0, x, v);
 }
 

@@ -108,7 +108,8 @@ struct Scene {
   std::vector<PressureLoad> pressure_loads;  // [[load]] kind = "pressure" (follower loads)
   RayleighDamping damping;
   Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();
-  Points initial_positions;  // every node's start (initial.flatten); empty: the rest positions
+  Points initial_positions;   // every node's start (initial.flatten, initial.from); empty: the rest positions
+  Points initial_velocities;  // every node's start velocity (initial.from); empty: initial_velocity
   std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tet indices
   double zone_restore_time =
       0.0;                 // zones.restore_time (s): zone targets go from the start's volumes to the rest volumes
