@@ -74,7 +74,7 @@ def table(runs, tol):
     row("volume change at the end", lambda m: f"{100 * m['volume']:+.3g}%")
     row("inverted tets: most in a frame / at the end",
         lambda m: f"{m['inverted'][0]} / {m['inverted'][1]}" if m["inverted"] else "–")
-    row("wall time (s)", lambda m: f"{m['wall']:.1f}")
+    row("wall time (s)", lambda m: f"{m['wall']:.1f}" if np.isfinite(m["wall"]) else "—")
     fails = [(label, m["failure"]) for label, m in runs if m["failure"]]
     text = "\n".join(lines)
     for label, f in fails:
