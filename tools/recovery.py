@@ -39,7 +39,15 @@ def shape_errors(run):
 
 
 def recovery_time(times, err, tol):
-    """The first time from which err stays within tol to the end (None: it does not)."""
+    """The first time from which err stays within tol to the end (None: it does not).
+
+    >>> recovery_time([0.0, 1.0, 2.0, 3.0], np.array([0.5, 0.005, 0.02, 0.001]), 0.01)  # dips, rises, recovers
+    3.0
+    >>> recovery_time([0.0, 1.0], np.array([0.001, 0.002]), 0.01)
+    0.0
+    >>> recovery_time([0.0, 1.0], np.array([0.001, 0.2]), 0.01) is None
+    True
+    """
     above = np.nonzero(err > tol)[0]
     if len(above) == 0:
         return float(times[0])
