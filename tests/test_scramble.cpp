@@ -4,10 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "isochor/base/error.hpp"
 #include "isochor/scene/mesh_system.hpp"
 #include "isochor/scene/scene.hpp"
+#include "test_util.hpp"
 
 using namespace isochor;
 
@@ -127,4 +131,53 @@ TEST(Scramble, RestoreTimeRampsTheZoneTargetFromTheStartToTheRestVolume) {
       EXPECT_GT(std::abs(fd), 0.1 * V0);  // not vacuous inside the ramp
     }
   }
+}
+
+// initial.displacement: each listed node starts displaced from its rest position by its row
+// (CSV node,ux,uy,uz), the others at rest. A rigid translation of a free body is an equilibrium
+// (no strain): the body stays there; a stretch of one node is not: the body moves. Rows that name
+// no node, a node twice or a non-finite displacement are refused with the file and row.
+TEST(Scramble, DisplacementStartsTheListedNodesDisplaced) {
+  const auto dir = test::temp_dir();
+  const auto parse = [&](const std::string& csv, std::vector<std::string> set = {}) {
+    test::write_file(dir / "u.csv", csv);
+    set.insert(set.begin(), {"initial.flatten=none", "initial.displacement=\"u.csv\"", "zones.restore_time=0.0"});
+    return parse_scene(SceneFile::parse(kScene, "start.toml", std::move(set), dir.string()));
+  };
+  const std::vector<std::string> be = {"integrator.kind=backward_euler", "integrator.dt=0.01", "frames.duration=0.2"};
+  const Scene one = parse("node,ux,uy,uz\n3,0.01,-0.02,0.5\n", be);
+  const Points& X = one.mesh.rest_positions();
+  for (Eigen::Index n = 0; n < X.cols(); ++n)
+    EXPECT_EQ((one.initial_positions.col(n) - X.col(n)).norm(),
+              n == 3 ? Eigen::Vector3d(0.01, -0.02, 0.5).norm() : 0.0);
+  std::string all = "node,ux,uy,uz\n";
+  for (Eigen::Index n = 0; n < X.cols(); ++n) all += std::to_string(n) + ",0.1,0.2,-0.3\n";
+  const Scene translated = parse(all, be);  // MeshSystem keeps a reference to its scene
+  MeshSystem moved(translated);
+  VectorXd q, v;
+  moved.initial_state(0.0, q, v);
+  for (Index i = 0; i < q.size(); ++i)
+    EXPECT_NEAR(q[i], X(i % 3, i / 3) + (i % 3 == 0 ? 0.1 : i % 3 == 1 ? 0.2 : -0.3), 1e-15);
+  VectorXd f;
+  moved.force(0.0, q, v, f);
+  EXPECT_LT(f.cwiseAbs().maxCoeff(), 1e-9);  // a rigid translation: no elastic force
+  const Scene pulled = parse("node,ux,uy,uz\n3,0.01,0.0,0.0\n", be);
+  MeshSystem bumped(pulled);
+  bumped.initial_state(0.0, q, v);
+  bumped.force(0.0, q, v, f);
+  EXPECT_GT(f.cwiseAbs().maxCoeff(), 1.0);  // one node pulled out: the mesh pulls it back
+  for (const auto& [csv, what] : std::vector<std::pair<std::string, std::string>>{
+           {"node,ux,uy,uz\n999,0,0,0\n", "u.csv:2: node 999"},
+           {"node,ux,uy,uz\n1,0,0,0\n1,0,0,0\n", "u.csv:3: node 1 is listed twice"},
+           {"node,ux,uy\n1,0,0\n", "expected the columns node, ux, uy, uz"}}) {
+    const std::string e = test::error_of([&] { parse(csv); });
+    EXPECT_NE(e.find("initial.displacement: "), std::string::npos) << e;
+    EXPECT_NE(e.find(what), std::string::npos) << e;
+  }
+  // On IDA the zone must start at its rest volume: one node moved by 0.5 m leaves it far off.
+  const std::string ida = test::error_of([&] { parse("node,ux,uy,uz\n3,0.01,-0.02,0.5\n"); });
+  EXPECT_NE(ida.find("initial.displacement: the zone global starts"), std::string::npos) << ida;
+  const std::string both = test::error_of([&] { parse(all, {"initial.flatten=z"}); });
+  EXPECT_NE(both.find("initial.displacement: initial.flatten or initial.from also sets the start"), std::string::npos)
+      << both;
 }

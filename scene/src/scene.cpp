@@ -18,6 +18,7 @@
 
 #include "isochor/models/constraints.hpp"
 #include "isochor/base/error.hpp"
+#include "isochor/core/csv.hpp"
 #include "isochor/core/meshing.hpp"
 #include "isochor/core/output_reader.hpp"
 #include "isochor/core/selection.hpp"
@@ -294,12 +295,47 @@ void parse_start_from(const Section& in, Scene& sc) {
   sc.initial_velocities = read([&] { return run->velocities(static_cast<int>(k)); });
 }
 
+// initial.displacement = "FILE.csv": columns node, ux, uy, uz; each listed node starts displaced
+// from its rest position by (ux, uy, uz) m, the others at rest (velocities initial.velocity).
+void parse_start_displacement(const Section& in, Scene& sc) {
+  if (!in.has("displacement")) return;
+  if (sc.initial_positions.cols())
+    in.fail("displacement", "initial.flatten or initial.from also sets the start (expected one of the three)");
+  const std::string path = sc.file.resolve_path(in.string("displacement", ""));
+  const int nodes = sc.mesh.num_nodes();
+  Points x = sc.mesh.rest_positions();
+  std::vector<char> seen(static_cast<std::size_t>(nodes), 0);
+  try {
+    const CsvTable t = read_csv_table(path, "a displacement file (CSV: node,ux,uy,uz)");
+    const std::vector<double>*node = t.column("node"), *ux = t.column("ux"), *uy = t.column("uy"), *uz = t.column("uz");
+    if (!node || !ux || !uy || !uz) throw Error(path + ":1: expected the columns node, ux, uy, uz");
+    const double size = (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).norm();
+    for (std::size_t r = 0; r < node->size(); ++r) {
+      const double v = (*node)[r];
+      const Eigen::Vector3d u((*ux)[r], (*uy)[r], (*uz)[r]);
+      const std::string row = path + ":" + std::to_string(r + 2) + ": ";
+      if (v != std::floor(v) || v < 0 || v >= nodes)
+        throw Error(row + "node " + std::to_string(v) + " is not a node of the mesh (expected 0.." +
+                    std::to_string(nodes - 1) + ")");
+      const auto n = static_cast<std::size_t>(v);
+      if (seen[n]) throw Error(row + "node " + std::to_string(n) + " is listed twice");
+      if (!u.allFinite() || u.norm() > 1e3 * size)
+        throw Error(row + "expected a finite displacement within 1000 times the mesh's size");
+      seen[n] = 1;
+      x.col(static_cast<Eigen::Index>(n)) += u;
+    }
+  } catch (const Error& e) {
+    in.fail("displacement", e.what());
+  }
+  sc.initial_positions = x;
+}
+
 // IDA starts from a consistent state: a start whose zones are not at their rest volumes (every
 // zone flat after initial.flatten; a run of another model after initial.from) cannot meet them at
 // t = 0 (it would fail there with IDA_CONV_FAIL and no hint) without zones.restore_time.
 void check_start_volumes(const Section& initial, const Scene& sc) {
   const char* restore = " (expected zones.restore_time > 0: the volumes restored over that time)";
-  if (!initial.has("from"))
+  if (!initial.has("from") && !initial.has("displacement"))
     initial.fail(
         "flatten",
         std::string("starts every zone at volume 0, which IDA cannot hold to its rest volume at t = 0") + restore);
@@ -311,7 +347,7 @@ void check_start_volumes(const Section& initial, const Scene& sc) {
       char buf[160];
       std::snprintf(buf, sizeof buf, "the zone %s starts %.3g%% off its rest volume, which IDA cannot hold at t = 0",
                     name.c_str(), 100 * (start / rest - 1));
-      initial.fail("from", buf + std::string(restore));
+      initial.fail(initial.has("from") ? "from" : "displacement", buf + std::string(restore));
     }
   }
 }
@@ -917,6 +953,7 @@ Scene parse_scene(SceneFile file) {
   sc.initial_velocity = initial.vec3("velocity", Eigen::Vector3d::Zero());
   parse_flatten(initial, sc);
   parse_start_from(initial, sc);
+  parse_start_displacement(initial, sc);
   parse_integrator(root, sc);
   parse_muscles(root, sc);
   // IDA starts from a consistent state: zones flattened to volume 0 cannot meet their rest
