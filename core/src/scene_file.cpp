@@ -23,8 +23,11 @@ std::string fmt(double v) {
   return s.str();
 }
 
+// Whether a value came from a --set override rather than a file.
+bool from_override(const toml::node* n) { return n && n->source().path && *n->source().path == kOverride; }
+
 std::string source_of(const toml::node* n, const std::string& fallback_file) {
-  if (n && n->source().path && *n->source().path == kOverride) return kOverride;
+  if (from_override(n)) return kOverride;
   std::string file = (n && n->source().path) ? *n->source().path : fallback_file;
   long line = n ? static_cast<long>(n->source().begin.line) : 0;
   return file + ":" + std::to_string(line);
@@ -98,15 +101,12 @@ bool Section::has(std::string_view key) const {
   return table_ && table_->contains(key);
 }
 
-bool Section::overridden(std::string_view key) const {
-  const toml::node* n = table_ ? table_->get(key) : nullptr;
-  return n && n->source().path && *n->source().path == kOverride;
-}
+bool Section::overridden(std::string_view key) const { return from_override(table_ ? table_->get(key) : nullptr); }
 
 std::string Section::where(std::string_view key) const {
   const toml::node* n = table_ ? table_->get(key) : nullptr;
   if (!n) n = table_;
-  if (n && n->source().path && *n->source().path == kOverride) return std::string(kOverride) + " " + full(key);
+  if (from_override(n)) return std::string(kOverride) + " " + full(key);
   return source_of(n, file_->name_) + ": " + full(key);
 }
 

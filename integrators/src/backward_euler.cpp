@@ -636,17 +636,6 @@ struct BackwardEuler::Impl {
     return found;
   }
 
-  // Newton's test after a whole update of size `size` in q and `lsize` in the multipliers, `since`
-  // updates after the first on the current matrix. With a rate measured on this matrix within the
-  // step: done when ss |dq| <= tol. A first update has no rate of its own, and one carried from
-  // earlier steps, or from a matrix whose constraint rows have turned since (KLU's KKT matrix
-  // keeps G), says nothing of this one: trusting it left the MEBDFDAE pendulum 0.27 digit less
-  // accurate at h = 1e-4 (docs/results/tolerance.md). So a first update counts only when the
-  // multipliers moved by little too (newton_tol of the larger of their size and the system's
-  // force scale; the residual check is blind to them at small h, h^2 G^T dlambda / M) and it is
-  // tiny against the tolerance, or within it and the step's residual at the new q confirms it
-  // (residual_error, checked at the next iteration's residual, without a solve). Once a rate is
-  // measured, the positions decide: the multipliers' change near rounding has no rate to measure.
   // Whether ss, measured on the current matrix in an earlier step, bounds this step's first
   // update: a rate was measured (ss < 20, reset at each factorisation) and the factor does not
   // hold the constraint rows (KLU's KKT matrix keeps G from its factorisation, and G turns with
@@ -654,6 +643,18 @@ struct BackwardEuler::Impl {
   // digit behind; the Schur complement is formed with the current G).
   bool rate_carries() const { return ss < 20.0 && (!use_kkt || m == 0); }
 
+  // Newton's test after a whole update of size `size` in q and `lsize` in the multipliers, `since`
+  // updates after the first on the current matrix. With a rate measured on this matrix within the
+  // step: done when ss |dq| <= tol. A first update has no rate of its own; one carried from
+  // earlier steps counts only where rate_carries() (trusted on KLU's KKT matrix it left the
+  // MEBDFDAE pendulum 0.27 digit less accurate at h = 1e-4, docs/results/tolerance.md). So a first
+  // update counts only when the multipliers moved by little too (newton_tol of the larger of
+  // their size and the system's force scale; the residual check is blind to them at small h,
+  // h^2 G^T dlambda / M), both scaled by the carried rate where it carries, else as they are,
+  // and then only once the step's residual at the new q confirms it (residual_error, checked at
+  // the next iteration's residual, without a solve), unless the update is tiny against the
+  // tolerance. Once a rate is measured, the positions decide: the multipliers' change near
+  // rounding has no rate to measure.
   NewtonTest newton_test(int since, double size, double tol, double lsize, const VectorXd& lambda) const {
     if (since > 0) return ss * size <= tol ? NewtonTest::done : NewtonTest::go_on;
     const double ltol = m ? opt.newton_tol * std::max(lambda.cwiseAbs().maxCoeff(), sys.force_scale()) : 0.0;

@@ -98,9 +98,7 @@ void scene_initial_state(const Scene& s, const DofMap& dofs, const StartState* s
     const int node = dofs.free_nodes[f];
     const Points& X = s.initial_positions.cols() ? s.initial_positions : s.mesh.rest_positions();
     q.segment<3>(3 * f) = start ? start->positions.col(node) : X.col(node);
-    v.segment<3>(3 * f) = start                         ? Eigen::Vector3d(start->velocities.col(node))
-                          : s.initial_velocities.cols() ? Eigen::Vector3d(s.initial_velocities.col(node))
-                                                        : s.initial_velocity;
+    v.segment<3>(3 * f) = s.start_velocity(start, node);
   }
 }
 

@@ -76,10 +76,7 @@ void XpbdMeshSystem::initial_state(double t0, Eigen::VectorXd& x, Eigen::VectorX
                                                       : scene_.mesh.rest_positions();
   x = Eigen::Map<const Eigen::VectorXd>(X.data(), X.size());
   v.resize(x.size());
-  for (int n = 0; n < scene_.mesh.num_nodes(); ++n)
-    v.segment<3>(3 * n) = start                              ? Eigen::Vector3d(start->velocities.col(n))
-                          : scene_.initial_velocities.cols() ? Eigen::Vector3d(scene_.initial_velocities.col(n))
-                                                             : scene_.initial_velocity;
+  for (int n = 0; n < scene_.mesh.num_nodes(); ++n) v.segment<3>(3 * n) = scene_.start_velocity(start, n);
   prescribe(t0, x, v);
 }
 

@@ -110,6 +110,11 @@ struct Scene {
   Eigen::Vector3d initial_velocity = Eigen::Vector3d::Zero();
   Points initial_positions;   // every node's start (initial.flatten, initial.from); empty: the rest positions
   Points initial_velocities;  // every node's start velocity (initial.from); empty: initial_velocity
+  // Node n's velocity at the start: a resumed run's, else initial.from's, else initial.velocity.
+  Eigen::Vector3d start_velocity(const StartState* start, int n) const {
+    if (start) return start->velocities.col(n);
+    return initial_velocities.cols() ? Eigen::Vector3d(initial_velocities.col(n)) : initial_velocity;
+  }
   std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tet indices
   double zone_restore_time =
       0.0;                 // zones.restore_time (s): zone targets go from the start's volumes to the rest volumes
