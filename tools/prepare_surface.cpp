@@ -9,6 +9,7 @@
 // (Garland-Heckbert quadrics, positions bounded so that no face flips) down to about N faces.
 // --length L scales the result so that its bounding box's longest side is L (metres). The output
 // is checked closed and free of self-intersections; a surface that is not stops with one line.
+// OUT is written whole or not at all: a full disk or a file size limit leaves no partial file.
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/IO/polygon_mesh_io.h>
 #include <CGAL/Polygon_mesh_processing/bbox.h>
@@ -20,9 +21,13 @@
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 #include <CGAL/alpha_wrap_3.h>
 
+#include <cctype>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <stdexcept>
 #include <string>
@@ -51,6 +56,44 @@ double positive_number(const std::string& key, const char* text) {
   if (end == text || *end != '\0' || !(v > 0) || !std::isfinite(v))
     fail(key + " " + text + ": expected a positive number");
   return v;
+}
+
+// OUT's extension, lower case, when it is a format this tool writes; else it stops.
+std::string output_format(const std::string& out) {
+  std::string ext = std::filesystem::path(out).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl")
+    fail(out + ": expected an output file ending in .obj, .off, .ply or .stl");
+  return ext;
+}
+
+// OUT in its format, written to STEM.part.EXT beside it and renamed into place; a write that fails
+// (SIGXFSZ is ignored, so a file size limit fails the write instead of killing the process)
+// removes the part file and stops with one line.
+void write_whole(const std::string& out, const Surface& s) {
+  namespace fs = std::filesystem;
+  const std::string ext = output_format(out);
+  const fs::path path(out);
+  const fs::path part = path.parent_path() / (path.stem().string() + ".part" + path.extension().string());
+  bool ok = false;
+  {
+    std::ofstream f(part, std::ios::binary);
+    const auto np = CGAL::parameters::stream_precision(9);
+    if (f) {
+      if (ext == ".obj") ok = CGAL::IO::write_OBJ(f, s, np);
+      if (ext == ".off") ok = CGAL::IO::write_OFF(f, s, np);
+      if (ext == ".ply") ok = CGAL::IO::write_PLY(f, s, np);
+      if (ext == ".stl") ok = CGAL::IO::write_STL(f, s, np);
+      f.close();
+      ok = ok && !f.fail();
+    }
+  }
+  std::error_code ec;
+  if (ok) fs::rename(part, path, ec);
+  if (!ok || ec) {
+    fs::remove(part, ec);
+    fail(out + ": cannot be written (a full disk, a file size limit or no permission?); nothing was written");
+  }
 }
 
 Options parse(int argc, char** argv) {
@@ -110,7 +153,9 @@ void scale_to(Surface& s, double length) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::signal(SIGXFSZ, SIG_IGN);
   const Options o = parse(argc, argv);
+  output_format(o.out);  // before any work
   Surface s;
   if (!PMP::IO::read_polygon_mesh(o.in, s) || s.number_of_faces() == 0)
     fail(o.in + ": cannot be read as a triangle surface (expected .obj, .off, .ply or .stl)");
@@ -127,8 +172,7 @@ int main(int argc, char** argv) {
   if (!CGAL::is_closed(s)) fail(o.out + ": the result is not closed (wrap it: --wrap 80)");
   if (PMP::does_self_intersect(s))
     fail(o.out + ": the result intersects itself (wrap it with --wrap, or keep more faces)");
-  if (!CGAL::IO::write_polygon_mesh(o.out, s, CGAL::parameters::stream_precision(9)))
-    fail(o.out + ": cannot be written");
+  write_whole(o.out, s);
   std::printf("%s: %zu faces%s -> %s: %zu faces, %zu vertices, closed, no self-intersection\n", o.in.c_str(), faces_in,
               crossed ? " (intersecting itself)" : "", o.out.c_str(), static_cast<std::size_t>(s.number_of_faces()),
               static_cast<std::size_t>(s.number_of_vertices()));
