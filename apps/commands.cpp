@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "isochor/app/install.hpp"
 #include "isochor/app/run.hpp"
 #include "isochor/app/shell.hpp"
 #include "isochor/base/error.hpp"
@@ -14,6 +15,11 @@
 #include "isochor/scene/scene.hpp"
 
 namespace isochor::cli {
+
+std::string tools_dir() {
+  static const std::string dir = tools_directory(this_executable_directory(), ISOCHOR_TOOLS_DIR).string();
+  return dir;
+}
 
 namespace {
 
@@ -166,8 +172,7 @@ int cmd_study(const StudyCommand& c) {
 // A Python tool of tools/ on a run file, with the options after the file passed on as they are.
 int run_tool(const std::string& script, const std::string& h5_path, const std::vector<std::string>& options) {
   if (!std::filesystem::exists(h5_path)) throw Error(h5_path + ": no such file");
-  std::string cmd =
-      "/usr/bin/python3 " + shell_quoted(std::string(ISOCHOR_TOOLS_DIR "/") + script) + " " + shell_quoted(h5_path);
+  std::string cmd = "/usr/bin/python3 " + shell_quoted(tools_dir() + "/" + script) + " " + shell_quoted(h5_path);
   for (const std::string& a : options) cmd += " " + shell_quoted(a);
   return std::system(cmd.c_str()) == 0 ? 0 : 1;
 }
@@ -182,7 +187,7 @@ int run_blender(const std::string& h5_path, const std::vector<std::string>& opti
         "`isochor render` without --blender draws with matplotlib");
   std::filesystem::path p(h5_path);
   std::string cmd = "set -o pipefail; blender -b --python-exit-code 1 --python " +
-                    shell_quoted(ISOCHOR_TOOLS_DIR "/blender/isochor_blender.py") + " -- " + shell_quoted(h5_path) +
+                    shell_quoted(tools_dir() + "/blender/isochor_blender.py") + " -- " + shell_quoted(h5_path) +
                     " --render " + shell_quoted((p.parent_path() / (p.stem().string() + "_blender")).string());
   for (const std::string& a : options) cmd += " " + shell_quoted(a);
   cmd += " 2>&1 | grep -E --line-buffered '^(isochor_blender|Error|Traceback|  File|[A-Za-z]*Error)'";
@@ -194,7 +199,7 @@ int study_report(const std::string& dir) {
   if (!std::filesystem::exists(std::filesystem::path(dir) / "results.csv"))
     throw Error(dir + ": no results.csv (expected the output directory of `isochor study`)");
   const std::string cmd =
-      "/usr/bin/python3 " + shell_quoted(ISOCHOR_TOOLS_DIR "/study_report.py") + " " + shell_quoted(dir);
+      "/usr/bin/python3 " + shell_quoted(tools_dir() + "/study_report.py") + " " + shell_quoted(dir);
   const int rc = std::system(cmd.c_str());
   if (rc != 0) throw Error(dir + ": the report tool failed (" + cmd + ")");
   return 0;

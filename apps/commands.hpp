@@ -32,6 +32,10 @@ int cmd_study(const StudyCommand& c);
 // `mpirun -n N isochor study STUDY --mpi` (study_mpi.cpp).
 int study_mpi(const Study& s, const std::string& exe, const std::string& study_path);
 
+// The folder of the Python and Blender tools this program runs (tools/ of its source tree, or of
+// the package it was installed with).
+std::string tools_dir();
+
 // A Python tool of tools/ on a run file, with the options after the file passed on as they are.
 int run_tool(const std::string& script, const std::string& h5_path, const std::vector<std::string>& options);
 // `isochor render --blender`.

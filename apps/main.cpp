@@ -153,7 +153,8 @@ int main(int argc, char** argv) {
   // Bad command lines, like bad input, stop with one line.
   app.failure_message(
       [](const CLI::App*, const CLI::Error& e) { return std::string("isochor: ") + e.what() + " (see --help)\n"; });
-  app.set_version_flag("--version", std::string(isochor_version()) + " (" + isochor_git_revision() + ")");
+  app.set_version_flag("--version", std::string(isochor_version()) + " (" + isochor_git_revision() +
+                                        ")\ntools: " + isochor::cli::tools_dir());
   Line line;
   add_mesh_and_run(app, line);
   add_study(app, line);

@@ -11,7 +11,7 @@ packages=(
   libopenblas0-pthread
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-dev python3-numpy python3-h5py python3-matplotlib python3-meshio
-  pybind11-dev python3-pytest
+  pybind11-dev python3-pytest python3-venv python3-setuptools python3-wheel
   libopenmpi-dev openmpi-bin libhypre-dev
 )
 missing=()

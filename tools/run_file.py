@@ -1,12 +1,22 @@
-"""The run-file reader of the isochor package (python/isochor/runfile.py) for the scripts of
+"""The run-file reader of the isochor package (python/isochor/_runfile.py) for the scripts of
 tools/: pure Python (h5py, NumPy), no compiled module needed. No script indexes the file's
 layout or parses the scene's text itself."""
 import os
 import sys
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "python"))
-from isochor.errors import Error  # noqa: E402
-from isochor.runfile import Collider, Run  # noqa: E402,F401
+
+def _package_root():
+    """The folder holding the isochor package: a source tree's python/ beside tools/, or the
+    site-packages of an installed package whose isochor/tools/ this file is in."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    for root in (os.path.join(here, os.pardir, "python"), os.path.join(here, os.pardir, os.pardir)):
+        if os.path.isfile(os.path.join(root, "isochor", "__init__.py")):
+            return os.path.abspath(root)
+    sys.exit(f"{here}: no isochor package beside these tools (expected ../python/isochor or ../../isochor)")
+
+
+sys.path.insert(0, _package_root())
+from isochor import Collider, Error, Run  # noqa: E402,F401
 
 
 def write_whole(path, write, mode="w"):

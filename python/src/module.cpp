@@ -6,6 +6,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <dlfcn.h>
+
 #include <filesystem>
 #include <optional>
 #include <sstream>
@@ -15,6 +17,7 @@
 #include "isochor/base/error.hpp"
 #include "isochor/core/output.hpp"
 #include "isochor/scene/scene.hpp"
+#include "isochor/app/install.hpp"
 #include "isochor/app/run.hpp"
 #include "isochor/app/study.hpp"
 
@@ -275,9 +278,9 @@ std::shared_ptr<Scene> scene_from_dict(py::dict d, py::object overrides, const s
 }
 
 void bind_error(py::module_& m) {
-  // One isochor.Error for the compiled part and the pure-Python reader (isochor/errors.py): its
+  // One isochor.Error for the compiled part and the pure-Python reader (isochor/_errors.py): its
   // class is kept for the interpreter's life (never released: no destructor runs at exit).
-  static PyObject* const error = py::object(py::module_::import("isochor.errors").attr("Error")).release().ptr();
+  static PyObject* const error = py::object(py::module_::import("isochor._errors").attr("Error")).release().ptr();
   m.attr("Error") = py::handle(error);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
@@ -290,35 +293,67 @@ void bind_error(py::module_& m) {
 
 // isochor.Scene: a loaded scene's name, text, mesh, zones, frame times and choices, read-only.
 void bind_scene(py::module_& m) {
-  py::class_<Scene, std::shared_ptr<Scene>>(m, "Scene")
-      .def_property_readonly("name", [](const Scene& s) { return s.file.name(); })
-      .def_property_readonly("text", [](const Scene& s) { return s.file.text_as_run(); })
-      .def_property_readonly("output_path", [](const Scene& s) { return s.output.path; })
-      .def_property_readonly("num_nodes", [](const Scene& s) { return s.mesh.num_nodes(); })
-      .def_property_readonly("num_tets", [](const Scene& s) { return s.mesh.num_tets(); })
-      .def_property_readonly("rest_positions", [](const Scene& s) { return points_array(s.mesh.rest_positions()); })
-      .def_property_readonly("tets", [](const Scene& s) { return index_array(s.mesh.tets()); })
-      .def_property_readonly("surface", [](const Scene& s) { return index_array(s.mesh.surface()); })
-      .def_property_readonly("zones",
-                             [](const Scene& s) {
-                               py::dict d;
-                               for (const auto& [name, tets] : s.zones)
-                                 d[py::str(name)] =
-                                     py::array_t<int>(static_cast<py::ssize_t>(tets.size()), tets.data());
-                               return d;
-                             })
-      .def_property_readonly("frame_times", [](const Scene& s) { return vector_array(s.frames.times()); })
-      .def_property_readonly("gravity",
-                             [](const Scene& s) { return std::vector<double>(s.gravity.data(), s.gravity.data() + 3); })
-      .def_property_readonly("integrator", [](const Scene& s) { return std::string(to_string(s.integrator.kind)); })
-      .def_property_readonly("material", [](const Scene& s) { return std::string(to_string(s.material.model)); })
+  py::class_<Scene, std::shared_ptr<Scene>>(m, "Scene", "A loaded scene (isochor.load or isochor.scene): read-only")
+      .def_property_readonly(
+          "name", [](const Scene& s) { return s.file.name(); }, "The scene file's path as given (or the dict's name)")
+      .def_property_readonly(
+          "text", [](const Scene& s) { return s.file.text_as_run(); },
+          "The scene as it runs, overrides applied, as TOML text")
+      .def_property_readonly(
+          "output_path", [](const Scene& s) { return s.output.path; },
+          "output.path: where a run writes its HDF5 file by default")
+      .def_property_readonly(
+          "num_nodes", [](const Scene& s) { return s.mesh.num_nodes(); }, "The mesh's node count")
+      .def_property_readonly(
+          "num_tets", [](const Scene& s) { return s.mesh.num_tets(); }, "The mesh's tetrahedron count")
+      .def_property_readonly(
+          "rest_positions", [](const Scene& s) { return points_array(s.mesh.rest_positions()); },
+          "(N, 3) the nodes' rest positions (m)")
+      .def_property_readonly(
+          "tets", [](const Scene& s) { return index_array(s.mesh.tets()); }, "(T, 4) each tetrahedron's nodes")
+      .def_property_readonly(
+          "surface", [](const Scene& s) { return index_array(s.mesh.surface()); },
+          "(F, 3) the boundary triangles' nodes, outward")
+      .def_property_readonly(
+          "zones",
+          [](const Scene& s) {
+            py::dict d;
+            for (const auto& [name, tets] : s.zones)
+              d[py::str(name)] = py::array_t<int>(static_cast<py::ssize_t>(tets.size()), tets.data());
+            return d;
+          },
+          "Each zone's name and its sorted tetrahedron indices (the constraints' order)")
+      .def_property_readonly(
+          "frame_times", [](const Scene& s) { return vector_array(s.frames.times()); },
+          "The times (s) at which a run writes its frames")
+      .def_property_readonly(
+          "gravity", [](const Scene& s) { return std::vector<double>(s.gravity.data(), s.gravity.data() + 3); },
+          "gravity: the acceleration vector (m/s^2)")
+      .def_property_readonly(
+          "integrator", [](const Scene& s) { return std::string(to_string(s.integrator.kind)); },
+          "integrator.kind: ida, backward_euler, xpbd, ...")
+      .def_property_readonly(
+          "material", [](const Scene& s) { return std::string(to_string(s.material.model)); },
+          "material.model: cnh, snh, unh, ...")
       .def("activations", &Scene::activations, py::arg("t"),
            "Each muscle's activation at time t as the scene gives it (activation_scale applied)")
-      .def_property_readonly("muscles", [](const Scene& s) {
-        std::vector<std::string> names;
-        for (const Scene::MuscleSpec& m : s.muscles) names.push_back(m.name);
-        return names;
-      });
+      .def_property_readonly(
+          "muscles",
+          [](const Scene& s) {
+            std::vector<std::string> names;
+            for (const Scene::MuscleSpec& m : s.muscles) names.push_back(m.name);
+            return names;
+          },
+          "The [[muscle]] names, in the order of activations()");
+}
+
+// The folder this module was loaded from (an installed package's isochor/, or build/python/isochor).
+std::filesystem::path module_directory() {
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<const void*>(&module_directory), &info) == 0 || !info.dli_fname) return {};
+  std::error_code ec;
+  const std::filesystem::path file = std::filesystem::canonical(info.dli_fname, ec);
+  return ec ? std::filesystem::path() : file.parent_path();
 }
 
 }  // namespace
@@ -334,12 +369,14 @@ PYBIND11_MODULE(_isochor, m) {
       [](const std::string& path, py::object overrides) {
         return std::make_shared<Scene>(load_scene(path, overrides_of(overrides)));
       },
-      py::arg("path"), py::arg("overrides") = py::none());
+      py::arg("path"), py::arg("overrides") = py::none(), "A scene file with overrides (isochor.load)");
   m.def("scene_from_dict", &scene_from_dict, py::arg("scene"), py::arg("overrides") = py::none(),
-        py::arg("name") = "<dict>", py::arg("directory") = "");
+        py::arg("name") = "<dict>", py::arg("directory") = "",
+        "A scene from a dict shaped like the file (isochor.scene)");
   m.def("overrides", &overrides_of, py::arg("overrides"), "The `--set` strings of a dict or list of overrides");
   m.def("run", &run, py::arg("scene"), py::arg("output") = "", py::arg("mode") = "create", py::arg("progress") = false,
-        py::arg("on_frame") = py::none(), py::arg("activation") = py::none());
+        py::arg("on_frame") = py::none(), py::arg("activation") = py::none(),
+        "Runs a scene into its file; a dict of what it did (isochor.run)");
 
   m.def(
       "study_cases",
@@ -358,7 +395,8 @@ PYBIND11_MODULE(_isochor, m) {
         }
         return py::make_tuple(s.output.string(), cases);
       },
-      py::arg("path"), py::arg("overrides") = py::none());
+      py::arg("path"), py::arg("overrides") = py::none(),
+      "A study's output folder and its cases (isochor.study_cases)");
   m.def(
       "run_study",
       [](const std::string& path, py::object overrides, bool resume, bool progress) {
@@ -366,11 +404,12 @@ PYBIND11_MODULE(_isochor, m) {
         int failed = 0;
         {
           py::gil_scoped_release nogil;
-          failed = run_study(s, ISOCHOR_EXE, resume, progress);
+          failed = run_study(s, executable_beside(module_directory(), ISOCHOR_EXE).string(), resume, progress);
         }
         return py::make_tuple(s.output.string(), failed);
       },
-      py::arg("path"), py::arg("overrides") = py::none(), py::arg("resume") = false, py::arg("progress") = false);
-  m.attr("executable") = ISOCHOR_EXE;
-  m.attr("tools_dir") = ISOCHOR_TOOLS_DIR;
+      py::arg("path"), py::arg("overrides") = py::none(), py::arg("resume") = false, py::arg("progress") = false,
+      "Runs a study's cases; its output folder and the count that failed (isochor.study)");
+  m.attr("executable") = executable_beside(module_directory(), ISOCHOR_EXE).string();
+  m.attr("tools_dir") = tools_directory(module_directory(), ISOCHOR_TOOLS_DIR).string();
 }

@@ -1,4 +1,4 @@
-"""The one reader of run files (isochor.runfile): pure Python, so tools/ read runs without the
+"""The one reader of run files (isochor._runfile): pure Python, so tools/ read runs without the
 compiled module; the colliders, their poses and scales, and up as the run recorded them."""
 import os
 import subprocess
@@ -54,7 +54,7 @@ def test_a_moving_plane_is_where_its_ramp_puts_it_at_every_frame(swing_with_coll
 def test_the_reader_needs_no_compiled_module(swing_with_colliders):
     # The source tree's package has no _isochor beside it: isochor.open works, isochor.load says why not.
     code = ("import isochor, sys\n"
-            "assert isochor._isochor is None\n"
+            "assert isochor._api._isochor is None\n"
             f"r = isochor.open({str(swing_with_colliders)!r})\n"
             "print(r.num_frames, len(r.colliders))\n"
             "try:\n    isochor.load('x.toml')\nexcept isochor.Error as e:\n    print(e)\n")

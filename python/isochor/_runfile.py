@@ -12,7 +12,7 @@ from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
-from .errors import Error
+from ._errors import Error
 
 
 def _text(v: object) -> object:
@@ -34,6 +34,7 @@ class Collider:
 
     @property
     def is_ground(self) -> bool:
+        """Whether it is the scene's [contact] ground plane."""
         return self.name == "contact.ground"
 
 
@@ -46,7 +47,11 @@ class Run:
     """
 
     def __init__(self, path: Union[str, os.PathLike]):
-        import h5py  # Debian's python3-h5py
+        try:
+            import h5py  # Debian's python3-h5py
+        except ImportError as e:
+            raise Error(f"reading run files needs h5py ({e}; Debian: apt-get install python3-h5py, and a "
+                        "virtual environment made with --system-site-packages)") from None
 
         self.path = os.fspath(path)
         if not os.path.exists(self.path):
@@ -218,6 +223,7 @@ class Run:
         return float(np.max(np.abs(self.volumes / self.volumes[0] - 1)))
 
     def close(self) -> None:
+        """Closes the file (a `with isochor.open(...) as run:` block does it on leaving)."""
         self._h5.close()
 
     def __enter__(self) -> "Run":

@@ -1,0 +1,30 @@
+#include "isochor/app/install.hpp"
+
+#include <unistd.h>
+
+namespace isochor {
+
+namespace fs = std::filesystem;
+
+fs::path tools_directory(const fs::path& own_dir, const fs::path& built_in) {
+  for (const fs::path& d : {own_dir / "tools", own_dir.parent_path() / "tools"}) {
+    std::error_code ec;
+    if (fs::is_regular_file(d / "render.py", ec)) return d;
+  }
+  return built_in;
+}
+
+fs::path executable_beside(const fs::path& own_dir, const fs::path& built_in) {
+  const fs::path exe = own_dir / "bin" / "isochor";
+  std::error_code ec;
+  if (fs::is_regular_file(exe, ec) && ::access(exe.c_str(), X_OK) == 0) return exe;
+  return built_in;
+}
+
+fs::path this_executable_directory() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? fs::path() : exe.parent_path();
+}
+
+}  // namespace isochor
