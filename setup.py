@@ -1,8 +1,8 @@
 """The build behind `pip install .` (pyproject.toml holds the metadata): CMake builds the compiled
 part (_isochor) and the isochor program in build/ (ISOCHOR_BUILD_DIR names another; a configured
 tree is built as it is, so `make build` and pip share one), and the package gets them beside its
-Python files: isochor/_isochor*.so, isochor/bin/isochor and isochor/tools/, which both find by
-their own location. setuptools' own build files go under that tree too, so the source tree keeps
+Python files: isochor/_isochor*.so, isochor/bin/isochor, isochor/tools/ and isochor/viewer/ (the
+page of `isochor view`), which they find by their own location. setuptools' own build files go under that tree too, so the source tree keeps
 only what git has."""
 import glob
 import os
@@ -26,7 +26,7 @@ class CMakeBuild(build_ext):
         if not os.path.exists(os.path.join(BUILD, "CMakeCache.txt")):
             subprocess.check_call(["cmake", "-S", SOURCE, "-B", BUILD, "-DCMAKE_BUILD_TYPE=Release"])
         subprocess.check_call(["cmake", "--build", BUILD, "-j", str(os.cpu_count() or 1),
-                               "--target", "_isochor", "isochor"])
+                               "--target", "_isochor", "isochor", "isochor_viewer"])
         suffix = sysconfig.get_config_var("EXT_SUFFIX")
         built = glob.glob(os.path.join(BUILD, "python", "isochor", "_isochor*.so"))
         if not built:
@@ -40,6 +40,10 @@ class CMakeBuild(build_ext):
         os.makedirs(os.path.join(package, "bin"), exist_ok=True)
         shutil.copy2(built[0], target)
         shutil.copy2(os.path.join(BUILD, "isochor"), os.path.join(package, "bin", "isochor"))  # CMAKE_RUNTIME_OUTPUT_DIRECTORY
+        viewer = os.path.join(BUILD, "viewer", "static")
+        if os.path.isfile(os.path.join(viewer, "viewer.js")):  # isochor view's page (npm at build time)
+            shutil.rmtree(os.path.join(package, "viewer"), ignore_errors=True)
+            shutil.copytree(viewer, os.path.join(package, "viewer"))
         tools = os.path.join(package, "tools")
         shutil.rmtree(tools, ignore_errors=True)
         shutil.copytree(os.path.join(SOURCE, "tools"), tools, ignore=shutil.ignore_patterns(

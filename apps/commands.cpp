@@ -177,6 +177,12 @@ int run_tool(const std::string& script, const std::string& h5_path, const std::v
   return std::system(cmd.c_str()) == 0 ? 0 : 1;
 }
 
+int run_view(const std::string& h5_path, std::vector<std::string> options) {
+  options.push_back("--static");
+  options.push_back(viewer_directory(this_executable_directory(), ISOCHOR_VIEWER_DIR).string());
+  return run_tool("view.py", h5_path, options);
+}
+
 // `isochor render --blender`: Blender in the background on tools/blender/isochor_blender.py,
 // frames into RUN_blender/ unless --render says otherwise; Blender's own chatter is left out.
 int run_blender(const std::string& h5_path, const std::vector<std::string>& options) {

@@ -38,6 +38,8 @@ std::string tools_dir();
 
 // A Python tool of tools/ on a run file, with the options after the file passed on as they are.
 int run_tool(const std::string& script, const std::string& h5_path, const std::vector<std::string>& options);
+// `isochor view`: tools/view.py with the page this program was built or installed with.
+int run_view(const std::string& h5_path, std::vector<std::string> options);
 // `isochor render --blender`.
 int run_blender(const std::string& h5_path, const std::vector<std::string>& options);
 // Charts, results.h5 and report.md of a study directory (tools/study_report.py).

@@ -28,6 +28,7 @@ struct Line {
   CLI::App* exporter = nullptr;
   CLI::App* paraview = nullptr;
   CLI::App* obj = nullptr;
+  CLI::App* view = nullptr;
   RunCommand run_cmd;
   StudyCommand study_cmd;
   std::string h5_path, dir, prefix = "frame";
@@ -76,6 +77,15 @@ void add_study(CLI::App& app, Line& l) {
   l.report->add_option("dir", l.dir, "The study's output directory")->required();
 }
 
+// A subcommand that runs a Python tool on a run file, the options after the file passed on.
+CLI::App* tool_subcommand(CLI::App& app, Line& l, const char* name, const char* what, const char* footer) {
+  CLI::App* c = app.add_subcommand(name, what);
+  c->add_option("file", l.h5_path, "Output file (.h5)")->required();
+  c->footer(footer);
+  c->prefix_command();
+  return c;
+}
+
 void add_viewers(CLI::App& app, Line& l) {
   l.render = app.add_subcommand("render",
                                 "Draw frames of a run to PNG (smooth-shaded surface, up from the scene, coloured by "
@@ -91,19 +101,17 @@ void add_viewers(CLI::App& app, Line& l) {
       "--samples 8, --size 640x480, --mp4, --color zone|pressure|none, --save FILE.blend");
   l.render->prefix_command();
 
-  l.exporter = app.add_subcommand(
-      "export", "Write a run's surface motion as a point cache (PC2 or MDD) for Blender, Maya, Houdini");
-  l.exporter->add_option("file", l.h5_path, "Output file (.h5)")->required();
-  l.exporter->footer("Options after the file go to tools/export.py: --format pc2|mdd, --out FILE, --all-nodes");
-  l.exporter->prefix_command();
-
-  l.paraview = app.add_subcommand(
-      "paraview", "Write a ParaView script that opens a run ready to play (pressure and zones, time, ground)");
-  l.paraview->add_option("file", l.h5_path, "Output file (.h5)")->required();
-  l.paraview->footer(
+  l.exporter = tool_subcommand(
+      app, l, "export", "Write a run's surface motion as a point cache (PC2 or MDD) for Blender, Maya, Houdini",
+      "Options after the file go to tools/export.py: --format pc2|mdd, --out FILE, --all-nodes");
+  l.paraview = tool_subcommand(
+      app, l, "paraview", "Write a ParaView script that opens a run ready to play (pressure and zones, time, ground)",
       "Options after the file go to tools/paraview.py: --out SCRIPT.py, --up z|y|a,b,c. Then: "
       "paraview --script=SCRIPT.py, or xvfb-run -a pvpython SCRIPT.py --screenshot F.png [--frame K]");
-  l.paraview->prefix_command();
+  l.view = tool_subcommand(app, l, "view",
+                           "Play a run in the browser: its surface, timeline, colours and charts (a page on 127.0.0.1)",
+                           "Options after the file go to tools/view.py: --port N (default: a free one), --no-browser, "
+                           "--export DIR [--every K] (a folder that opens from disk). docs/viewer.md");
 
   l.obj = app.add_subcommand("export-obj", "Write the surface of every frame as an OBJ sequence");
   l.obj->add_option("file", l.h5_path, "Output file (.h5)")->required();
@@ -126,6 +134,7 @@ int dispatch(Line& l, int argc, char** argv) {
   if (l.render->parsed()) return run_tool("render.py", l.h5_path, l.render->remaining());
   if (l.exporter->parsed()) return run_tool("export.py", l.h5_path, l.exporter->remaining());
   if (l.paraview->parsed()) return run_tool("paraview.py", l.h5_path, l.paraview->remaining());
+  if (l.view->parsed()) return run_view(l.h5_path, l.view->remaining());
   if (l.info->parsed()) {
     std::fputs(describe_run(l.h5_path).c_str(), stdout);
     return 0;

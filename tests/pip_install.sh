@@ -19,6 +19,11 @@ scene=$src/tests/data/good_box.toml
 "$tmp/v/bin/python" -m isochor run "$scene" -o m.h5 -q --set frames.duration=0.02
 "$tmp/v/bin/isochor" export cli.h5 --format pc2 --out cli.pc2 > /dev/null
 test -s cli.pc2
+if [ -f "$build/viewer/static/viewer.js" ]; then  # the page of isochor view, built where npm is
+  "$tmp/v/bin/isochor" view cli.h5 --export page > /dev/null
+  test -s page/viewer.js && test -s page/data/frame_0.js && test -s page/data/meta.js
+  cmp -s page/viewer.js "$(ls -d "$tmp"/v/lib/python3*/site-packages/isochor/viewer)/viewer.js"
+fi
 "$tmp/v/bin/python" - "$tmp/v" "$scene" <<'PY'
 import os
 import sys

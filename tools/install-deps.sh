@@ -14,6 +14,9 @@ packages=(
   pybind11-dev python3-pytest python3-venv python3-setuptools python3-wheel
   libopenmpi-dev openmpi-bin libhypre-dev
 )
+# npm builds the page of `isochor view` (viewer/, its packages pinned in package-lock.json):
+# Debian's, unless an npm is on PATH already (a Node.js from elsewhere brings its own).
+command -v npm > /dev/null 2>&1 || packages+=(npm)
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then

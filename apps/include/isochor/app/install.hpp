@@ -11,6 +11,10 @@ namespace isochor {
 // or own_dir/../tools when it holds render.py (an installed package), else `built_in`.
 std::filesystem::path tools_directory(const std::filesystem::path& own_dir, const std::filesystem::path& built_in);
 
+// The page of `isochor view` (viewer.js, index.html) for a binary in `own_dir`: own_dir/viewer or
+// own_dir/../viewer when it holds viewer.js (an installed package), else `built_in`.
+std::filesystem::path viewer_directory(const std::filesystem::path& own_dir, const std::filesystem::path& built_in);
+
 // The command line for a module in `own_dir`: own_dir/bin/isochor when it is there (an installed
 // package), else `built_in`.
 std::filesystem::path executable_beside(const std::filesystem::path& own_dir, const std::filesystem::path& built_in);
