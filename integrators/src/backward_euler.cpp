@@ -31,6 +31,7 @@ struct BackwardEuler::Impl {
   std::vector<Index> diag;
   std::vector<std::vector<double>> G;
   RunStats stats;
+  std::unique_ptr<FixedStepper> stepper;  // between begin() and finish()
   // Many constraints: KLU on the whole KKT matrix instead of m solves for a dense Schur complement.
   bool use_kkt;
   std::unique_ptr<KktLayout> layout;
@@ -697,6 +698,12 @@ BackwardEuler::BackwardEuler(ConstrainedSystem& system, BackwardEulerOptions opt
 BackwardEuler::~BackwardEuler() = default;
 
 RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallback& on_frame) {
+  begin(times, on_frame);
+  step(times.back());
+  return finish();
+}
+
+void BackwardEuler::begin(const std::vector<double>& times, const FrameCallback& on_frame) {
   Impl& s = *impl_;
   const double h = s.opt.dt;
   VectorXd q, v, a, lambda;
@@ -720,8 +727,8 @@ RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
     s.choosing = s.opt.automatic_linear_solver && s.line_search;
   }
   if (s.variational) s.Dn.assign(s.sys.pattern().nnz(), 0.0);
-  auto step = [&](double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q1, VectorXd& v1, VectorXd& l1,
-                  std::string& reason) {
+  auto step = [&s](double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q1, VectorXd& v1,
+                   VectorXd& l1, std::string& reason) {
     const Impl::StepCounts before = s.counts();
     if (!s.advance(t, t1, qn, vn, q1, v1, l1, reason)) return false;
     if (s.choosing) s.after_step(before);
@@ -731,20 +738,30 @@ RunStats BackwardEuler::run(const std::vector<double>& times, const FrameCallbac
     }
     return true;
   };
-  auto sample = [&]() {
+  auto sample = [&s, h]() {
     return RunStats::FrameSample{
         s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 1, h};
   };
   // Frames between steps: the interpolation projected back onto the constraints (as IDA's frames).
   FrameCorrection between;
   if (s.m > 0)
-    between = [&](double t, VectorXd& qf, VectorXd& vf) {
+    between = [&s](double t, VectorXd& qf, VectorXd& vf) {
       const auto tp = Clock::now();
       project_state(s.sys, t, qf, vf);
       s.stats.projection_seconds += seconds_since(tp);
     };
-  run_fixed_steps(times, h, s.opt.max_steps, q, v, lambda, step, s.stats, sample, on_frame, between);
-  return s.stats;
+  s.stepper = std::make_unique<FixedStepper>(times, h, s.opt.max_steps, step, s.stats, sample, on_frame, between);
+  s.stepper->begin(q, v, lambda);
+}
+
+double BackwardEuler::step(double t_out) {
+  if (!impl_->stepper) throw Error("BackwardEuler::step before begin");
+  return impl_->stepper->step(t_out);
+}
+
+RunStats BackwardEuler::finish() {
+  impl_->stepper.reset();
+  return impl_->stats;
 }
 
 }  // namespace isochor

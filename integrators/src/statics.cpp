@@ -32,6 +32,11 @@ struct StaticSolver::Impl {
   VectorXd q, v0, lambda, f, g;
   double t = 0;
   RunStats stats;
+  // Between begin() and finish(): the frames, the callback and the next frame to solve.
+  std::vector<double> times;
+  FrameCallback on_frame;
+  std::size_t next = 0;
+  bool running = false;
   // SUNDIALS' objects of the run, released in reverse order (KINSOL's memory first).
   struct KinFree {
     void operator()(void* mem) const { KINFree(&mem); }
@@ -264,28 +269,67 @@ StaticSolver::StaticSolver(ConstrainedSystem& system, StaticOptions options)
 StaticSolver::~StaticSolver() = default;
 
 RunStats StaticSolver::run(const std::vector<double>& times, const FrameCallback& on_frame) {
-  Impl& s = *impl_;
+  begin(times, on_frame);
+  step(times.back());
+  return finish();
+}
+
+namespace {
+// Solves frame k of the run from the previous frame's solution and delivers it.
+void solve_frame(StaticSolver::Impl& s, std::size_t k) {
+  increment(s, k > 0 ? s.times[k - 1] : s.times.front(), s.times[k], 0);
+  double fnorm = 0;
+  check(KINGetFuncNorm(s.mem, &fnorm), "KINGetFuncNorm", s.t);
+  s.stats.frames.push_back(
+      {s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 0, fnorm});
+  const double* y = N_VGetArrayPointer(s.u.get());
+  s.on_frame(static_cast<int>(k), s.t, Eigen::Map<const VectorXd>(y, s.n), s.v0,
+             Eigen::Map<const VectorXd>(y + s.n, s.m), s.stats.frames.back());
+}
+// Runs `work`, adding its wall time to the run's; on an exception KINSOL is released first.
+template <class Work>
+void timed_or_released(StaticSolver::Impl& s, Work&& work) {
   const auto wall0 = Clock::now();
-  const double t0 = times.front();
   try {
-    setup_kinsol(s, t0);
-    for (std::size_t k = 0; k < times.size(); ++k) {
-      increment(s, k > 0 ? times[k - 1] : t0, times[k], 0);
-      double fnorm = 0;
-      check(KINGetFuncNorm(s.mem, &fnorm), "KINGetFuncNorm", s.t);
-      s.stats.frames.push_back(
-          {s.stats.steps, s.stats.newton_iterations, 0, s.stats.newton_failures, s.stats.jacobian_evals, 0, fnorm});
-      const double* y = N_VGetArrayPointer(s.u.get());
-      on_frame(static_cast<int>(k), s.t, Eigen::Map<const VectorXd>(y, s.n), s.v0,
-               Eigen::Map<const VectorXd>(y + s.n, s.m), s.stats.frames.back());
-    }
+    work();
   } catch (...) {
-    s.stats.wall_seconds = seconds_since(wall0);
+    s.stats.wall_seconds += seconds_since(wall0);
+    s.running = false;
     release(s);
     throw;
   }
-  s.stats.wall_seconds = seconds_since(wall0);
-  release(s);
+  s.stats.wall_seconds += seconds_since(wall0);
+}
+}  // namespace
+
+void StaticSolver::begin(const std::vector<double>& times, const FrameCallback& on_frame) {
+  Impl& s = *impl_;
+  s.times = times;
+  s.on_frame = on_frame;
+  s.next = 0;
+  s.stats.wall_seconds = 0;
+  timed_or_released(s, [&] {
+    setup_kinsol(s, times.front());
+    s.running = true;
+    solve_frame(s, s.next++);
+  });
+}
+
+// Statics has no steps between frames: the time reached is the last frame solved.
+double StaticSolver::step(double t_out) {
+  Impl& s = *impl_;
+  if (!s.running) throw Error("statics: step() before begin()");
+  const double target = std::min(t_out, s.times.back());
+  timed_or_released(s, [&] {
+    while (s.next < s.times.size() && s.times[s.next - 1] < target) solve_frame(s, s.next++);
+  });
+  return s.times[s.next - 1];
+}
+
+RunStats StaticSolver::finish() {
+  Impl& s = *impl_;
+  if (s.running) release(s);
+  s.running = false;
   return s.stats;
 }
 

@@ -18,28 +18,37 @@ void parse_xpbd(const Section& in, IntegratorKind, IntegratorSpec& spec) {
 }
 
 namespace {
-class XpbdOnScene : public Integrator {
+class XpbdOnScene : public SteppingIntegrator {
  public:
   XpbdOnScene(const Scene& scene, const SceneSystem& system, XpbdOptions o)
       : system_(system), points_(scene), xpbd_(points_, o), free_(system.dofs().free_nodes) {}
   RunStats run(const std::vector<double>& times, const FrameCallback& on_frame) override {
+    begin(times, on_frame);
+    step(times.back());
+    return finish();
+  }
+  void begin(const std::vector<double>& times, const FrameCallback& on_frame) override {
     points_.start = system_.start();
-    VectorXd q(3 * free_.size()), v(3 * free_.size());
-    return xpbd_.run(times, [&](int k, double t, const VectorXd& x, const VectorXd& xv, const VectorXd& lambda,
-                                const RunStats::FrameSample& s) {
+    q_.resize(3 * free_.size());
+    v_.resize(3 * free_.size());
+    xpbd_.begin(times, [this, on_frame](int k, double t, const VectorXd& x, const VectorXd& xv, const VectorXd& lambda,
+                                        const RunStats::FrameSample& s) {
       for (std::size_t f = 0; f < free_.size(); ++f) {
-        q.segment<3>(3 * f) = x.segment<3>(3 * free_[f]);
-        v.segment<3>(3 * f) = xv.segment<3>(3 * free_[f]);
+        q_.segment<3>(3 * f) = x.segment<3>(3 * free_[f]);
+        v_.segment<3>(3 * f) = xv.segment<3>(3 * free_[f]);
       }
-      on_frame(k, t, q, v, lambda, s);
+      on_frame(k, t, q_, v_, lambda, s);
     });
   }
+  double step(double t_out) override { return xpbd_.step(t_out); }
+  RunStats finish() override { return xpbd_.finish(); }
 
  private:
   const SceneSystem& system_;
   XpbdMeshSystem points_;
   Xpbd xpbd_;
   std::vector<int> free_;
+  VectorXd q_, v_;  // the free nodes' part of a frame, as the scene system counts its unknowns
 };
 }  // namespace
 

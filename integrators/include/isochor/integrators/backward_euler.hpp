@@ -33,7 +33,7 @@
 namespace isochor {
 
 struct BackwardEulerOptions {
-  double dt = 1e-3;
+  double dt = kDefaultFixedStep;
   bool semi_implicit = false;
   bool rescale_volume = false;  // after each step, the system's naive volume rescaling
   int max_newton = 30;
@@ -42,7 +42,7 @@ struct BackwardEulerOptions {
   // newton_atol (m) the floor for a body at rest.
   double newton_tol = 1e-6;
   double newton_atol = 1e-12;
-  long max_steps = 100000000;
+  long max_steps = kDefaultMaxSteps;
   // Up to this many constraints: CHOLMOD on the n x n step matrix and a dense Schur complement
   // for the borders; more (e.g. 1-ring zones): KLU on the whole (n + m) KKT matrix.
   int schur_max_constraints = 32;
@@ -84,7 +84,7 @@ struct BackwardEulerOptions {
   std::function<void(double before, double after, double alpha)> on_line_search;
 };
 
-class BackwardEuler : public Integrator {
+class BackwardEuler : public SteppingIntegrator {
  public:
   BackwardEuler(ConstrainedSystem& system, BackwardEulerOptions options);
   ~BackwardEuler() override;
@@ -92,6 +92,9 @@ class BackwardEuler : public Integrator {
   // onto the constraints (initial_state.hpp: project_state). Throws
   // IntegrationError (time, reason) after delivering every frame reached.
   RunStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
+  void begin(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
+  double step(double t_out) override;
+  RunStats finish() override;
 
  private:
   struct Impl;

@@ -28,4 +28,32 @@ void run_fixed_steps(const std::vector<double>& frame_times, double h, long max_
                      const std::function<RunStats::FrameSample()>& sample, const FrameCallback& on_frame,
                      const FrameCorrection& between = nullptr);
 
+// The same loop a step at a time (the fixed-step integrators' SteppingIntegrator interface):
+// begin() delivers the frames at the start; step(t_out) steps until the time reached is at least
+// t_out (at most the last frame time; within 1e-9 h, the tolerance by which a frame belongs to a
+// step's end), delivering every frame passed, and returns that time. run_fixed_steps is begin and
+// step to the last frame. `stats` (steps, wall time) must outlive the stepper.
+class FixedStepper {
+ public:
+  FixedStepper(std::vector<double> frame_times, double h, long max_steps, FixedStep step, RunStats& stats,
+               std::function<RunStats::FrameSample()> sample, FrameCallback on_frame,
+               FrameCorrection between = nullptr);
+  void begin(VectorXd q, VectorXd v, VectorXd lambda);
+  double step(double t_out);
+
+ private:
+  void deliver_up_to(double t1);
+  std::vector<double> times_;
+  double h_;
+  long max_steps_;
+  FixedStep step_;
+  RunStats& stats_;
+  std::function<RunStats::FrameSample()> sample_;
+  FrameCallback on_frame_;
+  FrameCorrection between_;
+  VectorXd q_, v_, lambda_, q1_, v1_, l1_;
+  double t_ = 0;
+  std::size_t k_ = 0;  // the next frame to deliver
+};
+
 }  // namespace isochor

@@ -10,26 +10,42 @@
 // weights for the volume and ones for the supports, so every row's linearisation holds after the
 // step (a linear row exactly).
 #pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "isochor/integrators/constrained_system.hpp"
 #include "isochor/integrators/integrator.hpp"
 
 namespace isochor {
 
 struct HongOptions {
-  double dt = 1e-4;
+  double dt = kDefaultFixedStep;
   Eigen::VectorXd weights;  // per dof group (free node); empty: all ones
   long weighted_rows = 1;   // the first rows the weights apply to (the enclosed volume); 1 for the rest
-  long max_steps = 100000000;
+  long max_steps = kDefaultMaxSteps;
 };
 
-class HongStep : public Integrator {
+class FixedStepper;
+
+class HongStep : public SteppingIntegrator {
  public:
   HongStep(ConstrainedSystem& system, HongOptions options);
+  ~HongStep() override;
   RunStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
+  void begin(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
+  double step(double t_out) override;
+  RunStats finish() override;
 
  private:
+  struct Work;  // a step's weights and scratch
+  bool one_step(Work& k, double t, const VectorXd& q, const VectorXd& v, VectorXd& q1, VectorXd& v1, VectorXd& l1,
+                std::string& reason);
   ConstrainedSystem& sys_;
   HongOptions opt_;
+  RunStats stats_;
+  std::unique_ptr<Work> work_;
+  std::unique_ptr<FixedStepper> stepper_;
 };
 
 }  // namespace isochor

@@ -44,7 +44,7 @@ struct IdaOptions {
   static constexpr double kDefaultNewtonCoef = 0.05;
   int max_newton = 4;         // Newton iterations per step attempt before IDA calls it a failure (IDASetMaxNonlinIters)
   double initial_step = 0.0;  // 0: a position-based first step (see the .cpp)
-  long max_steps = 10000000;  // over the whole run
+  long max_steps = kDefaultMaxSteps;  // over the whole run
   // End a step on every frame time too (IDASetStopTime), as before frames were interpolated: for
   // comparisons; it costs steps and holds IDA at low order when frames are dense.
   bool stop_at_frames = false;

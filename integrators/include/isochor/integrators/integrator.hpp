@@ -21,6 +21,12 @@ enum class LinearSolverKind { klu, reduced, krylov, amg };
 enum class KluOrdering { metis, colamd, amd };
 
 const char* to_string(LinearSolverKind k);
+
+// Defaults that a scene's [integrator] keys (scene/src/methods/) and the options' members share,
+// declared once: integrator.max_steps (steps allowed over the whole run) and integrator.dt (the
+// fixed-step methods' step).
+constexpr long kDefaultMaxSteps = 10000000;
+constexpr double kDefaultFixedStep = 1e-3;
 // The solver of the effective stiffness that a reduced kind uses (sparse_factor.hpp).
 enum class SymmetricSolverKind;
 SymmetricSolverKind symmetric_solver_of(LinearSolverKind k);
@@ -40,7 +46,9 @@ class Integrator {
 //                                 last frame time), delivering every frame passed; returns the time
 //                                 reached (steps are the integrator's own: it may pass t_out);
 //   finish()                      the run's statistics, the solver released.
-// run(frame_times, on_frame) is begin, step to the last frame time, finish.
+// run(frame_times, on_frame) is begin, step to the last frame time, finish. Every integrator is one
+// (IDA; backward Euler, semi-implicit, XPBD and Hong's step over fixed_step.hpp's FixedStepper,
+// whose steps reach t_out within 1e-9 h; statics, whose time reached is the last frame solved).
 class SteppingIntegrator : public Integrator {
  public:
   virtual void begin(const std::vector<double>& frame_times, const FrameCallback& on_frame) = 0;

@@ -23,13 +23,18 @@ struct StaticOptions {
   int substeps_on_failure = 0;
 };
 
-class StaticSolver : public Integrator {
+class StaticSolver : public SteppingIntegrator {
  public:
   StaticSolver(ConstrainedSystem& system, StaticOptions options);
   ~StaticSolver() override;
   // Solves at every frame time; the frame sample's `newton_iterations` is cumulative, and
   // `step_size` holds the final scaled residual norm of that frame's solve.
   RunStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
+  // begin solves frame 0; step(t_out) solves the frames up to the first at or after t_out (the
+  // time reached is the last frame solved); finish releases KINSOL.
+  void begin(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
+  double step(double t_out) override;
+  RunStats finish() override;
 
   struct Impl;  // public so that the C callbacks can reach it
 

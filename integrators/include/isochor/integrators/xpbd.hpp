@@ -9,6 +9,8 @@
 #pragma once
 #include <Eigen/Core>
 #include <functional>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "isochor/integrators/constrained_system.hpp"
@@ -41,22 +43,34 @@ class ProjectiveSystem {
 };
 
 struct XpbdOptions {
-  double dt = 1e-3;    // step between collision detections (a frame's steps are of this size)
-  int substeps = 10;   // per step
-  int iterations = 1;  // Gauss-Seidel sweeps per substep
-  long max_steps = 100000000;
+  double dt = kDefaultFixedStep;  // step between collision detections (a frame's steps are of this size)
+  int substeps = 10;              // per step
+  int iterations = 1;             // Gauss-Seidel sweeps per substep
+  long max_steps = kDefaultMaxSteps;
 };
 
-class Xpbd : public Integrator {
+class FixedStepper;
+
+class Xpbd : public SteppingIntegrator {
  public:
   Xpbd(ProjectiveSystem& system, XpbdOptions options);
+  ~Xpbd() override;
   // Steps from frame_times.front(); frames between steps are interpolated linearly. The frame
   // callback gets all point positions and velocities (3 per point) and no multipliers.
   RunStats run(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
+  void begin(const std::vector<double>& frame_times, const FrameCallback& on_frame) override;
+  double step(double t_out) override;
+  RunStats finish() override;
 
  private:
+  bool substeps(double t, VectorXd& x, VectorXd& v, std::string& reason);
   ProjectiveSystem& sys_;
   XpbdOptions opt_;
+  RunStats stats_;
+  VectorXd a_, x_prev_, lambda_;  // a step's scratch: accelerations, positions before a substep, multipliers
+  std::vector<int> pts_;
+  std::vector<double> grad_;
+  std::unique_ptr<FixedStepper> stepper_;
 };
 
 }  // namespace isochor
