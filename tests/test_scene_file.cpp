@@ -1,6 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cctype>
+#include <cstring>
 #include <fstream>
+#include <map>
+#include <sstream>
 #include <regex>
 #include <set>
 
@@ -185,6 +190,113 @@ t1 = 0.8
 }
 
 // Every key a parser asks for, over all demo scenes, is documented in docs/scenes.md.
+namespace {
+
+// docs/scenes.md's rows: key -> its type and default cells (the second and fourth columns of
+// every key table).
+struct DocRow {
+  std::string type, fallback;
+};
+std::map<std::string, DocRow> documented_rows(const std::string& text) {
+  std::map<std::string, DocRow> out;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.rfind("| `", 0) != 0) continue;
+    std::vector<std::string> cells;
+    std::size_t at = 1;
+    for (int c = 0; c < 4; ++c) {
+      const std::size_t bar = line.find('|', at);
+      if (bar == std::string::npos) break;
+      cells.push_back(line.substr(at, bar - at));
+      at = bar + 1;
+    }
+    if (cells.size() < 4) continue;
+    auto trim = [](std::string v) {
+      v.erase(0, v.find_first_not_of(' '));
+      v.erase(v.find_last_not_of(' ') + 1);
+      return v;
+    };
+    std::string key = trim(cells[0]);
+    if (key.size() < 2 || key.front() != '`' || key.back() != '`') continue;
+    out[key.substr(1, key.size() - 2)] = {trim(cells[1]), trim(cells[3])};
+  }
+  return out;
+}
+
+// A default as a value to compare: a number, a list of numbers, true/false or a quoted string
+// (the first word of the cell, backticks dropped, U+2212 as '-'); "" for prose, "–" and the like,
+// which say what the default is in words and are not compared.
+std::string comparable(std::string cell) {
+  for (std::size_t p; (p = cell.find("\u2212")) != std::string::npos;) cell.replace(p, 3, "-");
+  cell.erase(std::remove(cell.begin(), cell.end(), '`'), cell.end());
+  if (cell.empty()) return "";
+  if (cell[0] == '"') {
+    const std::size_t end = cell.find('"', 1);
+    return end == std::string::npos ? "" : cell.substr(0, end + 1);
+  }
+  if (cell[0] == '[') {
+    const std::size_t end = cell.find(']');
+    if (end == std::string::npos) return "";
+    std::string list = "[", inner = cell.substr(1, end - 1);
+    std::istringstream items(inner);
+    std::string item;
+    while (std::getline(items, item, ',')) {
+      char* stop = nullptr;
+      const double v = std::strtod(item.c_str(), &stop);
+      if (stop == item.c_str()) return "";
+      std::ostringstream o;
+      o << v;
+      list += (list.size() > 1 ? ", " : "") + o.str();
+    }
+    return list + "]";
+  }
+  const std::string word = cell.substr(0, cell.find(' '));
+  if (word == "true" || word == "false") return word;
+  char* stop = nullptr;
+  const double v = std::strtod(word.c_str(), &stop);
+  if (stop == word.c_str() || *stop != '\0') return "";
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
+// A number's type cell ("number > 0", "number in (−1, 0.5]", "number") as Range::describe words it
+// ("a number > 0", ...); "" for a cell that is not a number's range in symbols.
+std::string range_words(std::string cell) {
+  if (cell.rfind("number", 0) != 0) return "";
+  if (cell == "number") return "a finite number";
+  const std::pair<const char*, const char*> symbols[] = {
+      {"\u2212", "-"}, {"\u2265", ">="}, {"\u2264", "<="}, {"10\u2076", "1e6"}, {"10\u2078", "1e8"}};
+  for (const auto& [from, to] : symbols)
+    for (std::size_t p; (p = cell.find(from)) != std::string::npos;) cell.replace(p, std::strlen(from), to);
+  std::string out = "a ";
+  for (std::size_t i = 0; i < cell.size();) {  // numbers written as fmt writes them (1e+06)
+    const char c = cell[i];
+    const bool starts_number =
+        std::isdigit(static_cast<unsigned char>(c)) ||
+        (c == '-' && i + 1 < cell.size() && std::isdigit(static_cast<unsigned char>(cell[i + 1])));
+    if (!starts_number) {
+      if (static_cast<unsigned char>(c) >= 0x80) return "";  // another symbol (δ): prose
+      out += c;
+      ++i;
+      continue;
+    }
+    char* stop = nullptr;
+    const double v = std::strtod(cell.c_str() + i, &stop);
+    std::ostringstream o;
+    o << v;
+    out += o.str();
+    i = static_cast<std::size_t>(stop - cell.c_str());
+  }
+  return out;
+}
+
+}  // namespace
+
+// Every key a demo reads is in docs/scenes.md, and where the docs give its default as a value
+// (a number, list, boolean or quoted string), it is the default the parser gave when it read the
+// key (SceneFile::key_defaults: the parsers' own fallbacks, recorded as they read).
 TEST(Scene, EveryKeyReadByTheDemosIsDocumented) {
   std::ifstream doc(std::string(ISOCHOR_SOURCE_DIR) + "/docs/scenes.md");
   ASSERT_TRUE(doc) << "docs/scenes.md is missing";
@@ -205,6 +317,8 @@ TEST(Scene, EveryKeyReadByTheDemosIsDocumented) {
       if (k.rfind(prefix, 0) == 0 && k.find('.', prefix.size()) == std::string::npos) return true;
     return false;
   };
+  const std::map<std::string, DocRow> rows = documented_rows(text);
+  std::map<std::string, std::set<std::string>> code_defaults, code_ranges;
   int scenes = 0;
   for (const auto& e : fs::directory_iterator(std::string(ISOCHOR_SOURCE_DIR) + "/demos")) {
     if (e.path().extension() != ".toml") continue;
@@ -212,8 +326,32 @@ TEST(Scene, EveryKeyReadByTheDemosIsDocumented) {
     scenes++;
     for (const std::string& k : sc.file.queried_keys())
       EXPECT_TRUE(is_documented(k)) << k << " (read by " << e.path().filename() << ") is not in docs/scenes.md";
+    for (const auto& [k, values] : sc.file.key_defaults()) code_defaults[k].insert(values.begin(), values.end());
+    for (const auto& [k, values] : sc.file.key_ranges()) code_ranges[k].insert(values.begin(), values.end());
   }
   EXPECT_GT(scenes, 0);
+  int compared = 0, ranges = 0;
+  for (const auto& [key, row] : rows) {
+    const auto code = code_defaults.find(key);
+    const std::string doc_value = comparable(row.fallback);
+    if (code != code_defaults.end() && !doc_value.empty()) {
+      std::set<std::string> values;
+      for (const std::string& v : code->second) values.insert(comparable(v));
+      ++compared;
+      EXPECT_TRUE(values.count(doc_value))
+          << key << ": docs/scenes.md gives the default " << row.fallback << ", the parser " << *code->second.begin()
+          << (code->second.size() > 1 ? " (and others)" : "");
+    }
+    const auto range = code_ranges.find(key);
+    const std::string doc_range = range_words(row.type);
+    if (range != code_ranges.end() && !doc_range.empty()) {
+      ++ranges;
+      EXPECT_TRUE(range->second.count(doc_range))
+          << key << ": docs/scenes.md gives the type " << row.type << ", the parser checks " << *range->second.begin();
+    }
+  }
+  EXPECT_GT(compared, 100);
+  EXPECT_GT(ranges, 50);
 }
 
 TEST(Scene, RingZonesOnePerNode) {

@@ -113,6 +113,7 @@ std::string Section::where(std::string_view key) const {
 void Section::fail(std::string_view key, const std::string& message) const { throw Error(where(key) + ": " + message); }
 
 std::optional<double> Section::number_opt(std::string_view key, Range range) const {
+  note_range(key, range);
   const toml::node* n = get(key);
   if (!n) return std::nullopt;
   double v;
@@ -126,7 +127,16 @@ std::optional<double> Section::number_opt(std::string_view key, Range range) con
   return v;
 }
 
+void Section::note_default(std::string_view key, std::string text) const {
+  file_->defaults_[strip_indices(full(key))].insert(std::move(text));
+}
+
+void Section::note_range(std::string_view key, const Range& range) const {
+  file_->ranges_[strip_indices(full(key))].insert(range.describe());
+}
+
 double Section::number(std::string_view key, double fallback, Range range) const {
+  note_default(key, fmt(fallback));
   return number_opt(key, range).value_or(fallback);
 }
 
@@ -142,10 +152,12 @@ std::optional<long> Section::integer_opt(std::string_view key, long min, long ma
 }
 
 long Section::integer(std::string_view key, long fallback, long min, long max) const {
+  note_default(key, std::to_string(fallback));
   return integer_opt(key, min, max).value_or(fallback);
 }
 
 bool Section::boolean(std::string_view key, bool fallback) const {
+  note_default(key, fallback ? "true" : "false");
   const toml::node* n = get(key);
   if (!n) return fallback;
   auto b = n->as_boolean();
@@ -171,6 +183,7 @@ std::optional<std::string> Section::string_opt(std::string_view key, const std::
 
 std::string Section::string(std::string_view key, const std::string& fallback,
                             const std::vector<std::string>& choices) const {
+  note_default(key, "\"" + fallback + "\"");
   return string_opt(key, choices).value_or(fallback);
 }
 
@@ -247,14 +260,19 @@ std::optional<Eigen::Vector3d> Section::vec3_opt(std::string_view key, Range ran
 }
 
 Eigen::Vector3d Section::vec3(std::string_view key, const Eigen::Vector3d& fallback, Range range) const {
+  note_default(key, "[" + fmt(fallback[0]) + ", " + fmt(fallback[1]) + ", " + fmt(fallback[2]) + "]");
   return vec3_opt(key, range).value_or(fallback);
 }
 
 std::array<long, 3> Section::int3(std::string_view key, std::array<long, 3> fallback, long min, long max) const {
+  note_default(key, fallback[0] == fallback[1] && fallback[1] == fallback[2]
+                        ? std::to_string(fallback[0])
+                        : "[" + std::to_string(fallback[0]) + ", " + std::to_string(fallback[1]) + ", " +
+                              std::to_string(fallback[2]) + "]");
   const toml::node* n = get(key);
   if (!n) return fallback;
   if (n->is_integer()) {
-    long v = integer(key, 0, min, max);
+    const long v = *integer_opt(key, min, max);
     return {v, v, v};
   }
   if (!n->is_array())

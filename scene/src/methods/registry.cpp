@@ -33,9 +33,9 @@ std::unique_ptr<Integrator> make_integrator(const Scene& scene, SceneSystem& sys
   return integrator_entry(scene.integrator.kind).make(scene, system);
 }
 
-long parse_max_steps(const Section& in) { return in.integer("max_steps", 10000000, 1, 1000000000000L); }
+long parse_max_steps(const Section& in) { return in.integer("max_steps", kDefaultMaxSteps, 1, 1000000000000L); }
 
-double parse_dt(const Section& in) { return in.number("dt", 1e-3, Range::positive()); }
+double parse_dt(const Section& in) { return in.number("dt", kDefaultFixedStep, Range::positive()); }
 
 static std::string linear_solver_name(const Section& in) {
   return in.string("linear_solver", "auto", {"auto", "klu", "reduced", "krylov", "amg"});

@@ -84,6 +84,9 @@ class Section {
   // Marks the key as read; `leaf` keys (values, not tables) are recorded in queried_keys().
   const toml::node* get(std::string_view key, bool leaf = true) const;
   std::string full(std::string_view key) const;
+  // Records the default a parser gave for the key (key_defaults()), and a number's range.
+  void note_default(std::string_view key, std::string text) const;
+  void note_range(std::string_view key, const Range& range) const;
   const SceneFile* file_ = nullptr;
   const toml::table* table_ = nullptr;
   std::string path_;
@@ -113,6 +116,12 @@ class SceneFile {
   // Every dotted value key (array indices dropped, tables left out) that parsers asked for,
   // present or not.
   const std::set<std::string>& queried_keys() const { return queried_; }
+  // The default each parser gave for a key it read with one (number, integer, boolean, string,
+  // vec3, int3), as text: a key read in several places may carry several. docs/scenes.md's
+  // default column is checked against them (Scene.EveryKeyReadByTheDemosIsDocumented).
+  const std::map<std::string, std::set<std::string>>& key_defaults() const { return defaults_; }
+  // The range each parser checked a number key against (Range::describe), likewise.
+  const std::map<std::string, std::set<std::string>>& key_ranges() const { return ranges_; }
 
  private:
   friend class Section;
@@ -122,6 +131,7 @@ class SceneFile {
   mutable std::set<const toml::node*> read_;
   mutable std::map<std::string, std::set<std::string>> asked_;  // table path -> keys asked for
   mutable std::set<std::string> queried_;
+  mutable std::map<std::string, std::set<std::string>> defaults_, ranges_;
 };
 
 }  // namespace isochor
