@@ -8,7 +8,7 @@ Serves on 127.0.0.1 only (port 0, the default, takes a free one) and opens the b
 --no-browser. The page asks for what it shows: /api/meta (the surface, zones, colliders, charts;
 asked again while the run is being written, so a growing run grows on the page) and
 /api/frame/K (one frame, binary: its time, the surface nodes' positions, each surface face's
-volume change, each surface node's contact force and the colliders' poses), so a run of 10^5
+volume change, each surface node's contact force, the colliders' and the bones' poses), so a run of 10^5
 frames opens as fast as one of ten. --export DIR writes a folder that opens from disk with no
 server (every K-th frame; data as scripts, which a page opened from file:// may load).
 The page itself (viewer/, three.js pinned in its lockfile) is built by CMake into
@@ -156,11 +156,15 @@ class Model:
                 "up": [float(u) for u in r.up], "rest": r.rest_positions[self.nodes].astype(float).ravel().tolist(),
                 "faces": self.faces.ravel().tolist(), "face_zone": self.face_zone.tolist(),
                 "zones": r.volume_columns[1:], "has_contact": bool(self.has_contact),
-                "colliders": [collider_json(c) for c in r.colliders], "charts": charts(r)}
+                "colliders": [collider_json(c) for c in r.colliders],
+                "bones": [{"name": b.name, "parent": b.parent, "from": b.start.tolist(), "to": b.end.tolist(),
+                           "radius": b.radius} for b in r.bones],
+                "charts": charts(r)}
 
     def frame(self, k):
         """Frame k's bytes: time (float64), then float32 positions (S,3), face volume change (F),
-        contact force magnitude (S, when the run has contact), collider poses (C,12) and scales (C)."""
+        contact force magnitude (S, when the run has contact), collider poses (C,12) and scales (C),
+        bone poses (B,12)."""
         with self.lock:
             r = self.run
             if r is None:
@@ -173,6 +177,9 @@ class Model:
                 A, b = r.collider_pose(k, c)
                 parts.append(np.r_[A.ravel(), b])
             parts.append([r.collider_scale(k, c) for c in range(len(r.colliders))])
+            for b in range(len(r.bones)):
+                A, t = r.bone_pose(k, b)
+                parts.append(np.r_[A.ravel(), t])
             body = b"".join(np.asarray(p, "<f4").tobytes() for p in parts)
             return struct.pack("<d", float(r.times[k])) + body
 

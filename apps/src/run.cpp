@@ -78,9 +78,9 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
   const bool tets = sys.has_tets();
   return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), contact = Points(),
           poses = std::vector<double>(), scales = std::vector<double>(), activations = std::vector<double>(),
-          velocities = Points(), multipliers = std::vector<double>()](int j, double t, const VectorXd& q,
-                                                                      const VectorXd& v, const VectorXd& lambda,
-                                                                      const RunStats::FrameSample& s) mutable {
+          bones = std::vector<double>(), velocities = Points(),
+          multipliers = std::vector<double>()](int j, double t, const VectorXd& q, const VectorXd& v,
+                                               const VectorXd& lambda, const RunStats::FrameSample& s) mutable {
     if (first >= 0 && j == 0) return;
     const int k = std::max(first, 0) + j;
     sys.set_state(t, q, v);
@@ -110,6 +110,10 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
       f.collider_poses = &poses;
       sys.collider_scales(scales);
       f.collider_scales = &scales;
+    }
+    if (sc.skeleton) {
+      bone_poses(sc, t, bones);
+      f.bone_poses = &bones;
     }
     if (!sc.muscles.empty()) {
       activations = sys.activations();

@@ -282,7 +282,7 @@ struct OutputWriter::Impl {
   bool pressure = false;
   bool zone_index = false;  // /mesh/zone exists (a cell attribute "zone" in the sidecar)
   std::unique_ptr<Series> time, positions, velocities, multipliers, volume, energy, pressure_series, collider_pose,
-      collider_scale, activation;
+      collider_scale, bone_pose, activation;
   // Per-node vectors of a frame, when the scene has them: "load" and "contact" (kNodeVectors).
   std::map<std::string, std::unique_ptr<Series>> node_series;
   std::map<std::string, std::unique_ptr<Series>> stats;
@@ -299,6 +299,7 @@ struct OutputWriter::Impl {
   void write_header(const RunInfo& info);
   void write_mesh(const Mesh& mesh, const Zones& zones);
   void write_colliders(const std::vector<ColliderRecord>& colliders);
+  void write_bones(const std::vector<BoneRecord>& bones);
   void write_muscles(const SceneRecord& scene);
   // A per-frame row series that the first frame may start (collider poses and scales,
   // activations): appended at frame k, its row `row` numbers.
@@ -310,7 +311,7 @@ struct OutputWriter::Impl {
   std::vector<Series*> all_series() {
     std::vector<Series*> all{time.get(),           positions.get(), velocities.get(),      multipliers.get(),
                              volume.get(),         energy.get(),    pressure_series.get(), collider_pose.get(),
-                             collider_scale.get(), activation.get()};
+                             collider_scale.get(), bone_pose.get(), activation.get()};
     for (auto& [name, series] : node_series) all.push_back(series.get());
     for (auto& [name, series] : stats) all.push_back(series.get());
     all.erase(std::remove(all.begin(), all.end(), nullptr), all.end());
@@ -516,6 +517,8 @@ struct OutputWriter::Impl {
       collider_pose = std::make_unique<Series>(frames_group, "collider_pose", H5T_NATIVE_DOUBLE);
     if (H5Lexists(frames_group, "collider_scale", H5P_DEFAULT) > 0)
       collider_scale = std::make_unique<Series>(frames_group, "collider_scale", H5T_NATIVE_DOUBLE);
+    if (H5Lexists(frames_group, "bone_pose", H5P_DEFAULT) > 0)
+      bone_pose = std::make_unique<Series>(frames_group, "bone_pose", H5T_NATIVE_DOUBLE);
     if (H5Lexists(frames_group, "activation", H5P_DEFAULT) > 0)
       activation = std::make_unique<Series>(frames_group, "activation", H5T_NATIVE_DOUBLE);
     volume = std::make_unique<Series>(frames_group, "volume", H5T_NATIVE_DOUBLE);
@@ -672,21 +675,40 @@ void OutputWriter::Impl::write_mesh(const Mesh& mesh, const Zones& zones) {
   zone_index = true;
 }
 
+// /NAME/<k>: one group per record, named by its index and holding its name, filled by `write`.
+template <class Record, class Write>
+void indexed_groups(hid_t file, const char* name, const std::vector<Record>& records, Write&& write) {
+  H g = group(file, name);
+  for (std::size_t k = 0; k < records.size(); ++k) {
+    H one = group(g, std::to_string(k));
+    string_attribute(one, "name", records[k].name);
+    write(one, records[k]);
+  }
+}
+
 // /colliders/<k>: one group per collider in the scene's order (the index of its column in
 // /frames/collider_pose), with its name, shape, dimensions and rest pose; a mesh's surface.
 void OutputWriter::Impl::write_colliders(const std::vector<ColliderRecord>& colliders) {
-  H g = group(file, "colliders");
-  for (std::size_t k = 0; k < colliders.size(); ++k) {
-    const ColliderRecord& c = colliders[k];
-    H one = group(g, std::to_string(k));
-    string_attribute(one, "name", c.name);
+  indexed_groups(file, "colliders", colliders, [](hid_t one, const ColliderRecord& c) {
     string_attribute(one, "shape", c.shape);
     for (const auto& [name, value] : c.dimensions) number_attribute(one, name, value);
     vector_attribute(one, "rest_pose", c.rest_pose.data(), 12);
-    if (c.shape != "mesh") continue;
+    if (c.shape != "mesh") return;
     write_array(one, "vertices", H5T_NATIVE_DOUBLE, {static_cast<hsize_t>(c.vertices.cols()), 3}, c.vertices.data());
     write_array(one, "triangles", H5T_NATIVE_INT, {c.triangles.size(), 3}, c.triangles.data());
-  }
+  });
+}
+
+// /bones/<k>: one group per bone of the skeleton (the index of its row in /frames/bone_pose), with
+// its name, parent (-1: none) and rest capsule (from, to, radius).
+void OutputWriter::Impl::write_bones(const std::vector<BoneRecord>& bones) {
+  if (bones.empty()) return;
+  indexed_groups(file, "bones", bones, [](hid_t one, const BoneRecord& b) {
+    number_attribute(one, "parent", b.parent);
+    vector_attribute(one, "from", b.from.data(), 3);
+    vector_attribute(one, "to", b.to.data(), 3);
+    number_attribute(one, "radius", b.radius);
+  });
 }
 
 // /muscles: the names (attribute `names`, the columns of /frames/activation), each tet's muscle
@@ -770,6 +792,7 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh, const Zone
     m.write_header(info);
     m.write_mesh(mesh, zones);
     m.write_colliders(info.scene.colliders);
+    m.write_bones(info.scene.bones);
     m.write_muscles(info.scene);
     m.create_series(zones);
     check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
@@ -844,6 +867,8 @@ void OutputWriter::Impl::append_frame(const Frame& f, hsize_t k) {
     m.append_optional(m.collider_pose, "collider_pose", *f.collider_poses, {f.collider_poses->size() / 12, 12}, k);
   if (f.collider_scales && !f.collider_scales->empty())
     m.append_optional(m.collider_scale, "collider_scale", *f.collider_scales, {f.collider_scales->size()}, k);
+  if (f.bone_poses && !f.bone_poses->empty())
+    m.append_optional(m.bone_pose, "bone_pose", *f.bone_poses, {f.bone_poses->size() / 12, 12}, k);
   if (f.activations && !f.activations->empty())
     m.append_optional(m.activation, "activation", *f.activations, {f.activations->size()}, k);
   m.volume->append(k, f.volumes.data());
@@ -924,6 +949,7 @@ void OutputWriter::close() {
   m.multipliers.reset();
   m.collider_pose.reset();
   m.collider_scale.reset();
+  m.bone_pose.reset();
   m.activation.reset();
   m.volume.reset();
   m.energy.reset();

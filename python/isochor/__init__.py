@@ -13,11 +13,11 @@ interface and an example study; `python3 -m isochor` (or the `isochor` command t
 puts in an environment) is the command line.
 """
 from ._errors import Error
-from ._runfile import Collider, Run, open  # noqa: A001 (isochor.open is the name users expect)
+from ._runfile import Bone, Collider, Run, open  # noqa: A001 (isochor.open is the name users expect)
 from ._api import Frame, RunResult, load, run, scene, study, study_cases
 from . import _api
 
-__all__ = ["Error", "Scene", "Frame", "RunResult", "Run", "Collider", "load", "scene", "run", "open",
+__all__ = ["Error", "Scene", "Frame", "RunResult", "Run", "Collider", "Bone", "load", "scene", "run", "open",
            "study", "study_cases", "executable"]
 __version__ = "0.1.0"
 
@@ -29,7 +29,7 @@ def __getattr__(name: str):
     raise AttributeError(f"module 'isochor' has no attribute {name!r}")
 
 
-for _public in (Frame, RunResult, Run, Collider, open):
+for _public in (Frame, RunResult, Run, Collider, Bone, open):
     _public.__module__ = __name__  # shown as isochor.Run, and so on
 del _public
 

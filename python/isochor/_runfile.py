@@ -20,6 +20,19 @@ def _text(v: object) -> object:
 
 
 @dataclasses.dataclass
+class Bone:
+    """A bone of the scene's skeleton as the run recorded it (/bones): its name, its parent's index
+    (-1: none) and its capsule in the rest pose (from, to, radius; m, world coordinates). Where it
+    is at frame k: Run.bone_pose(k, index)."""
+    index: int             # its row in /frames/bone_pose (the skeleton's order)
+    name: str
+    parent: int
+    start: np.ndarray      # the capsule's axis from (3,), rest pose
+    end: np.ndarray        # and to (3,)
+    radius: float
+
+
+@dataclasses.dataclass
 class Collider:
     """A collider as the run recorded it (/colliders): its shape and dimensions (m) in its own
     frame (axis z; a mesh: its file's, scaled), its rest pose, and a mesh collider's surface.
@@ -121,6 +134,13 @@ class Run:
                                            np.asarray(a.get("rest_pose", np.r_[np.eye(3).ravel(), 0, 0, 0]), float),
                                            c["vertices"][()] if "vertices" in c else None,
                                            c["triangles"][()] if "triangles" in c else None))
+        self.bones: List[Bone] = []
+        g = h.get("bones")
+        for key in sorted(g.keys() if g is not None else [], key=int):
+            a = {k: _text(v) for k, v in g[key].attrs.items()}
+            self.bones.append(Bone(int(key), str(a.get("name", "")), int(a.get("parent", -1)),
+                                   np.asarray(a.get("from", np.zeros(3)), float), np.asarray(a.get("to", np.zeros(3)), float),
+                                   float(a.get("radius", 0.0))))
         # Muscles: their names (the columns of activation), each tet's muscle (-1: none) and fibre.
         mu = h.get("muscles")
         names = _text(mu.attrs.get("names", "")) if mu is not None else ""
@@ -210,6 +230,16 @@ class Run:
         p = f["collider_pose"][k][c] if "collider_pose" in f and f["collider_pose"].shape[0] > k else self.colliders[c].rest_pose
         return np.asarray(p[:9], float).reshape(3, 3), np.asarray(p[9:], float)
 
+    def bone_pose(self, k: int, b: int) -> Tuple[np.ndarray, np.ndarray]:
+        """Bone b's pose at frame k: (A (3,3), b (3,)), a rest point X of the bone at A X + b (the
+        nodes bound to it are exactly there)."""
+        f = self._h5["frames"]
+        k = self._frame_index(k)
+        if "bone_pose" not in f or not 0 <= b < f["bone_pose"].shape[1]:
+            raise KeyError(f"{self.path}: no bone {b} (bones: {len(self.bones)})")
+        p = f["bone_pose"][k][b]
+        return np.asarray(p[:9], float).reshape(3, 3), np.asarray(p[9:], float)
+
     def zone_volume(self, name: str) -> np.ndarray:
         """(F,) the volume of a zone ("total": the whole body) at every frame."""
         if name not in self.volume_columns:
@@ -234,7 +264,8 @@ class Run:
 
     def __repr__(self) -> str:
         return (f"<isochor.Run {self.path!r}: {len(self.rest_positions)} nodes, {len(self.tets)} tets, "
-                f"{self.num_frames} frames, zones {list(self.zones)}, {len(self.colliders)} colliders, {self.status}>")
+                f"{self.num_frames} frames, zones {list(self.zones)}, {len(self.colliders)} colliders, "
+                f"{len(self.bones)} bones, {self.status}>")
 
 
 def open(path: Union[str, os.PathLike]) -> Run:  # noqa: A001

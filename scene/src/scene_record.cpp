@@ -66,6 +66,10 @@ SceneRecord scene_record(const Scene& sc) {
   }
   r.up = {up.x(), up.y(), up.z()};
   for (const Collider& C : sc.colliders) r.colliders.push_back(collider_record(C));
+  if (sc.skeleton)
+    for (const BoneSpec& b : sc.skeleton->bones())
+      r.bones.push_back(
+          {b.name, b.parent, {b.from.x(), b.from.y(), b.from.z()}, {b.to.x(), b.to.y(), b.to.z()}, b.radius});
   if (!sc.muscles.empty()) {
     const FibreField f = scene_fibre_field(sc);
     for (const Scene::MuscleSpec& m : sc.muscles) r.muscles.push_back(m.name);
@@ -75,6 +79,21 @@ SceneRecord scene_record(const Scene& sc) {
       r.tet_fibre.col(e) = f.muscle_of[e] >= 0 ? f.direction[e] : Eigen::Vector3d::Zero();
   }
   return r;
+}
+
+void bone_poses(const Scene& sc, double t, std::vector<double>& out) {
+  out.clear();
+  if (!sc.skeleton) return;
+  sc.skeleton->realize(t);
+  const std::vector<BoneSpec>& bones = sc.skeleton->bones();
+  for (std::size_t b = 0; b < bones.size(); ++b) {
+    // The bone's frame: a rest point X, at s = X - origin in it, is at R s + p.
+    const Eigen::Matrix3d& R = sc.skeleton->rotation(static_cast<int>(b));
+    const Eigen::Vector3d shift = sc.skeleton->position(static_cast<int>(b)) - R * bones[b].origin;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) out.push_back(R(i, j));
+    for (int i = 0; i < 3; ++i) out.push_back(shift[i]);
+  }
 }
 
 }  // namespace isochor

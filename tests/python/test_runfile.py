@@ -74,3 +74,36 @@ def test_a_file_that_is_not_a_run_is_one_line(tmp_path):
     assert p.returncode == 1 and p.stderr.count("\n") == 1 and "cannot be read as HDF5" in p.stderr
     with pytest.raises(isochor.Error, match=r"/dev/zero: is not a regular file"):
         isochor.open("/dev/zero")
+
+
+def test_bones_and_their_poses_are_where_the_joint_puts_them(tmp_path):
+    # A box with a bone on a pin about z through the origin, turned by keyframes from 0 to 75
+    # degrees over 0.1 s (linear in the angle; the run stops at 0.04 s, within the ramp, so that
+    # IDA meets no kink), binding the nodes with x > 0.4: the recorded pose
+    # is R_z(a(t)) about the origin, and every bound node is at A X + b.
+    table = {"mesh": {"shape": "box", "cells": 2, "size": [1.0, 1.0, 1.0]},
+             "material": {"model": "cnh", "mu": 1e4, "lambda": 1e4},
+             "forces": {"gravity": [0.0, 0.0, 0.0]},
+             "skeleton": {"bone": [{"name": "arm", "joint": "pin", "origin": [0.0, 0.0, 0.0], "axis": [0.0, 0.0, 1.0],
+                                    "direction": [1.0, 0.0, 0.0], "length": 0.4, "radius": 0.05,
+                                    "motion": "keyframes", "times": [0.0, 0.1], "angles": [0.0, 75.0],
+                                    "select": {"kind": "box", "min": [0.4, -1, -1], "max": [1, 1, 1]}}]},
+             "frames": {"rate": 100.0, "duration": 0.04}}
+    out = tmp_path / "bone.h5"
+    isochor.run(isochor.scene(table), out)
+    with isochor.open(out) as run:
+        assert [(b.name, b.parent) for b in run.bones] == [("arm", -1)]
+        np.testing.assert_allclose(run.bones[0].start, [0, 0, 0], atol=1e-15)
+        np.testing.assert_allclose(run.bones[0].end, [0.4, 0, 0], atol=1e-15)
+        assert run.bones[0].radius == 0.05
+        X = run.rest_positions
+        bound = X[:, 0] > 0.4
+        assert bound.sum() == 9  # the box's +x face of a 2x2x2 grid
+        for k, t in enumerate(run.times):
+            a = np.radians(75.0 * t / 0.1)
+            R = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+            A, b = run.bone_pose(k, 0)
+            np.testing.assert_allclose(A, R, atol=1e-12)
+            np.testing.assert_allclose(b, 0, atol=1e-12)
+            np.testing.assert_allclose(run.frame_positions(k)[bound], X[bound] @ A.T + b, atol=1e-12)
+        assert run.num_frames == 5

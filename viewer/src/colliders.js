@@ -1,6 +1,7 @@
 // The run's colliders (/colliders: shape, dimensions in its own frame with axis z, rest pose; a
 // mesh collider's surface) as translucent objects, posed at each frame as the run recorded them
-// (a point l of the shape's frame at A l + b; a band's radius times its scale).
+// (a point l of the shape's frame at A l + b; a band's radius times its scale), and the skeleton's
+// bones (/bones: a capsule in the rest pose) as solid capsules, drawn through the tissue.
 
 function shapeGeometry(THREE, c, size) {
   const d = c.dimensions;
@@ -40,5 +41,28 @@ export function poseCollider(o, c, pose, scale) {
     const s = new o.matrix.constructor().makeScale(scale, scale, c.shape === "sphere" ? scale : 1);
     m.multiply(s);
   }
+  o.matrixWorldNeedsUpdate = true;
+}
+
+// A bone's capsule, built where it lies in the rest pose (world coordinates), so that its pose
+// (A, b: a rest point X at A X + b) is its matrix. A bone with no capsule shows as a small sphere.
+export function boneObject(THREE, bone, radius) {
+  const from = new THREE.Vector3(...bone.from), to = new THREE.Vector3(...bone.to);
+  const r = Math.max(bone.radius, 0.01 * radius);
+  const length = from.distanceTo(to);
+  const geometry = length > 0 ? new THREE.CapsuleGeometry(r, length, 6, 16) : new THREE.SphereGeometry(r, 16, 8);
+  if (length > 0) {
+    const along = new THREE.Quaternion().setFromUnitVectors(new THREE.Vector3(0, 1, 0), to.clone().sub(from).normalize());
+    geometry.applyQuaternion(along);
+  }
+  geometry.translate(...from.clone().add(to).multiplyScalar(0.5).toArray());
+  const o = new THREE.Mesh(geometry, new THREE.MeshStandardMaterial({ color: 0xe8dcc0, depthTest: false, transparent: true, opacity: 0.85 }));
+  o.renderOrder = 2;
+  o.matrixAutoUpdate = false;
+  return o;
+}
+
+export function poseBone(o, pose) {
+  o.matrix.set(pose[0], pose[1], pose[2], pose[9], pose[3], pose[4], pose[5], pose[10], pose[6], pose[7], pose[8], pose[11], 0, 0, 0, 1);
   o.matrixWorldNeedsUpdate = true;
 }

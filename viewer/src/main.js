@@ -7,7 +7,7 @@ import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import { drawChart, timeAt } from "./charts.js";
 import { colourFaces, legendItems } from "./colours.js";
-import { colliderObject, poseCollider } from "./colliders.js";
+import { boneObject, colliderObject, poseBone, poseCollider } from "./colliders.js";
 
 const exported = typeof window.ISOCHOR_META === "object";
 const params = new URLSearchParams(location.search);
@@ -19,7 +19,7 @@ window.addEventListener("error", (e) => pageErrors.push(String(e.message)));
 window.addEventListener("unhandledrejection", (e) => pageErrors.push(String(e.reason)));
 
 const state = { meta: null, frame: 0, shown: -1, playing: false, cache: new Map(), pending: new Map(), colour: params.get("colour") || "zone" };
-let renderer, scene, camera, controls, mesh, colliderObjects = [];
+let renderer, scene, camera, controls, mesh, colliderObjects = [], boneObjects = [];
 
 function fail(message) {
   const box = $("error");
@@ -36,7 +36,8 @@ async function loadMeta() {
   return body;
 }
 
-// One frame: {time, positions (S*3), volume (F), contact (S or null), poses (C*12), scales (C)}.
+// One frame: {time, positions (S*3), volume (F), contact (S or null), poses (C*12), scales (C),
+// bones (B*12)}.
 function decodeFrame(buffer, meta) {
   const S = meta.rest.length / 3, F = meta.face_zone.length, C = meta.colliders.length;
   const time = new DataView(buffer).getFloat64(0, true);
@@ -45,7 +46,7 @@ function decodeFrame(buffer, meta) {
   const take = (n) => f.subarray(at, (at += n));
   const positions = take(3 * S), volume = take(F);
   const contact = meta.has_contact ? take(S) : null;
-  return { time, positions, volume, contact, poses: take(12 * C), scales: take(C) };
+  return { time, positions, volume, contact, poses: take(12 * C), scales: take(C), bones: take(12 * meta.bones.length) };
 }
 
 function fetchFrame(k) {
@@ -135,6 +136,8 @@ function setUpScene(meta, positions) {
 
   colliderObjects = meta.colliders.map((c) => colliderObject(THREE, c, radius, centre));
   colliderObjects.forEach((o) => o && scene.add(o));
+  boneObjects = meta.bones.map((b) => boneObject(THREE, b, radius));
+  boneObjects.forEach((o) => scene.add(o));
   window.addEventListener("resize", () => {
     const [w, h] = viewSize();
     renderer.setSize(w, h);
@@ -160,6 +163,7 @@ function showFrame(frame) {
   mesh.geometry.attributes.color.needsUpdate = true;
   showLegend(legendItems(state.colour, range, meta));
   colliderObjects.forEach((o, c) => o && poseCollider(o, meta.colliders[c], frame.poses.subarray(12 * c, 12 * c + 12), frame.scales[c]));
+  boneObjects.forEach((o, b) => poseBone(o, frame.bones.subarray(12 * b, 12 * b + 12)));
   $("clock").textContent = `frame ${state.frame} / ${meta.frames - 1}   t = ${frame.time.toFixed(4)} s`;
   render();
   drawCharts(frame.time);

@@ -23,11 +23,22 @@ struct ColliderRecord {
   std::vector<Tri> triangles;
 };
 
-// What a viewer needs besides the body: the scene's up direction and its colliders.
+// A bone of the scene's skeleton as the run file records it under /bones (docs/output.md): its
+// name, its parent (-1: none) and its capsule in the rest pose (world coordinates). Where it is
+// at each frame is /frames/bone_pose: A, b with a rest point X at A X + b.
+struct BoneRecord {
+  std::string name;
+  int parent = -1;
+  std::array<double, 3> from{0, 0, 0}, to{0, 0, 0};
+  double radius = 0;
+};
+
+// What a viewer needs besides the body: the scene's up direction, its colliders and bones.
 struct SceneRecord {
   std::array<double, 3> up{0, 0, 1};      // unit
   std::string up_source;                  // why that is up ("the ground's normal", "against gravity", ...)
   std::vector<ColliderRecord> colliders;  // the scene's order: the ground, the planes, the [[collider]]s
+  std::vector<BoneRecord> bones;          // the [skeleton]'s bones, in its order
   // Muscles (/muscles): their names (the columns of /frames/activation), each tet's muscle (-1:
   // none) and rest fibre direction (3 x tets); empty without muscles.
   std::vector<std::string> muscles;
@@ -60,6 +71,9 @@ struct Frame {
   const std::vector<double>* collider_poses = nullptr;
   // Each collider's factor on its radius (Collider::resize; 1: its own), in the same order.
   const std::vector<double>* collider_scales = nullptr;
+  // Where each bone is: 12 numbers per bone, A (row-major) and b with a rest point X at A X + b,
+  // in the order of SceneRecord::bones.
+  const std::vector<double>* bone_poses = nullptr;
   // Each muscle's activation (0..1), in the order of SceneRecord::muscles.
   const std::vector<double>* activations = nullptr;
   std::vector<std::pair<std::string, double>> stats;  // per-frame series under /stats

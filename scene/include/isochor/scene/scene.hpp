@@ -149,8 +149,10 @@ struct Scene {
 // Parses a scene file with overrides; every key is checked and unknown keys are errors.
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
 Scene parse_scene(SceneFile file);
-// What the run file records besides the body: the up direction and the colliders (output.hpp).
+// What the run file records besides the body: the up direction, the colliders and the bones (output.hpp).
 SceneRecord scene_record(const Scene& sc);
+// The skeleton's bones at time t as Frame::bone_poses holds them (12 per bone; empty without one).
+void bone_poses(const Scene& sc, double t, std::vector<double>& out);
 
 // Keyframes of a driver or joint: `times`, `per_time` numbers of `key` per time (scaled by `scale`,
 // into x, y, z of the values) and `interpolation`; `what` names the numbers in errors. The knots
