@@ -23,7 +23,9 @@ PIL = pytest.importorskip("PIL.Image")
 from PIL import Image, ImageDraw  # noqa: E402
 
 CHROMIUM = shutil.which("chromium")
-pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (optional: apt-get install chromium)")
+PAGE = os.path.join(os.path.dirname(EXE), "viewer", "static", "viewer.js")  # built where npm reached its registry
+pytestmark = [pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (optional: apt-get install chromium)"),
+              pytest.mark.skipif(not os.path.isfile(PAGE), reason="the page is not built (npm: viewer/build.sh)")]
 BACKGROUND = np.array([244, 244, 242])  # the page's clear colour, #f4f4f2
 
 
