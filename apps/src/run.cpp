@@ -76,7 +76,9 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
                            const std::function<bool(int, const Frame&)>& on_frame) {
   const auto start = std::chrono::steady_clock::now();
   const bool tets = sys.has_tets();
-  return [&, start, tets, first, pressure = std::vector<double>(), loads = Points(), contact = Points(),
+  // The callback outlives this call: the values of this call by value (a bool parameter taken by
+  // reference was read after the call had returned: AddressSanitizer), the caller's objects by reference.
+  return [&, start, tets, first, progress, pressure = std::vector<double>(), loads = Points(), contact = Points(),
           poses = std::vector<double>(), scales = std::vector<double>(), activations = std::vector<double>(),
           bones = std::vector<double>(), velocities = Points(),
           multipliers = std::vector<double>()](int j, double t, const VectorXd& q, const VectorXd& v,
