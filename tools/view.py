@@ -228,18 +228,30 @@ def handler(model, static):
 
 
 def export(model, static, out, every):
-    """A folder that opens from disk: the page, its meta and every `every`-th frame as scripts."""
-    os.makedirs(os.path.join(out, "data"), exist_ok=True)
-    for name in ("index.html", "viewer.js", "style.css"):
-        shutil.copyfile(os.path.join(static, name), os.path.join(out, name))
-    meta = model.meta()
+    """A folder that opens from disk: the page, its meta and every `every`-th frame as scripts.
+    Written into OUT.part and renamed into place (an earlier OUT replaced only then): a full disk
+    or a file size limit leaves OUT as it was and no part folder, with one line."""
+    out = os.path.normpath(out)
+    part = out + ".part"
     frames = list(range(0, model.run.num_frames, max(1, every)))
-    meta["exported_frames"] = frames
-    with open(os.path.join(out, "data", "meta.js"), "w") as f:
-        f.write("window.ISOCHOR_META = " + json.dumps(meta) + ";\n")
-    for k in frames:
-        with open(os.path.join(out, "data", f"frame_{k}.js"), "w") as f:
-            f.write(f"window.ISOCHOR_FRAME({k}, \"{base64.b64encode(model.frame(k)).decode()}\");\n")
+    try:
+        shutil.rmtree(part, ignore_errors=True)
+        os.makedirs(os.path.join(part, "data"))
+        for name in ("index.html", "viewer.js", "style.css"):
+            shutil.copyfile(os.path.join(static, name), os.path.join(part, name))
+        meta = model.meta()
+        meta["exported_frames"] = frames
+        with open(os.path.join(part, "data", "meta.js"), "w") as f:
+            f.write("window.ISOCHOR_META = " + json.dumps(meta) + ";\n")
+        for k in frames:
+            with open(os.path.join(part, "data", f"frame_{k}.js"), "w") as f:
+                f.write(f"window.ISOCHOR_FRAME({k}, \"{base64.b64encode(model.frame(k)).decode()}\");\n")
+        if os.path.isdir(out):
+            shutil.rmtree(out)
+        os.replace(part, out)
+    except OSError as e:
+        shutil.rmtree(part, ignore_errors=True)
+        sys.exit(f"isochor view: {out}: cannot be written ({e.strerror or e}); nothing was written")
     print(f"isochor view: wrote {out}/index.html ({len(frames)} frames; open it in a browser)")
 
 

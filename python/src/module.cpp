@@ -356,6 +356,12 @@ std::filesystem::path module_directory() {
   return ec ? std::filesystem::path() : file.parent_path();
 }
 
+// The command line that studies run their cases with: the package's, else the build tree's.
+const std::string& module_executable() {
+  static const std::string exe = executable_beside(module_directory(), ISOCHOR_EXE).string();
+  return exe;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_isochor, m) {
@@ -404,12 +410,12 @@ PYBIND11_MODULE(_isochor, m) {
         int failed = 0;
         {
           py::gil_scoped_release nogil;
-          failed = run_study(s, executable_beside(module_directory(), ISOCHOR_EXE).string(), resume, progress);
+          failed = run_study(s, module_executable(), resume, progress);
         }
         return py::make_tuple(s.output.string(), failed);
       },
       py::arg("path"), py::arg("overrides") = py::none(), py::arg("resume") = false, py::arg("progress") = false,
       "Runs a study's cases; its output folder and the count that failed (isochor.study)");
-  m.attr("executable") = executable_beside(module_directory(), ISOCHOR_EXE).string();
+  m.attr("executable") = module_executable();
   m.attr("tools_dir") = tools_directory(module_directory(), ISOCHOR_TOOLS_DIR).string();
 }

@@ -6,6 +6,7 @@ canvas's place, and every error the page itself met. The silhouette in the scree
 against the run's own surface at that frame projected with that matrix here (numpy and PIL), so
 the drawing is tested against the positions in the file, not against itself.
 """
+import concurrent.futures
 import json
 import os
 import re
@@ -24,8 +25,8 @@ from PIL import Image, ImageDraw  # noqa: E402
 
 CHROMIUM = shutil.which("chromium")
 PAGE = os.path.join(os.path.dirname(EXE), "viewer", "static", "viewer.js")  # built where npm reached its registry
-pytestmark = [pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (optional: apt-get install chromium)"),
-              pytest.mark.skipif(not os.path.isfile(PAGE), reason="the page is not built (npm: viewer/build.sh)")]
+pytestmark = pytest.mark.skipif(not os.path.isfile(PAGE), reason="the page is not built (npm: viewer/build.sh)")
+needs_chromium = pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (optional: apt-get install chromium)")
 BACKGROUND = np.array([244, 244, 242])  # the page's clear colour, #f4f4f2
 
 
@@ -97,11 +98,15 @@ def iou(a, b):
     return (a & b).sum() / max((a | b).sum(), 1)
 
 
+@needs_chromium
 def test_the_page_draws_the_runs_surface_and_steps_through_frames(swing, tmp_path):
     server = Server(swing)
     try:
-        s0, shot0, console0, error0 = browse(server.url + "?size=760x520&frame=0", tmp_path / "f0.png")
-        s1, shot1, console1, error1 = browse(server.url + "?size=760x520&frame=28&steps=2", tmp_path / "f30.png")
+        with concurrent.futures.ThreadPoolExecutor(2) as pool:  # two browsers at once: each mostly waits
+            first = pool.submit(browse, server.url + "?size=760x520&frame=0", tmp_path / "f0.png")
+            second = pool.submit(browse, server.url + "?size=760x520&frame=28&steps=2", tmp_path / "f30.png")
+            s0, shot0, console0, error0 = first.result()
+            s1, shot1, console1, error1 = second.result()
     finally:
         server.stop()
     for s, console, error in ((s0, console0, error0), (s1, console1, error1)):
@@ -114,6 +119,7 @@ def test_the_page_draws_the_runs_surface_and_steps_through_frames(swing, tmp_pat
     assert iou(m0, m1) < 0.9  # stepping moved it: the swing has fallen by frame 30
 
 
+@needs_chromium
 def test_an_exported_folder_opens_from_disk_like_the_served_page(swing, tmp_path):
     out = tmp_path / "page"
     p = subprocess.run([EXE, "view", str(swing), "--export", str(out), "--every", "10"], capture_output=True,
@@ -125,6 +131,7 @@ def test_an_exported_folder_opens_from_disk_like_the_served_page(swing, tmp_path
     assert iou(drawn_mask(shot, s), projected_mask(swing, 20, s)) > 0.95
 
 
+@needs_chromium
 def test_a_bad_file_is_one_line_on_the_terminal_and_a_message_on_the_page(swing, tmp_path):
     bad = tmp_path / "bad.h5"
     bad.write_text("not a run")
@@ -141,3 +148,17 @@ def test_a_bad_file_is_one_line_on_the_terminal_and_a_message_on_the_page(swing,
         _, err = server.stop()
     assert "error" in s and "cannot be read as HDF5" in s["error"] and "cannot be read as HDF5" in error
     assert "cannot be read as HDF5" in err  # and on the terminal
+
+
+def test_an_export_onto_a_full_disk_is_one_line_and_leaves_the_old_folder(swing, tmp_path):
+    # A file size limit (as a nearly full disk) below the first frame's script: one line, exit 1,
+    # the earlier export untouched and no part folder left.
+    out = tmp_path / "page"
+    out.mkdir()
+    (out / "index.html").write_text("an earlier export")
+    p = subprocess.run(["sh", "-c", f"ulimit -f 64; exec '{EXE}' view '{swing}' --export '{out}'"],
+                       capture_output=True, text=True, timeout=60)
+    assert p.returncode == 1 and len(p.stderr.splitlines()) == 1, p.stderr
+    assert "cannot be written" in p.stderr and "nothing was written" in p.stderr
+    assert (out / "index.html").read_text() == "an earlier export"
+    assert not os.path.exists(str(out) + ".part")
