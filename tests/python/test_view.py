@@ -58,7 +58,7 @@ def browse(url, shot):
     """The page after its scripts ran (virtual time): the #state JSON, the screenshot, and what
     Chromium printed from the page's console."""
     p = subprocess.run([CHROMIUM, "--headless=new", "--no-sandbox", "--use-angle=swiftshader",
-                        "--enable-unsafe-swiftshader", "--window-size=1200,700", "--virtual-time-budget=3000",
+                        "--enable-unsafe-swiftshader", "--window-size=1200,700", "--virtual-time-budget=10000",
                         "--no-first-run", "--disable-extensions", "--disable-background-networking",
                         "--enable-logging=stderr", "--v=0", f"--screenshot={shot}", "--dump-dom", url],
                        capture_output=True, text=True, timeout=120)
