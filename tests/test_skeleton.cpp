@@ -12,6 +12,7 @@
 #include "isochor/core/paint.hpp"
 #include "isochor/app/run.hpp"
 #include "isochor/scene/scene.hpp"
+#include "gltf_builder.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;
@@ -313,6 +314,105 @@ TEST(Skeleton, ZoneConstraintTimeDerivativeFollowsTheBones) {
   const Eigen::VectorXd fd = (g_at(t + 1e-6) - g_at(t - 1e-6)) / 2e-6;
   EXPECT_LT((gt - fd).norm(), 1e-7 * (1 + fd.norm()));
   EXPECT_GT(fd.norm(), 1e-3);  // not vacuous
+}
+
+// A bar [0, 1] x [-0.2, 0.2]^2 skinned to joint "a" at (0.1, 0, 0) (the corners at x = 0) and its
+// child "b" at (0.5, 0, 0) (the corners at x = 1); the clip "bend" turns b by 90 degrees about z and
+// lifts a by 0.2 along z over its one second (LINEAR keys).
+std::string bar_character(const std::string& name) {
+  test::GltfBuilder g;
+  std::vector<float> corners;
+  std::vector<std::uint8_t> joints;
+  std::vector<float> weights;
+  for (int k = 0; k < 8; ++k) {
+    const float x = (k & 1) ? 1.0f : 0.0f, y = (k & 2) ? 0.2f : -0.2f, z = (k & 4) ? 0.2f : -0.2f;
+    corners.insert(corners.end(), {x, y, z});
+    joints.insert(joints.end(), {static_cast<std::uint8_t>(k & 1), 0, 0, 0});
+    weights.insert(weights.end(), {1, 0, 0, 0});
+  }
+  // The cube's 12 triangles, outward (vertex k has bits x, y, z).
+  const std::vector<std::uint16_t> tris = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                                           2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
+  const int pos = g.floats(corners, "VEC3");
+  const int idx = g.add(tris, "SCALAR", 5123);
+  const int jnt = g.add(joints, "VEC4", 5121);
+  const int wgt = g.floats(weights, "VEC4");
+  std::vector<float> ibm = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -0.1f, 0, 0, 1,
+                            1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -0.5f, 0, 0, 1};
+  const int ibm_acc = g.floats(ibm, "MAT4");
+  const int times = g.floats({0, 1}, "SCALAR");
+  const float h = static_cast<float>(std::sqrt(0.5));
+  const int rot = g.floats({0, 0, 0, 1, 0, 0, h, h}, "VEC4");
+  const int lift = g.floats({0.1f, 0, 0, 0.1f, 0, 0.2f}, "VEC3");
+  g.nodes = R"([{"mesh":0,"skin":0},{"name":"a","translation":[0.1,0,0],"children":[2]},)"
+            R"({"name":"b","translation":[0.4,0,0]}])";
+  g.scenes = R"([{"nodes":[0,1]}])";
+  g.skinned_mesh(pos, jnt, wgt, idx);
+  g.skins = "[{\"joints\":[1,2],\"inverseBindMatrices\":" + std::to_string(ibm_acc) + "}]";
+  g.animations = "[{\"name\":\"bend\",\"samplers\":[{\"input\":" + std::to_string(times) +
+                 ",\"output\":" + std::to_string(rot) + "},{\"input\":" + std::to_string(times) +
+                 ",\"output\":" + std::to_string(lift) +
+                 "}],\"channels\":[{\"sampler\":0,\"target\":{\"node\":2,\"path\":\"rotation\"}},"
+                 "{\"sampler\":1,\"target\":{\"node\":1,\"path\":\"translation\"}}]}]";
+  return g.write(name);
+}
+
+Scene character_scene(const std::string& glb, const std::string& extra = "") {
+  return parse_scene(
+      SceneFile::parse("[character]\nfile = \"" + glb + "\"\nclip = \"bend\"\nedge_length = 0.08\n" +
+                           "loop = false\n[material]\nmodel = \"cnh\"\nmu = 1000.0\nlambda = 1000.0\n" +
+                           "[zones]\nfrom_mesh = true\nglobal = false\n[frames]\nrate = 10.0\nduration = 2.0\n" + extra,
+                       "character.toml"));
+}
+
+// The bones follow the clip: after the half-second blend from rest, the clip's end (t = 1.5)
+// turns b's nodes by 90 degrees about its joint (0.5, 0, 0) and lifts every bound node by 0.2; the
+// driven velocities are the time derivatives of the positions; the render mesh embedded in the
+// tets is the input at rest; zones are the joints' regions.
+TEST(Character, BonesFollowTheGltfClipAndTheRenderMeshIsEmbedded) {
+  const Scene s = character_scene(bar_character("bar.gltf"));
+  ASSERT_TRUE(s.skeleton);
+  ASSERT_TRUE(s.render);
+  const auto& bones = s.skeleton->bones();
+  ASSERT_EQ(bones.size(), 2u);
+  EXPECT_EQ(bones[0].name, "a");
+  EXPECT_EQ(bones[1].parent, 0);
+  EXPECT_FALSE(bones[0].nodes.empty());
+  EXPECT_FALSE(bones[1].nodes.empty());
+  const Points& X = s.mesh.rest_positions();
+  const Eigen::Vector3d pivot(0.5, 0, 0), lift(0, 0, 0.2);
+  for (double t : {0.0, 1.5, 1.9}) {
+    Points x;
+    Eigen::VectorXd v;
+    drive(s, t, x, v);
+    const double done = t >= 1.5 ? 1.0 : 0.0;
+    double worst = 0;
+    for (int n : bones[0].nodes) worst = std::max(worst, (x.col(n) - (X.col(n) + done * lift)).norm());
+    for (int n : bones[1].nodes) {
+      const Eigen::Vector3d turned = pivot + rot({0, 0, 1}, done * M_PI / 2) * (X.col(n) - pivot);
+      worst = std::max(worst, (x.col(n) - (turned + done * lift)).norm());
+    }
+    EXPECT_LT(worst, 1e-6) << "t = " << t;  // glTF stores float32: sqrt(1/2) to 3e-8
+  }
+  for (double t : {0.3, 0.8, 1.2}) EXPECT_LT(velocity_error(s, t), 1e-5) << "t = " << t;
+  const Points at_rest = s.render->embedding.positions(s.mesh, X);
+  EXPECT_LT((at_rest - s.render->rest).cwiseAbs().maxCoeff(), 1e-9);
+  ASSERT_EQ(s.zones.size(), 2u);
+  EXPECT_EQ(s.zones[0].first, "a");
+  EXPECT_EQ(s.zones[1].first, "b");
+  test::expect_closed_outward(s.mesh);
+}
+
+TEST(Character, BadInputNamesTheKey) {
+  const std::string bar = bar_character("bar.gltf");
+  EXPECT_NE(test::error_of([&] {
+              character_scene(bar, "[mesh]\nshape = \"box\"\n");
+            }).find("a [character] brings its own mesh and skeleton (expected no [mesh])"),
+            std::string::npos);
+  const std::string e = test::error_of(
+      [&] { parse_scene(SceneFile::parse("[character]\nfile = \"" + bar + "\"\nclip = \"walk\"\n", "c.toml")); });
+  EXPECT_NE(e.find("character.clip"), std::string::npos) << e;
+  EXPECT_NE(e.find("no animation \"walk\" (expected one of \"bend\""), std::string::npos) << e;
 }
 
 TEST(Skeleton, BadInputNamesTheBoneAndWhatWasExpected) {

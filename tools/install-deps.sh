@@ -6,7 +6,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake git pkg-config universal-ctags clang-format
-  libeigen3-dev libhdf5-dev libgmsh-dev gmsh libtomlplusplus-dev libcli11-dev libnanoflann-dev libcgal-dev
+  libeigen3-dev libhdf5-dev libgmsh-dev gmsh libtomlplusplus-dev libcli11-dev libnanoflann-dev libcgal-dev libtinygltf-dev
   libsundials-dev libsuitesparse-dev libmetis-dev libsimbody-dev
   libopenblas0-pthread
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -485,6 +485,10 @@ Mesh mesh_closed_surface(const std::string& path, double edge_length) {
   Points x;
   std::vector<Tri> tris;
   read_surface(path, x, tris);
+  return mesh_closed_surface(x, std::move(tris), edge_length, path);
+}
+
+Mesh mesh_closed_surface(const Points& x, std::vector<Tri> tris, double edge_length, const std::string& path) {
   if (tris.empty()) throw Error(path + ": has no triangles (expected a closed surface)");
   SurfaceCheck sc = check_surface(tris);
   if (!sc.closed)

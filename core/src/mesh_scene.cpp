@@ -11,8 +11,6 @@
 
 namespace isochor {
 
-namespace {
-
 // Before meshing: a mesh of about `tets` tets must fit this machine's memory while it runs.
 void check_tets(const Section& s, const std::string& key, double tets) {
   const double ram = physical_memory_mb();
@@ -41,6 +39,8 @@ void check_size(const Section& s, const std::string& key, double size) {
 
 // Tets of a Gmsh mesh of volume V at edge length h, at least.
 double gmsh_tets(double volume, double h) { return kGmshTetsPerEdgeCube * volume / (h * h * h); }
+
+namespace {
 
 // A closed surface file filled with tets: with an edge_length, the tets it makes are estimated
 // from the enclosed volume before Gmsh runs, as for the shapes.

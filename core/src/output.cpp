@@ -301,6 +301,7 @@ struct OutputWriter::Impl {
   void write_colliders(const std::vector<ColliderRecord>& colliders);
   void write_bones(const std::vector<BoneRecord>& bones);
   void write_muscles(const SceneRecord& scene);
+  void write_render(const SceneRecord& scene);
   // A per-frame row series that the first frame may start (collider poses and scales,
   // activations): appended at frame k, its row `row` numbers.
   void append_optional(std::unique_ptr<Series>& series, const char* name, const std::vector<double>& values,
@@ -724,6 +725,21 @@ void OutputWriter::Impl::write_muscles(const SceneRecord& scene) {
               scene.tet_fibre.data());
 }
 
+// /render: an artist's mesh carried by the tets (attribute `source`, the file it came from): its
+// rest vertices (`rest`, n x 3), `triangles` (m x 3), and each vertex's tet (`tet`) and barycentric
+// weights there (`weights`, n x 4): at a frame, x_v = sum_k weights[v][k] positions[tets[tet[v]][k]].
+void OutputWriter::Impl::write_render(const SceneRecord& scene) {
+  if (!scene.render) return;
+  const RenderMesh& r = *scene.render;
+  H g = group(file, "render");
+  string_attribute(g, "source", r.source);
+  const hsize_t n = static_cast<hsize_t>(r.rest.cols());
+  write_array(g, "rest", H5T_NATIVE_DOUBLE, {n, 3}, r.rest.data());
+  write_array(g, "triangles", H5T_NATIVE_INT, {r.triangles.size(), 3}, r.triangles.data());
+  write_array(g, "tet", H5T_NATIVE_INT, {n}, r.embedding.tet.data());
+  write_array(g, "weights", H5T_NATIVE_DOUBLE, {n, 4}, r.embedding.weights.data());
+}
+
 void OutputWriter::Impl::append_optional(std::unique_ptr<Series>& series, const char* name,
                                          const std::vector<double>& values, std::vector<hsize_t> row, hsize_t k) {
   if (!series) {
@@ -794,6 +810,7 @@ OutputWriter::OutputWriter(const std::string& path, const Mesh& mesh, const Zone
     m.write_colliders(info.scene.colliders);
     m.write_bones(info.scene.bones);
     m.write_muscles(info.scene);
+    m.write_render(info.scene);
     m.create_series(zones);
     check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
   } catch (const Error& e) {  // a full disk or a size limit before the first frame: nothing is kept

@@ -8,9 +8,7 @@
 
 namespace isochor {
 
-namespace {
-// Keyframe segment containing t (clamped to the ends) and the local parameter s in [0, 1].
-int segment(const std::vector<double>& times, double t, double& s) {
+int key_segment(const std::vector<double>& times, double t, double& s) {
   const int n = static_cast<int>(times.size());
   if (t <= times.front()) {
     s = 0;
@@ -24,14 +22,6 @@ int segment(const std::vector<double>& times, double t, double& s) {
   s = (t - times[i]) / (times[i + 1] - times[i]);
   return std::min(i, n - 2);
 }
-// Catmull-Rom tangent at keyframe k; zero at the first and last keys, where the value is then
-// held, so that the motion is C^1 at the ends too (a driven velocity that jumps stalls IDA).
-Eigen::Vector3d tangent(const std::vector<double>& times, const std::vector<Eigen::Vector3d>& values, int k) {
-  const int n = static_cast<int>(times.size());
-  if (k == 0 || k == n - 1) return Eigen::Vector3d::Zero();
-  return (values[k + 1] - values[k - 1]) / (times[k + 1] - times[k - 1]);
-}
-}  // namespace
 
 Eigen::Vector3d Driver::displacement(double t) const {
   switch (kind) {
@@ -44,17 +34,16 @@ Eigen::Vector3d Driver::displacement(double t) const {
     default:
       break;
   }
+  if (kind == Kind::keyframes_cubic) {
+    Eigen::Vector3d value, rate;
+    cubic_keys(times, values, t, value, rate);
+    return value;
+  }
   double s;
-  const int i = segment(times, t, s);
+  const int i = key_segment(times, t, s);
   if (i == -1) return values.front();
   if (i == -2) return values.back();
-  if (kind == Kind::keyframes_linear) return (1 - s) * values[i] + s * values[i + 1];
-  // Cubic Hermite on [t_i, t_i+1] with Catmull-Rom tangents (zero at the ends).
-  const double h = times[i + 1] - times[i];
-  const double h00 = 2 * s * s * s - 3 * s * s + 1, h10 = s * s * s - 2 * s * s + s, h01 = -2 * s * s * s + 3 * s * s,
-               h11 = s * s * s - s * s;
-  return h00 * values[i] + h10 * h * tangent(times, values, i) + h01 * values[i + 1] +
-         h11 * h * tangent(times, values, i + 1);
+  return (1 - s) * values[i] + s * values[i + 1];
 }
 
 Eigen::Vector3d Driver::velocity(double t) const {
@@ -68,14 +57,15 @@ Eigen::Vector3d Driver::velocity(double t) const {
     default:
       break;
   }
+  if (kind == Kind::keyframes_cubic) {
+    Eigen::Vector3d value, rate;
+    cubic_keys(times, values, t, value, rate);
+    return rate;
+  }
   double s;
-  const int i = segment(times, t, s);
+  const int i = key_segment(times, t, s);
   if (i < 0) return Eigen::Vector3d::Zero();
-  const double h = times[i + 1] - times[i];
-  if (kind == Kind::keyframes_linear) return (values[i + 1] - values[i]) / h;
-  const double d00 = 6 * s * s - 6 * s, d10 = 3 * s * s - 4 * s + 1, d01 = -6 * s * s + 6 * s, d11 = 3 * s * s - 2 * s;
-  return (d00 * values[i] + d01 * values[i + 1]) / h + d10 * tangent(times, values, i) +
-         d11 * tangent(times, values, i + 1);
+  return (values[i + 1] - values[i]) / (times[i + 1] - times[i]);
 }
 
 void Driver::breakpoints(std::vector<double>& out) const {

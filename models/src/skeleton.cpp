@@ -14,9 +14,49 @@
 
 namespace isochor {
 
+Eigen::Vector4d BoneSpec::quaternion(double t, Eigen::Vector4d* rate) const {
+  if (!key_quaternions.empty()) {
+    // q = p / |p| with p the cubic through the keys: q' = (p' - q (q . p')) / |p|.
+    Eigen::Vector4d p, dp;
+    cubic_keys(key_times, key_quaternions, t, p, dp);
+    const double n = p.norm();
+    const Eigen::Vector4d q = p / n;
+    if (rate) *rate = (dp - q * q.dot(dp)) / n;
+    return q;
+  }
+  // Angles: the product of axis quaternions (continuous in t), and q' = 1/2 (0, w) q.
+  Eigen::Vector3d w;
+  rotation(t, rate ? &w : nullptr);
+  const Eigen::Vector3d a = motion.displacement(t);
+  Eigen::Quaterniond Q = Eigen::Quaterniond::Identity();
+  for (int k = 0; k < angles; ++k) Q = Q * Eigen::Quaterniond(Eigen::AngleAxisd(a[k], axes.col(k)));
+  if (rate) {
+    const Eigen::Quaterniond D = Eigen::Quaterniond(0, w.x(), w.y(), w.z()) * Q;
+    *rate = 0.5 * Eigen::Vector4d(D.w(), D.x(), D.y(), D.z());
+  }
+  return Eigen::Vector4d(Q.w(), Q.x(), Q.y(), Q.z());
+}
+
+void BoneSpec::breakpoints(std::vector<double>& out) const {
+  motion.breakpoints(out);
+  translation.breakpoints(out);
+  if (!key_times.empty()) out.insert(out.end(), {key_times.front(), key_times.back()});
+}
+
 Eigen::Matrix3d BoneSpec::rotation(double t, Eigen::Vector3d* omega) const {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   if (omega) omega->setZero();
+  if (!key_quaternions.empty()) {
+    // w = 2 vec(q' conj(q)).
+    Eigen::Vector4d dq;
+    const Eigen::Vector4d q = quaternion(t, omega ? &dq : nullptr);
+    if (omega) {
+      const Eigen::Quaterniond W =
+          Eigen::Quaterniond(dq[0], dq[1], dq[2], dq[3]) * Eigen::Quaterniond(q[0], q[1], q[2], q[3]).conjugate();
+      *omega = 2 * W.vec();
+    }
+    return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).toRotationMatrix();
+  }
   if (angles == 0) return R;
   const Eigen::Vector3d a = motion.displacement(t);
   const Eigen::Vector3d da = omega ? motion.velocity(t) : Eigen::Vector3d::Zero();
@@ -72,35 +112,35 @@ class JointMotion : public SimTK::Motion::Custom::Implementation {
   void calcPrescribedPositionDotDot(const SimTK::State& s, int nq, SimTK::Real* qdd) const override {
     // Only the acceleration stage asks for it, which isochor never realizes: a central difference.
     const double h = 1e-6;
-    SimTK::Real a[4], b[4];
+    SimTK::Real a[7], b[7];  // free: quaternion and translation
     eval(s.getTime() + h, nq, nullptr, a);
     eval(s.getTime() - h, nq, nullptr, b);
     for (int k = 0; k < nq; ++k) qdd[k] = (a[k] - b[k]) / (2 * h);
   }
 
  private:
+  // Pin and universal: the angles. Ball: the quaternion (w, x, y, z). Free: the quaternion, then
+  // the origin's displacement.
   void eval(double t, int nq, SimTK::Real* q, SimTK::Real* qd) const {
-    if (b_->joint != BoneSpec::Joint::ball) {
+    if (b_->joint != BoneSpec::Joint::ball && b_->joint != BoneSpec::Joint::free) {
       const Eigen::Vector3d a = b_->motion.displacement(t), da = b_->motion.velocity(t);
-      for (int k = 0; k < nq; ++k) {
+      for (int k = 0; k < nq && k < 3; ++k) {
         if (q) q[k] = a[k];
         if (qd) qd[k] = da[k];
       }
       return;
     }
-    // Ball: the quaternion (w, x, y, z) of R = R_1 R_2 R_3, built as a product of axis
-    // quaternions (continuous in t), and q' = 1/2 (0, w) * q with w in the parent frame.
-    Eigen::Vector3d w;
-    b_->rotation(t, &w);
-    const Eigen::Vector3d a = b_->motion.displacement(t);
-    Eigen::Quaterniond Q = Eigen::Quaterniond::Identity();
-    for (int k = 0; k < 3; ++k) Q = Q * Eigen::Quaterniond(Eigen::AngleAxisd(a[k], b_->axes.col(k)));
-    const Eigen::Quaterniond W(0, w.x(), w.y(), w.z());
-    const Eigen::Quaterniond D = W * Q;
-    const double v[4] = {Q.w(), Q.x(), Q.y(), Q.z()}, dv[4] = {0.5 * D.w(), 0.5 * D.x(), 0.5 * D.y(), 0.5 * D.z()};
+    Eigen::Vector4d dv;
+    const Eigen::Vector4d v = b_->quaternion(t, qd ? &dv : nullptr);
     for (int k = 0; k < nq && k < 4; ++k) {
       if (q) q[k] = v[k];
       if (qd) qd[k] = dv[k];
+    }
+    if (nq < 7) return;
+    const Eigen::Vector3d u = b_->translation.displacement(t), du = b_->translation.velocity(t);
+    for (int k = 0; k < 3; ++k) {
+      if (q) q[4 + k] = u[k];
+      if (qd) qd[4 + k] = du[k];
     }
   }
   const BoneSpec* b_;
@@ -143,6 +183,9 @@ Skeleton::Skeleton(std::vector<BoneSpec> bones)
         break;
       case BoneSpec::Joint::ball:
         idx = MobilizedBody::Ball(parent, X_PF, body, X_BM).getMobilizedBodyIndex();
+        break;
+      case BoneSpec::Joint::free:
+        idx = MobilizedBody::Free(parent, X_PF, body, X_BM).getMobilizedBodyIndex();
         break;
     }
     impl_->index.push_back(idx);

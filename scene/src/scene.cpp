@@ -1,5 +1,6 @@
 #include "isochor/scene/scene.hpp"
 #include "isochor/scene/body_setup.hpp"
+#include "isochor/scene/character_setup.hpp"
 #include "isochor/scene/skeleton_setup.hpp"
 #include "isochor/core/paint.hpp"
 #include "isochor/scene/integrator_registry.hpp"
@@ -69,7 +70,7 @@ std::vector<double> Scene::breakpoints() const {
   std::vector<double> t;
   for (const Driver& d : boundary) d.breakpoints(t);
   if (skeleton)
-    for (const BoneSpec& b : skeleton->bones()) b.motion.breakpoints(t);
+    for (const BoneSpec& b : skeleton->bones()) b.breakpoints(t);
   for (const Collider& c : colliders) {
     c.motion.breakpoints(t);
     c.resize.breakpoints(t);
@@ -903,6 +904,30 @@ void parse_frames(const Section& root, Scene& sc) {
   if (!statics) check_run_length(fr, root.table("integrator"), sc);
 }
 
+// [character]: a rigged glTF's mesh, zones and render mesh (the skeleton comes after the
+// boundaries, which its bones must not drive twice); it stands in for [mesh] and [skeleton].
+std::optional<Character> parse_character_block(const Section& root, Scene& sc) {
+  const Section c = root.table("character");
+  if (!c.exists()) return std::nullopt;
+  for (const char* other : {"mesh", "skeleton"})
+    if (root.table(other).exists())
+      root.fail(other, std::string("a [character] brings its own mesh and skeleton (expected no [") + other + "])");
+  const double duration = root.table("frames").number("duration", sc.frames.duration, Range::non_negative());
+  Character ch = parse_character(c, sc.file, duration);
+  sc.mesh = std::move(ch.mesh);
+  sc.render = ch.render;
+  return ch;
+}
+
+std::shared_ptr<Skeleton> character_skeleton(const Section& c, const Character& ch, const std::vector<int>& driven_by) {
+  for (const BoneSpec& b : ch.bones)
+    for (int v : b.nodes)
+      if (driven_by[v] >= 0)
+        c.fail("file", "node " + std::to_string(v) + " follows joint \"" + b.name + "\" and boundary[" +
+                           std::to_string(driven_by[v]) + "] both (expected each node driven once)");
+  return std::make_shared<Skeleton>(ch.bones);
+}
+
 }  // namespace
 
 Scene parse_scene(SceneFile file) {
@@ -928,18 +953,23 @@ Scene parse_scene(SceneFile file) {
            {},
            {},
            {},
+           {},
            1.0};
   const Section root = sc.file.root();
-  Section mesh = root.table("mesh");
-  if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file");
-  sc.mesh = mesh_from_scene(mesh, sc.file);
+  const std::optional<Character> character = parse_character_block(root, sc);
+  if (!character) {
+    Section mesh = root.table("mesh");
+    if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file (or a [character])");
+    sc.mesh = mesh_from_scene(mesh, sc.file);
+  }
   sc.material = parse_material(root.table("material"));
   sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.file, sc.material.model == MaterialModel::cnh);
   sc.keep_zones = root.table("zones").boolean("keep", true);
   parse_material_regions(root.table("material"), sc);
   sc.zone_restore_time = root.table("zones").number("restore_time", 0.0, Range::non_negative());
   const std::vector<int> driven_by = parse_boundaries(root, sc);
-  sc.skeleton = parse_skeleton(root.table("skeleton"), sc.file, sc.mesh, driven_by);
+  sc.skeleton = character ? character_skeleton(root.table("character"), *character, driven_by)
+                          : parse_skeleton(root.table("skeleton"), sc.file, sc.mesh, driven_by);
 
   const Section forces = root.table("forces");
   sc.gravity = forces.vec3("gravity", sc.gravity);

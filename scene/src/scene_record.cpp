@@ -78,6 +78,7 @@ SceneRecord scene_record(const Scene& sc) {
     for (int e = 0; e < sc.mesh.num_tets(); ++e)
       r.tet_fibre.col(e) = f.muscle_of[e] >= 0 ? f.direction[e] : Eigen::Vector3d::Zero();
   }
+  r.render = sc.render;
   return r;
 }
 

@@ -48,12 +48,27 @@ Mesh read_tetgen(const std::string& path);
 // A closed, consistently oriented triangle surface (.obj or .stl) tetrahedralised by Gmsh without
 // changing its triangles. `edge_length` > 0 sets the interior size, otherwise it follows the surface.
 Mesh mesh_closed_surface(const std::string& path, double edge_length);
+// The same for a surface in memory; `what` names it in errors.
+Mesh mesh_closed_surface(const Points& x, std::vector<Tri> tris, double edge_length, const std::string& what);
+
+// CGAL's 3D alpha wrap of any triangle soup (open, non-manifold, self-intersecting): a closed,
+// outward oriented 2-manifold surface without self-intersections, `offset` outside the input,
+// closing over gaps narrower than about `alpha` (both lengths). `what` names the input in errors.
+void alpha_wrap(const Points& x, const std::vector<Tri>& tris, double alpha, double offset, Points& out_x,
+                std::vector<Tri>& out_tris, const std::string& what);
 
 // Surface readers (no tetrahedralisation): positions and triangles, duplicate STL vertices merged.
 void read_obj_surface(const std::string& path, Points& x, std::vector<Tri>& tris);
 void read_stl_surface(const std::string& path, Points& x, std::vector<Tri>& tris);
 // Either, by the file's extension (.obj or .stl, any case); another extension is an Error.
 void read_surface(const std::string& path, Points& x, std::vector<Tri>& tris);
+
+// Checks before meshing, failing on the key `key` of section `s`: a mesh of about `tets` tets
+// fits this machine's memory while it runs; a size is at least 1e-6 m (Gmsh's tolerance).
+void check_tets(const Section& s, const std::string& key, double tets);
+void check_size(const Section& s, const std::string& key, double size);
+// Tets of a Gmsh mesh of volume V at edge length h, at least.
+double gmsh_tets(double volume, double h);
 
 // The [mesh] block of a scene: a shape or a file.
 Mesh mesh_from_scene(const Section& mesh, const SceneFile& file);

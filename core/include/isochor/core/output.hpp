@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "isochor/core/embedding.hpp"
 #include "isochor/core/mesh.hpp"
 
 namespace isochor {
@@ -44,6 +45,8 @@ struct SceneRecord {
   std::vector<std::string> muscles;
   std::vector<int> tet_muscle;
   Points tet_fibre;
+  // An artist's mesh carried by the tets (/render); null without one.
+  std::shared_ptr<const RenderMesh> render;
 };
 
 // Named sets of tets: /zones, and the columns of /frames/volume after "total".

@@ -11,6 +11,35 @@
 
 namespace isochor {
 
+// Keyframe segment containing t and the local parameter s in [0, 1]: -1 before the first key
+// (s = 0), -2 after the last (s = 1).
+int key_segment(const std::vector<double>& times, double t, double& s);
+
+// The cubic Hermite through keys (t_k, v_k) with Catmull-Rom tangents, zero at the first and last
+// keys, where the value is then held: C^1 everywhere (a driven velocity that jumps stalls IDA).
+// Its value and rate at t, for any vector type (3 displacements, 4 quaternion components).
+template <class V>
+void cubic_keys(const std::vector<double>& times, const std::vector<V>& values, double t, V& value, V& rate) {
+  double s;
+  const int i = key_segment(times, t, s);
+  if (i < 0) {
+    value = i == -1 ? values.front() : values.back();
+    rate = V::Zero();
+    return;
+  }
+  const int n = static_cast<int>(times.size());
+  auto tangent = [&](int k) -> V {
+    if (k == 0 || k == n - 1) return V::Zero();
+    return (values[k + 1] - values[k - 1]) / (times[k + 1] - times[k - 1]);
+  };
+  const double h = times[i + 1] - times[i];
+  const V m0 = tangent(i), m1 = tangent(i + 1);
+  value = (2 * s * s * s - 3 * s * s + 1) * values[i] + (s * s * s - 2 * s * s + s) * h * m0 +
+          (-2 * s * s * s + 3 * s * s) * values[i + 1] + (s * s * s - s * s) * h * m1;
+  rate = ((6 * s * s - 6 * s) * values[i] + (-6 * s * s + 6 * s) * values[i + 1]) / h + (3 * s * s - 4 * s + 1) * m0 +
+         (3 * s * s - 2 * s) * m1;
+}
+
 struct Driver {
   enum class Kind { fixed, ramp, keyframes_linear, keyframes_cubic, sinusoid };
   Kind kind = Kind::fixed;

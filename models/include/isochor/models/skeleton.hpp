@@ -7,7 +7,8 @@
 // bone's joint (`origin`, world coordinates). A joint's rotation R(t) turns the bone about its
 // origin relative to its parent: pin, angle a about `axis`; universal, a1 about `axis` then a2
 // about the turned `axis2`; ball, body-fixed rotations about the axes in `order` (e.g. "ZXY",
-// BVH's convention: R = R_Z(a1) R_X(a2) R_Y(a3)).
+// BVH's convention: R = R_Z(a1) R_X(a2) R_Y(a3)). A keyed joint (a glTF character's) turns by unit
+// quaternions at key times instead of angles; a free joint also moves its origin (a character's root).
 #pragma once
 #include <memory>
 #include <string>
@@ -19,7 +20,7 @@
 namespace isochor {
 
 struct BoneSpec {
-  enum class Joint { weld, pin, universal, ball };
+  enum class Joint { weld, pin, universal, ball, free };
   std::string name;
   int parent = -1;  // index of the parent bone, -1: the ground
   Joint joint = Joint::weld;
@@ -31,6 +32,18 @@ struct BoneSpec {
   int angles = 0;                                      // 0 weld, 1 pin, 2 universal, 3 ball
   Driver motion;           // angles (rad) of the joint in x, y, z of its values; Kind::fixed: zero
   std::vector<int> nodes;  // bound mesh nodes
+  // Keyed rotation (ball and free joints; replaces the angles): unit quaternions (w, x, y, z)
+  // relative to the parent at key times, neighbours of one sign (q and -q are one rotation);
+  // between keys the C^1 cubic through their components (cubic_keys), normalised.
+  std::vector<double> key_times;
+  std::vector<Eigen::Vector4d> key_quaternions;
+  // Free joints: the origin's displacement from its rest place, in the parent's rest frame.
+  Driver translation;
+
+  // The joint's quaternion (w, x, y, z) at t and its rate q' = 1/2 (0, w) q (w in the parent frame).
+  Eigen::Vector4d quaternion(double t, Eigen::Vector4d* rate = nullptr) const;
+  // Times where the joint's motion starts or stops or its velocity jumps (Driver::breakpoints).
+  void breakpoints(std::vector<double>& out) const;
 
   // The joint rotation relative to the parent, and its angular velocity (parent frame), at t.
   Eigen::Matrix3d rotation(double t, Eigen::Vector3d* omega = nullptr) const;

@@ -122,7 +122,8 @@ struct Scene {
   IntegratorSpec integrator;
   FramesSpec frames;
   OutputSpec output;
-  std::shared_ptr<Skeleton> skeleton;  // [skeleton]: bones that drive their bound nodes; null without
+  std::shared_ptr<Skeleton> skeleton;        // [skeleton]: bones that drive their bound nodes; null without
+  std::shared_ptr<const RenderMesh> render;  // [character]: its render mesh in the tets; null without
   // [[muscle]]: fibres and activation per muscle (body_setup.hpp); [muscles] activation_scale.
   struct MuscleSpec {
     std::string name;
