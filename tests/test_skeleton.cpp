@@ -5,8 +5,11 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 
 #include "isochor/core/bvh.hpp"
+#include "isochor/core/gltf.hpp"
 #include "isochor/scene/mesh_system.hpp"
 #include "isochor/core/output_reader.hpp"
 #include "isochor/core/paint.hpp"
@@ -318,7 +321,8 @@ TEST(Skeleton, ZoneConstraintTimeDerivativeFollowsTheBones) {
 
 // A bar [0, 1] x [-0.2, 0.2]^2 skinned to joint "a" at (0.1, 0, 0) (the corners at x = 0) and its
 // child "b" at (0.5, 0, 0) (the corners at x = 1); the clip "bend" turns b by 90 degrees about z and
-// lifts a by 0.2 along z over its one second (LINEAR keys).
+// lifts a by 0.2 along z over its one second (LINEAR keys); the clip "carry" turns the root a by 90
+// degrees about z at a steady rate and lifts it by 0.2 (keys at 0, 0.5 and 1 s): a rigid motion.
 std::string bar_character(const std::string& name) {
   test::GltfBuilder g;
   std::vector<float> corners;
@@ -353,7 +357,16 @@ std::string bar_character(const std::string& name) {
                  ",\"output\":" + std::to_string(rot) + "},{\"input\":" + std::to_string(times) +
                  ",\"output\":" + std::to_string(lift) +
                  "}],\"channels\":[{\"sampler\":0,\"target\":{\"node\":2,\"path\":\"rotation\"}},"
-                 "{\"sampler\":1,\"target\":{\"node\":1,\"path\":\"translation\"}}]}]";
+                 "{\"sampler\":1,\"target\":{\"node\":1,\"path\":\"translation\"}}]}";
+  const int times3 = g.floats({0, 0.5f, 1}, "SCALAR");
+  const float c = static_cast<float>(std::cos(M_PI / 8)), s = static_cast<float>(std::sin(M_PI / 8));
+  const int turn = g.floats({0, 0, 0, 1, 0, 0, s, c, 0, 0, h, h}, "VEC4");
+  const int rise = g.floats({0.1f, 0, 0, 0.1f, 0, 0.1f, 0.1f, 0, 0.2f}, "VEC3");
+  g.animations += ",{\"name\":\"carry\",\"samplers\":[{\"input\":" + std::to_string(times3) +
+                  ",\"output\":" + std::to_string(turn) + "},{\"input\":" + std::to_string(times3) +
+                  ",\"output\":" + std::to_string(rise) +
+                  "}],\"channels\":[{\"sampler\":0,\"target\":{\"node\":1,\"path\":\"rotation\"}},"
+                  "{\"sampler\":1,\"target\":{\"node\":1,\"path\":\"translation\"}}]}]";
   return g.write(name);
 }
 
@@ -401,6 +414,51 @@ TEST(Character, BonesFollowTheGltfClipAndTheRenderMeshIsEmbedded) {
   EXPECT_EQ(s.zones[0].first, "a");
   EXPECT_EQ(s.zones[1].first, "b");
   test::expect_closed_outward(s.mesh);
+}
+
+// End to end through the command line: a stiff bar character (mu = 1 MPa, no gravity, Kelvin-Voigt
+// damping calming its 2.5 ms elastic modes) carried by its root over the clip "carry" from t = 0
+// (no blend), then `isochor export --format glb`. (1) The .glb, read back by the reader, holds one
+// mesh per frame equal (float32) to the render mesh carried by the frames' node positions, and its
+// animation shows frame k alone between the run's times k and k + 1. (2) Nearly rigid tissue
+// follows linear blend skinning, here a rigid motion: each render vertex is where the clip's
+// skinning puts it at the clip's keys, to the elastic sag of the turning bar, rho a L^2 / mu ~ 1000 * 2.5 * 0.5^2 /
+// 1e6 ~ 6e-4 m (a: the centripetal acceleration at the far end).
+TEST(Character, RunExportsAGlbThatFollowsSkinning) {
+  const std::string bar = bar_character("bar_run.gltf");
+  const std::filesystem::path dir = std::filesystem::path(bar).parent_path();  // temp_dir() empties it
+  const std::string body = "[character]\nfile = \"" + bar + "\"\nclip = \"carry\"\nedge_length = 0.08\n" +
+                           "loop = false\nblend_in = 0.0\n[material]\nmodel = \"cnh\"\nmu = 1e6\nlambda = 1e6\n" +
+                           "[damping]\nbeta = 0.01\n[zones]\nfrom_mesh = true\nglobal = false\n" +
+                           "[frames]\nrate = 10.0\nduration = 1.5\n";
+  const std::string toml =
+      test::write_file(dir / "bar.toml", body + "[output]\npath = \"" + (dir / "bar.h5").string() + "\"\n");
+  const std::string bin = ISOCHOR_BINARY, h5 = (dir / "bar.h5").string(), glb = (dir / "bar.glb").string();
+  ASSERT_EQ(std::system((bin + " run " + toml + " --overwrite > /dev/null 2>&1").c_str()), 0);
+  ASSERT_EQ(std::system((bin + " export " + h5 + " --format glb --out " + glb + " > /dev/null").c_str()), 0);
+  const Scene s = parse_scene(SceneFile::parse(body, (dir / "again.toml").string()));
+  const RunFile run(h5);
+  const GltfCharacter out = read_gltf(glb);
+  const GltfCharacter in = read_gltf(bar);
+  const int F = run.num_frames(), V = static_cast<int>(s.render->rest.cols());
+  ASSERT_EQ(F, 16);
+  ASSERT_EQ(out.vertices.cols(), F * V);
+  ASSERT_EQ(out.clips.size(), 1u);
+  const std::vector<double> times = run.times();
+  double worst_copy = 0, worst_skin = 0;
+  for (int k = 0; k < F; ++k) {
+    const Points x = s.render->embedding.positions(s.mesh, run.positions(k));
+    worst_copy = std::max(worst_copy, (out.vertices.middleCols(k * V, V) - x).cwiseAbs().maxCoeff());
+    const auto G = out.node_globals(0, times[k] - times[0] + 0.05);  // half way to the next frame
+    for (int j = 0; j < F; ++j) EXPECT_NEAR(G[j](0, 0), j == k ? 1.0 : 0.0, 1e-12) << "frame " << k << " node " << j;
+    // The bones pass through the clip's keys (and hold its last pose); between keys their C^1
+    // cubic eases out of rest where the glTF interpolates linearly (drivers.hpp).
+    const bool at_key = std::abs(times[k] - 0.5) < 1e-9 || times[k] > 1.0 - 1e-9;
+    if (at_key) worst_skin = std::max(worst_skin, (x - in.skinned(1, times[k])).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(worst_copy, 1e-6 * (1 + s.render->rest.cwiseAbs().maxCoeff()));
+  EXPECT_LT(worst_skin, 1e-3) << worst_skin;
+  EXPECT_GT((in.skinned(1, 1.0) - in.vertices).norm(), 0.2);  // not vacuous: the bar moved
 }
 
 TEST(Character, BadInputNamesTheKey) {

@@ -147,6 +147,14 @@ class Run:
         self.muscles: List[str] = str(names).split(",") if names else []
         self.tet_muscle: np.ndarray = mu["tet_muscle"][()] if mu is not None else np.full(len(self.tets), -1)
         self.tet_fibre: np.ndarray = mu["tet_fibre"][()] if mu is not None else np.zeros((len(self.tets), 3))
+        # A character's render mesh (/render): its vertices at rest, triangles, and each vertex's
+        # tet and barycentric weights, which carry it with the tets (render_positions).
+        r = h.get("render")
+        self.render_source: str = str(_text(r.attrs.get("source", ""))) if r is not None else ""
+        self.render_rest: Optional[np.ndarray] = r["rest"][()] if r is not None else None
+        self.render_triangles: Optional[np.ndarray] = r["triangles"][()] if r is not None else None
+        self._render_tet = r["tet"][()] if r is not None else None
+        self._render_weights = r["weights"][()] if r is not None else None
 
     # The per-frame node arrays, read when first asked for.
     def _series(self, name: str) -> Optional[np.ndarray]:
@@ -215,6 +223,14 @@ class Run:
     def frame_positions(self, k: int) -> np.ndarray:
         """(N,3) node positions at frame k (negative k counts from the end)."""
         return self.frame("positions", k)
+
+    def render_positions(self, positions: np.ndarray) -> np.ndarray:
+        """The render mesh's vertices (V,3) carried by node positions (N,3), or (F,V,3) by (F,N,3):
+        each vertex the weighted sum of its tet's corners."""
+        if self.render_rest is None:
+            raise Error(f"{self.path}: has no render mesh (expected a run of a scene with a [character])")
+        corners = self.tets[self._render_tet]  # (V,4)
+        return np.einsum("...vkd,vk->...vd", positions[..., corners, :], self._render_weights)
 
     def collider_scale(self, k: int, c: int) -> float:
         """Collider c's factor on its radius at frame k (a band that tightens; 1: its own)."""

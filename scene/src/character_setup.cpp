@@ -67,6 +67,27 @@ void region_zones(const Section& s, const GltfCharacter& c, Mesh& mesh) {
   }
 }
 
+// A capsule kept `gap` radii clear of the joints it meets (its own origin where it has a parent,
+// its children's origins), so that the tissue about a joint is free to bend rather than held by
+// both bones: the segment cut at its ends, to a point where too short for both cuts, and the
+// radius cut where a joint is still nearer than (1 + gap) radii.
+void clear_joints(BoneSpec& b, bool at_from, const std::vector<Eigen::Vector3d>& joints, double gap) {
+  const Eigen::Vector3d a = b.from, e = b.to;
+  const double length = (e - a).norm(), clear = (1 + gap) * b.radius;
+  const double cut_from = at_from ? clear : 0, cut_to = joints.empty() ? 0 : clear;
+  if (cut_from + cut_to < length) {
+    const Eigen::Vector3d u = (e - a) / length;
+    b.from = a + cut_from * u;
+    b.to = e - cut_to * u;
+  } else {
+    const double s = cut_from + cut_to > 0 ? cut_from / (cut_from + cut_to) : 0.5;
+    b.from = b.to = a + s * (e - a);
+  }
+  double room = at_from ? b.segment_distance(a) : std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d& p : joints) room = std::min(room, b.segment_distance(p));
+  b.radius = std::max(0.0, std::min(b.radius, room / (1 + gap)));
+}
+
 // One bone per joint: its origin the joint's rest position, its capsule from there to the mean of
 // its children's (a leaf's: to the centroid of the vertices it dominates), its radius `bone_radius`
 // times the skin's thickness about it.
@@ -115,6 +136,11 @@ std::vector<BoneSpec> joint_bones(const Section& s, const GltfCharacter& c, cons
     std::nth_element(d.begin(), d.begin() + 2, d.end());
     b.radius = fraction * d[2];
   }
+  const double gap = s.number("joint_gap", 1.0, Range::non_negative());
+  std::vector<std::vector<Eigen::Vector3d>> child_joints(bones.size());
+  for (const BoneSpec& b : bones)
+    if (b.parent >= 0) child_joints[b.parent].push_back(b.origin);
+  for (std::size_t j = 0; j < bones.size(); ++j) clear_joints(bones[j], bones[j].parent >= 0, child_joints[j], gap);
   return bones;
 }
 
