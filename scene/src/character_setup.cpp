@@ -25,10 +25,10 @@ using KdTree = nanoflann::KDTreeEigenMatrixAdaptor<Points, 3, nanoflann::metric_
 // wrap filled with tets of about `edge_length`.
 Mesh wrap_and_fill(const Section& s, const GltfCharacter& c) {
   const Eigen::Vector3d extent = c.vertices.rowwise().maxCoeff() - c.vertices.rowwise().minCoeff();
-  const double h = s.number("edge_length", extent.maxCoeff() / 25, Range::length());
+  const double h = s.number("edge_length", extent.maxCoeff() / 25, Range::positive());
   check_size(s, "edge_length", h);
-  const double alpha = s.number("wrap_alpha", h, Range::length());
-  const double offset = s.number("wrap_offset", alpha / 20, Range::length());
+  const double alpha = s.number("wrap_alpha", h, Range::positive());
+  const double offset = s.number("wrap_offset", alpha / 20, Range::positive());
   Points x;
   std::vector<Tri> tris;
   alpha_wrap(c.vertices, c.triangles, alpha, offset, x, tris, c.path);
