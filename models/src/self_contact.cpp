@@ -2,6 +2,7 @@
 
 #include <nanoflann.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 #include "isochor/models/elements.hpp"
@@ -55,39 +56,44 @@ const std::vector<SelfContact::Pair>& SelfContact::pairs(const Points& x) const 
   if (cached_x_.cols() == x.cols() && cached_x_ == x) return cached_;
   const auto& S = mesh_.surface();
   const Points& X = mesh_.rest_positions();
-  Points centroid(3, static_cast<Eigen::Index>(S.size()));
-  double reach = 0;  // now: triangles stretch
-  for (std::size_t f = 0; f < S.size(); ++f) {
-    centroid.col(f) = (x.col(S[f][0]) + x.col(S[f][1]) + x.col(S[f][2])) / 3.0;
-    for (int v : S[f]) reach = std::max(reach, (x.col(v) - centroid.col(f)).norm());
-  }
-  KdTree tree(3, std::cref(centroid), 10);
+  const std::vector<int>& nodes = mesh_.surface_nodes();
+  Points xs(3, static_cast<Eigen::Index>(nodes.size()));
+  for (std::size_t i = 0; i < nodes.size(); ++i) xs.col(static_cast<Eigen::Index>(i)) = x.col(nodes[i]);
+  KdTree tree(3, std::cref(xs), 10);
   // Triangles farther than delta + 12 tau weigh less than e^-12 in the smoothed minimum of a node
-  // in contact: they are left out.
-  const double cutoff = law_.thickness + 12 * tau_, r = cutoff + reach;
-  std::vector<Pair> out;
+  // in contact: they are left out. Each triangle asks for the nodes within the cutoff plus its own
+  // reach (its corners' farthest from its centroid), so that one large triangle does not widen
+  // every search.
+  const double cutoff = law_.thickness + 12 * tau_;
+  std::vector<std::vector<Term>> terms(nodes.size());
   std::vector<std::pair<Eigen::Index, double>> found;
-  for (int p : mesh_.surface_nodes()) {
+  for (const Tri& t : S) {
+    const Vec3 a = x.col(t[0]), b = x.col(t[1]), cc = x.col(t[2]);
+    const Vec3 centroid = (a + b + cc) / 3.0;
+    const double reach = std::max({(a - centroid).norm(), (b - centroid).norm(), (cc - centroid).norm()});
+    const double r = cutoff + reach;
     found.clear();
-    tree.index->radiusSearch(x.col(p).data(), r * r, found, nanoflann::SearchParams(32, 0, false));
-    Pair c{p, 0.0, Vec3::Zero(), {}};
-    double dmin = cutoff;
+    tree.index->radiusSearch(centroid.data(), r * r, found, nanoflann::SearchParams(32, 0, false));
     for (const auto& item : found) {
-      const Tri& t = S[static_cast<std::size_t>(item.first)];
+      const int p = nodes[static_cast<std::size_t>(item.first)];
       bool near = false;  // the node's own neighbourhood at rest
       for (int v : t) near = near || (X.col(v) - X.col(p)).squaredNorm() < exclude2_;
       if (near) continue;
-      const Vec3 a = x.col(t[0]), b = x.col(t[1]), cc = x.col(t[2]);
       const Vec3 q = closest_on_triangle(x.col(p), a, b, cc);
       const double d = (x.col(p) - q).norm();
       if (d >= cutoff || !(d > 0)) continue;
       const Vec3 w = barycentric(q, a, b, cc);
       const Vec3* corner[3] = {&a, &b, &cc};
-      c.terms.push_back({t, w, (x.col(p) - q) / d, d, 0.0, distance_hessian(x.col(p), q, w, corner)});
-      dmin = std::min(dmin, d);
+      terms[static_cast<std::size_t>(item.first)].push_back(
+          {t, w, (x.col(p) - q) / d, d, 0.0, distance_hessian(x.col(p), q, w, corner)});
     }
-    if (c.terms.empty()) continue;
-    double sum = 0;
+  }
+  std::vector<Pair> out;
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (terms[i].empty()) continue;
+    Pair c{nodes[i], 0.0, Vec3::Zero(), std::move(terms[i])};
+    double dmin = cutoff, sum = 0;
+    for (const Term& t : c.terms) dmin = std::min(dmin, t.d);
     for (Term& t : c.terms) sum += t.omega = std::exp(-(t.d - dmin) / tau_);
     c.d = dmin - tau_ * std::log(sum);
     if (c.d >= law_.thickness) continue;
