@@ -378,6 +378,29 @@ Scene character_scene(const std::string& glb, const std::string& extra = "") {
                        "character.toml"));
 }
 
+// The bar character's bones after the half-second blend from rest and the one-second motion
+// (t = 1.5 on): b's nodes turned by 90 degrees about z through its joint (0.5, 0, 0), every bound
+// node lifted by 0.2 along z; at rest at t = 0.
+void expect_bent_and_lifted(const Scene& s, double tolerance) {
+  const auto& bones = s.skeleton->bones();
+  const Points& X = s.mesh.rest_positions();
+  const Eigen::Vector3d pivot(0.5, 0, 0), lift(0, 0, 0.2);
+  for (double t : {0.0, 1.5, 1.9}) {
+    Points x;
+    Eigen::VectorXd v;
+    drive(s, t, x, v);
+    const double done = t >= 1.5 ? 1.0 : 0.0;
+    double worst = 0;
+    for (int n : bones[0].nodes) worst = std::max(worst, (x.col(n) - (X.col(n) + done * lift)).norm());
+    for (int n : bones[1].nodes) {
+      const Eigen::Vector3d turned = pivot + rot({0, 0, 1}, done * M_PI / 2) * (X.col(n) - pivot);
+      worst = std::max(worst, (x.col(n) - (turned + done * lift)).norm());
+    }
+    EXPECT_LT(worst, tolerance) << "t = " << t;
+  }
+  for (double t : {0.3, 0.8, 1.2}) EXPECT_LT(velocity_error(s, t), 1e-5) << "t = " << t;
+}
+
 // The bones follow the clip: after the half-second blend from rest, the clip's end (t = 1.5)
 // turns b's nodes by 90 degrees about its joint (0.5, 0, 0) and lifts every bound node by 0.2; the
 // driven velocities are the time derivatives of the positions; the render mesh embedded in the
@@ -392,23 +415,9 @@ TEST(Character, BonesFollowTheGltfClipAndTheRenderMeshIsEmbedded) {
   EXPECT_EQ(bones[1].parent, 0);
   EXPECT_FALSE(bones[0].nodes.empty());
   EXPECT_FALSE(bones[1].nodes.empty());
-  const Points& X = s.mesh.rest_positions();
-  const Eigen::Vector3d pivot(0.5, 0, 0), lift(0, 0, 0.2);
-  for (double t : {0.0, 1.5, 1.9}) {
-    Points x;
-    Eigen::VectorXd v;
-    drive(s, t, x, v);
-    const double done = t >= 1.5 ? 1.0 : 0.0;
-    double worst = 0;
-    for (int n : bones[0].nodes) worst = std::max(worst, (x.col(n) - (X.col(n) + done * lift)).norm());
-    for (int n : bones[1].nodes) {
-      const Eigen::Vector3d turned = pivot + rot({0, 0, 1}, done * M_PI / 2) * (X.col(n) - pivot);
-      worst = std::max(worst, (x.col(n) - (turned + done * lift)).norm());
-    }
-    EXPECT_LT(worst, 1e-6) << "t = " << t;  // glTF stores float32: sqrt(1/2) to 3e-8
-  }
+  expect_bent_and_lifted(s, 1e-6);  // glTF stores float32: sqrt(1/2) to 3e-8
   for (double t : {0.3, 0.8, 1.2}) EXPECT_LT(velocity_error(s, t), 1e-5) << "t = " << t;
-  const Points at_rest = s.render->embedding.positions(s.mesh, X);
+  const Points at_rest = s.render->embedding.positions(s.mesh, s.mesh.rest_positions());
   EXPECT_LT((at_rest - s.render->rest).cwiseAbs().maxCoeff(), 1e-9);
   ASSERT_EQ(s.zones.size(), 2u);
   EXPECT_EQ(s.zones[0].first, "a");
@@ -459,6 +468,55 @@ TEST(Character, RunExportsAGlbThatFollowsSkinning) {
   EXPECT_LT(worst_copy, 1e-6 * (1 + s.render->rest.cwiseAbs().maxCoeff()));
   EXPECT_LT(worst_skin, 1e-3) << worst_skin;
   EXPECT_GT((in.skinned(1, 1.0) - in.vertices).norm(), 0.2);  // not vacuous: the bar moved
+}
+
+// A BVH capture of the same motion as the clip "bend", in centimetres and with its own joint names:
+// the root "Root" rises 20 cm, "Elbow" (its child, 40 cm along x) turns 90 degrees about z, keyed
+// every half second. Mapped onto the bar by character.bvh_joints with bvh_scale = 0.01, the bones
+// do what the glTF clip does (the bar's rest bone directions are the capture's: no retargeting).
+// Where the capture's rest bones point elsewhere, the character's bones turn to point there.
+TEST(Character, ABvhDrivesTheSkeletonByAJointNameMap) {
+  const std::string bar = bar_character("bar_bvh.gltf");
+  const std::filesystem::path dir = std::filesystem::path(bar).parent_path();
+  test::write_file(dir / "bend.bvh",
+                   "HIERARCHY\nROOT Root\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition Zrotation "
+                   "Xrotation Yrotation\n JOINT Elbow\n {\n  OFFSET 40 0 0\n  CHANNELS 3 Zrotation Xrotation "
+                   "Yrotation\n  End Site\n  {\n   OFFSET 50 0 0\n  }\n }\n}\nMOTION\nFrames: 3\n"
+                   "Frame Time: 0.5\n0 0 0 0 0 0 0 0 0\n0 0 10 0 0 0 45 0 0\n0 0 20 0 0 0 90 0 0\n");
+  const std::string keys = "bvh = \"bend.bvh\"\nbvh_scale = 0.01\n";
+  const std::string table = "[character.bvh_joints]\na = \"Root\"\nb = \"Elbow\"\n";
+  auto scene_with = [&](const std::string& character_keys, const std::string& tables) {
+    return parse_scene(SceneFile::parse("[character]\nfile = \"bar_bvh.gltf\"\nedge_length = 0.08\nloop = false\n" +
+                                            character_keys + "[material]\nmodel = \"cnh\"\nmu = 1000.0\n" +
+                                            "lambda = 1000.0\n[frames]\nrate = 10.0\nduration = 2.0\n" + tables,
+                                        (dir / "bvh.toml").string(), {}, dir.string()));
+  };
+  expect_bent_and_lifted(scene_with(keys, table), 1e-9);
+  // Retargeting: a capture whose Elbow hangs along +y at rest, standing still, turns the bar's a
+  // (whose child lies along +x) by 90 degrees about z through its joint (0.1, 0, 0) to point there.
+  test::write_file(
+      dir / "still.bvh",
+      "HIERARCHY\nROOT Root\n{\n OFFSET 0 0 0\n CHANNELS 3 Zrotation Xrotation Yrotation\n JOINT Elbow\n"
+      " {\n  OFFSET 0 40 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n  End Site\n  {\n   OFFSET 0 50 0\n"
+      "  }\n }\n}\nMOTION\nFrames: 2\nFrame Time: 0.5\n0 0 0 0 0 0\n0 0 0 0 0 0\n");
+  const Scene still = scene_with("bvh = \"still.bvh\"\n", table);
+  Points x;
+  Eigen::VectorXd v;
+  drive(still, 1.0, x, v);
+  const Points& X = still.mesh.rest_positions();
+  const Eigen::Vector3d joint(0.1, 0, 0);
+  double worst = 0;
+  for (int n : still.skeleton->bones()[0].nodes)
+    worst = std::max(worst, (x.col(n) - (joint + rot({0, 0, 1}, M_PI / 2) * (X.col(n) - joint))).norm());
+  EXPECT_LT(worst, 1e-9);
+  auto error = [&](const std::string& k, const std::string& t) { return test::error_of([&] { scene_with(k, t); }); };
+  EXPECT_NE(error(keys, "[character.bvh_joints]\na = \"Hips\"\n")
+                .find("character.bvh_joints.a: \"Hips\" is not a joint of bend.bvh"),
+            std::string::npos);
+  EXPECT_NE(error(keys, "[character.bvh_joints]\nhips = \"Root\"\n").find("character.bvh_joints.hips"),
+            std::string::npos);
+  EXPECT_NE(error(keys, "").find("character.bvh: no joint of the character is named in bend.bvh"), std::string::npos);
+  EXPECT_NE(error(keys + "clip = \"bend\"\n", table).find("expected one motion: clip or bvh"), std::string::npos);
 }
 
 TEST(Character, BadInputNamesTheKey) {

@@ -12,6 +12,7 @@
 #include <map>
 
 #include "isochor/base/error.hpp"
+#include "isochor/core/bvh.hpp"
 #include "isochor/core/gltf.hpp"
 #include "isochor/core/meshing.hpp"
 
@@ -67,14 +68,28 @@ void region_zones(const Section& s, const GltfCharacter& c, Mesh& mesh) {
   }
 }
 
-// A capsule kept `gap` radii clear of the joints it meets (its own origin where it has a parent,
-// its children's origins), so that the tissue about a joint is free to bend rather than held by
-// both bones: the segment cut at its ends, to a point where too short for both cuts, and the
-// radius cut where a joint is still nearer than (1 + gap) radii.
-void clear_joints(BoneSpec& b, bool at_from, const std::vector<Eigen::Vector3d>& joints, double gap) {
+// How far each bone turns from its parent over its motion (rad): the largest angle of its keyed
+// relative rotations (0 without motion).
+double largest_turn(const BoneSpec& b) {
+  double angle = 0;
+  for (const Eigen::Vector4d& q : b.key_quaternions)
+    angle = std::max(angle, 2 * std::acos(std::min(1.0, std::abs(q[0]))));
+  return angle;
+}
+
+// A capsule kept clear of the joints it meets (its own origin where it has a parent, its
+// children's origins), so that the tissue about a joint that bends is free to bend rather than
+// held by both bones: its surface stays gap r sin(theta / 2) / sin(45 degrees) from a joint that
+// turns by theta at most (gap radii at a right angle, nothing where the joint does not turn). The
+// segment is cut at its ends (to a point where too short for both cuts) and the radius where a
+// joint is still nearer.
+void clear_joints(BoneSpec& b, double clear_from, const std::vector<std::pair<Eigen::Vector3d, double>>& joints) {
   const Eigen::Vector3d a = b.from, e = b.to;
-  const double length = (e - a).norm(), clear = (1 + gap) * b.radius;
-  const double cut_from = at_from ? clear : 0, cut_to = joints.empty() ? 0 : clear;
+  const double length = (e - a).norm();
+  double clear_to = 0;
+  for (const auto& [p, c] : joints) clear_to = std::max(clear_to, c);
+  const double cut_from = clear_from >= 0 ? b.radius + clear_from : 0,
+               cut_to = joints.empty() ? 0 : b.radius + clear_to;
   if (cut_from + cut_to < length) {
     const Eigen::Vector3d u = (e - a) / length;
     b.from = a + cut_from * u;
@@ -83,9 +98,22 @@ void clear_joints(BoneSpec& b, bool at_from, const std::vector<Eigen::Vector3d>&
     const double s = cut_from + cut_to > 0 ? cut_from / (cut_from + cut_to) : 0.5;
     b.from = b.to = a + s * (e - a);
   }
-  double room = at_from ? b.segment_distance(a) : std::numeric_limits<double>::infinity();
-  for (const Eigen::Vector3d& p : joints) room = std::min(room, b.segment_distance(p));
-  b.radius = std::max(0.0, std::min(b.radius, room / (1 + gap)));
+  double room = clear_from >= 0 ? b.segment_distance(a) - clear_from : std::numeric_limits<double>::infinity();
+  for (const auto& [p, c] : joints) room = std::min(room, b.segment_distance(p) - c);
+  b.radius = std::max(0.0, std::min(b.radius, room));
+}
+
+// Every bone's capsule cleared (clear_joints) by its motion's turns.
+void clear_all_joints(const Section& s, std::vector<BoneSpec>& bones) {
+  const double gap = s.number("joint_gap", 1.0, Range::non_negative());
+  std::vector<double> clear(bones.size());
+  for (std::size_t j = 0; j < bones.size(); ++j)
+    clear[j] = gap * bones[j].radius * std::sin(largest_turn(bones[j]) / 2) / std::sin(M_PI / 4);
+  std::vector<std::vector<std::pair<Eigen::Vector3d, double>>> children(bones.size());
+  for (std::size_t j = 0; j < bones.size(); ++j)
+    if (bones[j].parent >= 0) children[bones[j].parent].emplace_back(bones[j].origin, clear[j]);
+  for (std::size_t j = 0; j < bones.size(); ++j)
+    clear_joints(bones[j], bones[j].parent >= 0 ? clear[j] : -1.0, children[j]);
 }
 
 // One bone per joint: its origin the joint's rest position, its capsule from there to the mean of
@@ -136,27 +164,37 @@ std::vector<BoneSpec> joint_bones(const Section& s, const GltfCharacter& c, cons
     std::nth_element(d.begin(), d.begin() + 2, d.end());
     b.radius = fraction * d[2];
   }
-  const double gap = s.number("joint_gap", 1.0, Range::non_negative());
-  std::vector<std::vector<Eigen::Vector3d>> child_joints(bones.size());
-  for (const BoneSpec& b : bones)
-    if (b.parent >= 0) child_joints[b.parent].push_back(b.origin);
-  for (std::size_t j = 0; j < bones.size(); ++j) clear_joints(bones[j], bones[j].parent >= 0, child_joints[j], gap);
   return bones;
 }
 
-// Each node within a capsule follows the bone it is deepest in.
+// Each node within a capsule follows the bone it is deepest in. A bone whose capsule holds fewer
+// than four nodes (a thin limb on a coarse mesh, a short bone cut back from its joints) takes the
+// free nodes nearest its axis up to four, so that every bone moves the tissue about it.
 void bind_nodes(std::vector<BoneSpec>& bones, const Mesh& mesh) {
   const Points& X = mesh.rest_positions();
+  std::vector<int> owner(static_cast<std::size_t>(mesh.num_nodes()), -1);
   for (int v = 0; v < mesh.num_nodes(); ++v) {
     double best = 0;
-    int which = -1;
     for (std::size_t b = 0; b < bones.size(); ++b) {
       if (bones[b].radius <= 0) continue;
       const double d = bones[b].segment_distance(X.col(v)) - bones[b].radius;
-      if (d <= best) best = d, which = static_cast<int>(b);
+      if (d <= best) best = d, owner[static_cast<std::size_t>(v)] = static_cast<int>(b);
     }
-    if (which >= 0) bones[which].nodes.push_back(v);
   }
+  constexpr int kAtLeast = 4;
+  for (std::size_t b = 0; b < bones.size(); ++b) {
+    if (bones[b].radius <= 0) continue;
+    const auto held = std::count(owner.begin(), owner.end(), static_cast<int>(b));
+    std::vector<std::pair<double, int>> nearest;
+    for (int v = 0; v < mesh.num_nodes(); ++v)
+      if (owner[static_cast<std::size_t>(v)] < 0) nearest.emplace_back(bones[b].segment_distance(X.col(v)), v);
+    const auto more = std::min<std::ptrdiff_t>(kAtLeast - held, static_cast<std::ptrdiff_t>(nearest.size()));
+    if (more <= 0) continue;
+    std::partial_sort(nearest.begin(), nearest.begin() + more, nearest.end());
+    for (std::ptrdiff_t k = 0; k < more; ++k) owner[static_cast<std::size_t>(nearest[k].second)] = static_cast<int>(b);
+  }
+  for (int v = 0; v < mesh.num_nodes(); ++v)
+    if (owner[static_cast<std::size_t>(v)] >= 0) bones[owner[static_cast<std::size_t>(v)]].nodes.push_back(v);
 }
 
 // The rotation nearest a matrix (its polar factor): a joint's scale is not its motion.
@@ -167,19 +205,19 @@ Eigen::Matrix3d nearest_rotation(const Eigen::Matrix3d& A) {
   return svd.matrixU() * D * svd.matrixV().transpose();
 }
 
-// The scene times of the clip's keys: a blend from the rest pose over `blend_in` seconds, then the
-// clip's keys, repeated to the run's end when `loop`.
-std::vector<std::pair<double, double>> key_schedule(const Section& s, const GltfClip& clip, double duration) {
+// The scene times of a motion's keys `taus` (the clip's or the BVH's own times, from `first` over
+// `length` seconds): a blend from the rest pose over `blend_in` seconds, then the keys, repeated to
+// the run's end when `loop`. A NaN motion time is the rest pose.
+std::vector<std::pair<double, double>> key_schedule(const Section& s, const std::vector<double>& taus, double first,
+                                                    double length, double duration) {
   const double blend = s.number("blend_in", 0.5, Range::non_negative());
   const bool loop = s.boolean("loop", true);
-  const double length = clip.end - clip.start;
-  std::vector<std::pair<double, double>> keys;  // scene time, clip time
+  std::vector<std::pair<double, double>> keys;  // scene time, motion time
   if (blend > 0) keys.emplace_back(0.0, std::numeric_limits<double>::quiet_NaN());
-  const std::vector<double> taus = clip.key_times();
   for (int play = 0;; ++play) {
     const double start = blend + play * length;
     for (double tau : taus) {
-      const double t = start + tau - clip.start;
+      const double t = start + tau - first;
       if (keys.empty() || t > keys.back().first + 1e-9) keys.emplace_back(t, tau);
     }
     if (!loop || length <= 0 || start + length >= duration) break;
@@ -188,44 +226,174 @@ std::vector<std::pair<double, double>> key_schedule(const Section& s, const Gltf
   return keys;
 }
 
-// The bones' motion from the clip, sampled at its keys: each joint's rotation relative to its
-// parent's as keyed quaternions; the root, and any joint whose offset from its parent moves, free.
-void clip_motion(const Section& s, const GltfCharacter& c, int clip, double duration, std::vector<BoneSpec>& bones) {
-  std::vector<Eigen::Matrix4d> rest_inv(c.joints.size());
-  const std::vector<Eigen::Matrix4d> G0 = c.node_globals(-1, 0.0);
-  for (std::size_t j = 0; j < c.joints.size(); ++j) rest_inv[j] = G0[c.joints[j].node].inverse();
-  const auto keys = key_schedule(s, c.clips[clip], duration);
+// A pose of the joints: each one's rotation from its rest orientation (world frame) and its
+// position.
+struct Pose {
+  std::vector<Eigen::Matrix3d> R;
+  std::vector<Eigen::Vector3d> p;
+};
+
+// The bones' keyed motion from poses at scene times: each joint's rotation relative to its
+// parent's as keyed quaternions, its offset from the parent as keyed translations; the root,
+// and any joint whose offset moves, free joints, the others ball joints.
+void keyed_motion(const std::vector<std::pair<double, Pose>>& poses, double size, std::vector<BoneSpec>& bones) {
   std::vector<double> moved(bones.size(), 0.0);
-  for (const auto& [t, tau] : keys) {
-    const std::vector<Eigen::Matrix4d> G = std::isnan(tau) ? G0 : c.node_globals(clip, tau);
-    std::vector<Eigen::Matrix3d> R(bones.size());
-    std::vector<Eigen::Vector3d> p(bones.size());
+  for (const auto& [t, pose] : poses)
     for (std::size_t j = 0; j < bones.size(); ++j) {
-      const Eigen::Matrix4d& Gj = G[c.joints[j].node];
-      R[j] = nearest_rotation((Gj * rest_inv[j]).topLeftCorner<3, 3>());
-      p[j] = Gj.topRightCorner<3, 1>();
       BoneSpec& b = bones[j];
       const int a = b.parent;
-      const Eigen::Matrix3d Rrel = a < 0 ? R[j] : Eigen::Matrix3d(R[a].transpose() * R[j]);
+      const Eigen::Matrix3d Rrel = a < 0 ? pose.R[j] : Eigen::Matrix3d(pose.R[a].transpose() * pose.R[j]);
       Eigen::Quaterniond q(Rrel);
       Eigen::Vector4d v(q.w(), q.x(), q.y(), q.z());
       if (!b.key_quaternions.empty() && v.dot(b.key_quaternions.back()) < 0) v = -v;  // one sign along the keys
       b.key_times.push_back(t);
       b.key_quaternions.push_back(v);
-      const Eigen::Vector3d d = a < 0
-                                    ? Eigen::Vector3d(p[j] - b.origin)
-                                    : Eigen::Vector3d(R[a].transpose() * (p[j] - p[a]) - (b.origin - bones[a].origin));
+      const Eigen::Vector3d d =
+          a < 0 ? Eigen::Vector3d(pose.p[j] - b.origin)
+                : Eigen::Vector3d(pose.R[a].transpose() * (pose.p[j] - pose.p[a]) - (b.origin - bones[a].origin));
       b.translation.times.push_back(t);
       b.translation.values.push_back(d);
       moved[j] = std::max(moved[j], d.norm());
     }
-  }
-  const Eigen::Vector3d extent = c.vertices.rowwise().maxCoeff() - c.vertices.rowwise().minCoeff();
   for (std::size_t j = 0; j < bones.size(); ++j) {
     BoneSpec& b = bones[j];
-    b.joint = b.parent < 0 || moved[j] > 1e-9 * extent.norm() ? BoneSpec::Joint::free : BoneSpec::Joint::ball;
+    b.joint = b.parent < 0 || moved[j] > 1e-9 * size ? BoneSpec::Joint::free : BoneSpec::Joint::ball;
     b.translation.kind = Driver::Kind::keyframes_cubic;
   }
+}
+
+double extent(const GltfCharacter& c) {
+  return (c.vertices.rowwise().maxCoeff() - c.vertices.rowwise().minCoeff()).norm();
+}
+
+Pose rest_pose(const std::vector<BoneSpec>& bones) {
+  Pose rest{std::vector<Eigen::Matrix3d>(bones.size(), Eigen::Matrix3d::Identity()), {}};
+  for (const BoneSpec& b : bones) rest.p.push_back(b.origin);
+  return rest;
+}
+
+// The bones' motion from a glTF clip, sampled at its keys.
+void clip_motion(const Section& s, const GltfCharacter& c, int clip, double duration, std::vector<BoneSpec>& bones) {
+  std::vector<Eigen::Matrix4d> rest_inv(c.joints.size());
+  const std::vector<Eigen::Matrix4d> G0 = c.node_globals(-1, 0.0);
+  for (std::size_t j = 0; j < c.joints.size(); ++j) rest_inv[j] = G0[c.joints[j].node].inverse();
+  const GltfClip& C = c.clips[clip];
+  std::vector<std::pair<double, Pose>> poses;
+  for (const auto& [t, tau] : key_schedule(s, C.key_times(), C.start, C.end - C.start, duration)) {
+    if (std::isnan(tau)) {
+      poses.emplace_back(t, rest_pose(bones));
+      continue;
+    }
+    const std::vector<Eigen::Matrix4d> G = c.node_globals(clip, tau);
+    Pose pose;
+    for (std::size_t j = 0; j < bones.size(); ++j) {
+      const Eigen::Matrix4d& Gj = G[c.joints[j].node];
+      pose.R.push_back(nearest_rotation((Gj * rest_inv[j]).topLeftCorner<3, 3>()));
+      pose.p.push_back(Gj.topRightCorner<3, 1>());
+    }
+    poses.emplace_back(t, std::move(pose));
+  }
+  keyed_motion(poses, extent(c), bones);
+}
+
+// A BVH joint's rotation at frame f: its rotation channels in file order, body-fixed
+// (R = R_1 R_2 R_3), and its position channels (the offset where it has none).
+void bvh_local(const Bvh& bvh, const BvhJoint& J, Eigen::Index f, Eigen::Matrix3d& R, Eigen::Vector3d& position) {
+  R.setIdentity();
+  position = J.offset;
+  for (std::size_t k = 0; k < J.channels.size(); ++k) {
+    const double value = bvh.motion(f, J.first_channel + static_cast<Eigen::Index>(k));
+    const int c = J.channels[k];
+    if (c >= BvhJoint::Xrotation)
+      R = R * Eigen::AngleAxisd(value * M_PI / 180, Eigen::Vector3d::Unit(c - BvhJoint::Xrotation)).toRotationMatrix();
+    else
+      position[c] = value;
+  }
+}
+
+// Each joint's BVH joint (-1: none, it turns with its parent): character.bvh_joints, or the
+// joints' own names.
+std::vector<int> bvh_map(const Section& s, const GltfCharacter& c, const Bvh& bvh, const std::string& file) {
+  std::vector<int> map(c.joints.size(), -1);
+  const Section m = s.table("bvh_joints");
+  if (m.exists()) {
+    for (const std::string& joint : m.keys()) {
+      const auto it =
+          std::find_if(c.joints.begin(), c.joints.end(), [&](const GltfJoint& j) { return j.name == joint; });
+      if (it == c.joints.end()) m.fail(joint, "\"" + joint + "\" is not a joint of " + c.path);
+      const std::string name = m.string(joint, "");
+      map[static_cast<std::size_t>(it - c.joints.begin())] = bvh.find(name);
+      if (bvh.find(name) < 0) m.fail(joint, "\"" + name + "\" is not a joint of " + file);
+    }
+  } else {
+    for (std::size_t j = 0; j < c.joints.size(); ++j) map[j] = bvh.find(c.joints[j].name);
+  }
+  if (std::all_of(map.begin(), map.end(), [](int b) { return b < 0; }))
+    s.fail("bvh", "no joint of the character is named in " + file +
+                      " (expected character.bvh_joints, the character's joint names mapped to the file's)");
+  return map;
+}
+
+// The bones' motion from a BVH file's frames, retargeted: a mapped joint turns so that its bone
+// points where the BVH bone points (its world rotation from rest is the BVH joint's, times the
+// rotation taking the character's rest bone direction to the BVH's rest bone direction, so that
+// an A-pose character follows a T-pose capture); the root moves with the BVH root's position
+// from its first frame, in metres by `bvh_scale`.
+void bvh_motion(const Section& s, const SceneFile& file, const GltfCharacter& c, double duration,
+                std::vector<BoneSpec>& bones) {
+  const std::string path = file.resolve_path(s.string("bvh", ""));
+  const Bvh bvh = read_bvh(path);
+  const double scale = s.number("bvh_scale", 1.0, Range::positive());
+  const std::vector<int> map = bvh_map(s, c, bvh, s.string("bvh", ""));
+  auto direction = [](const std::vector<Eigen::Vector3d>& to) {
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d& v : to) d += v;
+    return d;
+  };
+  std::vector<Eigen::Matrix3d> align(bones.size(), Eigen::Matrix3d::Identity());
+  for (std::size_t j = 0; j < bones.size(); ++j) {
+    if (map[j] < 0) continue;
+    std::vector<Eigen::Vector3d> mine, theirs;
+    for (const BoneSpec& b : bones)
+      if (b.parent == static_cast<int>(j)) mine.push_back(b.origin - bones[j].origin);
+    for (const BvhJoint& J : bvh.joints)
+      if (J.parent == map[j]) theirs.push_back(J.offset);
+    const Eigen::Vector3d a = direction(mine), b = direction(theirs);
+    if (a.norm() > 0 && b.norm() > 0) align[j] = Eigen::Quaterniond::FromTwoVectors(a, b).toRotationMatrix();
+  }
+  std::vector<double> taus;
+  for (Eigen::Index f = 0; f < bvh.motion.rows(); ++f) taus.push_back(static_cast<double>(f) * bvh.frame_time);
+  const int root = map[0];
+  Eigen::Vector3d start = Eigen::Vector3d::Zero();
+  std::vector<std::pair<double, Pose>> poses;
+  for (const auto& [t, tau] : key_schedule(s, taus, 0.0, taus.back(), duration)) {
+    if (std::isnan(tau)) {
+      poses.emplace_back(t, rest_pose(bones));
+      continue;
+    }
+    const auto f = static_cast<Eigen::Index>(std::lround(tau / bvh.frame_time));
+    std::vector<Eigen::Matrix3d> world(bvh.joints.size());
+    Eigen::Vector3d root_at = Eigen::Vector3d::Zero();
+    for (std::size_t b = 0; b < bvh.joints.size(); ++b) {
+      Eigen::Matrix3d L;
+      Eigen::Vector3d position;
+      bvh_local(bvh, bvh.joints[b], f, L, position);
+      world[b] = bvh.joints[b].parent < 0 ? L : Eigen::Matrix3d(world[bvh.joints[b].parent] * L);
+      if (static_cast<int>(b) == root) root_at = position;
+    }
+    if (f == 0) start = root_at;
+    Pose pose;
+    for (std::size_t j = 0; j < bones.size(); ++j) {
+      const int a = bones[j].parent;
+      pose.R.push_back(map[j] >= 0 ? Eigen::Matrix3d(world[map[j]] * align[j])
+                       : a < 0     ? Eigen::Matrix3d::Identity()
+                                   : pose.R[a]);
+      pose.p.push_back(a < 0 ? Eigen::Vector3d(bones[j].origin + scale * (root_at - start))
+                             : Eigen::Vector3d(pose.p[a] + pose.R[a] * (bones[j].origin - bones[a].origin)));
+    }
+    poses.emplace_back(t, std::move(pose));
+  }
+  keyed_motion(poses, extent(c), bones);
 }
 
 // Tets whose four nodes all follow bones move rigidly: their volume needs no constraint row (it
@@ -254,6 +422,7 @@ Character parse_character(const Section& s, const SceneFile& file, double durati
   if (c.joints.empty())
     s.fail("file", "\"" + s.string("file", "") + "\" has no skin (expected a mesh skinned to a skeleton of joints)");
   const std::string clip_name = s.string("clip", "");
+  if (!clip_name.empty() && s.has("bvh")) s.fail("bvh", "a clip is given too (expected one motion: clip or bvh)");
   int clip = -1;
   if (!clip_name.empty()) {
     try {
@@ -268,9 +437,12 @@ Character parse_character(const Section& s, const SceneFile& file, double durati
   out.bones = joint_bones(s, c, out.mesh);
   if (clip >= 0) {
     clip_motion(s, c, clip, duration, out.bones);
+  } else if (s.has("bvh")) {
+    bvh_motion(s, file, c, duration, out.bones);
   } else {
     for (BoneSpec& b : out.bones) b.joint = BoneSpec::Joint::weld;
   }
+  clear_all_joints(s, out.bones);
   bind_nodes(out.bones, out.mesh);
   prune_zones(out.mesh, out.bones);
   out.render = std::make_shared<RenderMesh>();
