@@ -3,7 +3,7 @@
 
     /usr/bin/python3 tools/render.py RUN.h5 [--frames 0,10,-1 | flattest | --every N]
         [--color deformation|displacement|pressure|zone] [--up z|y|-y|x,y,z] [--elev 18 --azim -60]
-        [--out DIR | --out FILE.png] [--size 800] [--mp4] [--loads] [--contact]
+        [--out DIR | --out FILE.png] [--size 800] [--mp4] [--loads] [--contact] [--skinning]
 
 The surface is shaded smoothly (per-vertex normals, a key light, a fill light and a highlight)
 and drawn back to front with Gouraud triangles (matplotlib's Agg renderer). The colour is, per
@@ -20,7 +20,10 @@ camera relative to up. The ground and every plane (where it is at the frame) are
 own planes; the body casts a shadow on the ground. Solid colliders (/colliders, posed by
 /frames/collider_pose) are drawn translucent. --loads draws the applied loads (/frames/load) as
 arrows, the largest a fifth of the body's size; --contact the colliders' force on each node
-(/frames/contact) the same way. --out FILE.png with one frame writes that file.
+(/frames/contact) the same way. --out FILE.png with one frame writes that file. --skinning (a
+[character]'s run): the artist's render mesh twice, side by side: moved by linear blend skinning
+of the bones alone (what the clip gives without tissue) and carried by the simulated tissue, with
+how far they part; with --mp4, the side-by-side video.
 """
 import argparse
 import os
@@ -36,7 +39,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.artist import Artist  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
-from run_file import open_run, write_whole  # noqa: E402  (the one reader of run files)
+from run_file import Error, open_run, write_whole  # noqa: E402  (the one reader of run files)
 
 
 # ---- The scene: up, planes, colliders (as the run file records them) -------------------------
@@ -256,6 +259,8 @@ def arguments():
     ap.add_argument("--loads", action="store_true")
     ap.add_argument("--contact", action="store_true", help="draw the colliders' force on each node (/frames/contact)")
     ap.add_argument("--no-shadow", action="store_true")
+    ap.add_argument("--skinning", action="store_true",
+                    help="a character's run: its render mesh skinned by the bones alone beside it simulated")
     return ap.parse_args()
 
 
@@ -470,6 +475,43 @@ def draw_frame(a, run, k, cam, up, up_from, scene, colouring, under, frames, pat
     plt.close(fig)
 
 
+def draw_mesh(ax, cam, x, tris, colour):
+    """A render mesh (any soup: no face hidden), Gouraud-shaded in one colour, far to near."""
+    vn, _ = vertex_normals(x, tris)
+    xy, depth = cam.project(x)
+    tris = tris[np.argsort(depth[tris].mean(1))]
+    facing = np.where((vn @ cam.toward)[:, None] < 0, -vn, vn)  # light a face seen from behind as its front
+    diffuse, spec = shade(facing, cam)
+    rgb = np.clip(np.asarray(colour)[None, None, :] * diffuse[tris][..., None] + spec[tris][..., None], 0, 1)
+    ax.add_artist(GouraudTriangles(xy[tris], np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,))], axis=2), zorder=1))
+
+
+def draw_versus(a, run, k, cam, scene, path):
+    """The render mesh at frame k: skinned by the bones alone (left) and carried by the tissue."""
+    try:
+        skinned, simulated = run.render_skinned(k), run.render_positions(run.frame_positions(k))
+    except Error as e:
+        sys.exit(str(e))
+    fig = plt.figure(figsize=(2 * a.size / 100, a.size / 100), dpi=100)
+    off = np.linalg.norm(simulated - skinned, axis=1)
+    for i, (x, label) in enumerate(((skinned, "skinned: the bones alone"),
+                                    (simulated, f"simulated: isochor (from skinning: max {1e3 * off.max():.0f} mm, "
+                                                f"mean {1e3 * off.mean():.0f} mm)"))):
+        ax = fig.add_axes([i / 2, 0, 0.5, 1])
+        ax.set_axis_off()
+        ax.set_aspect("equal")
+        behind, _ = scene.planes_at(k, cam)
+        for q2, colour, c, quad, point, normal in behind:
+            ax.add_collection(PolyCollection([q2], facecolors=[colour], edgecolors=(0.6, 0.6, 0.6, 0.6), zorder=0))
+        draw_mesh(ax, cam, x, run.render_triangles, (0.85, 0.62, 0.5))
+        c2, _ = cam.project(scene.mid)
+        ax.set_xlim(c2[0] - 0.55 * scene.span, c2[0] + 0.55 * scene.span)
+        ax.set_ylim(c2[1] - 0.55 * scene.span, c2[1] + 0.55 * scene.span)
+        ax.text(0.02, 0.97, f"{label}  t = {float(run.times[k]):.3f} s", transform=ax.transAxes, fontsize=9, va="top")
+    write_whole(path, lambda f: fig.savefig(f, dpi=100, format="png"), "wb")
+    plt.close(fig)
+
+
 def write_mp4(run, written, out):
     if not shutil.which("ffmpeg"):
         sys.exit("ffmpeg is not installed (apt-get install -y ffmpeg); the PNG files are written")
@@ -501,6 +543,8 @@ def main():
     except OSError as e:
         sys.exit(f"{out}: cannot be created ({e.strerror or e})")
     check_series(a, run)
+    if a.skinning and run.render_rest is None:
+        sys.exit(f"{a.run}: has no render mesh (--skinning draws a [character]'s run)")
     cam = Camera(up, a.elev, a.azim)
     surf_nodes = np.unique(run.surface)
     scene = Scene(run, frames, surf_nodes)
@@ -510,7 +554,10 @@ def main():
     started = clock.perf_counter()
     for k in frames:
         path = a.out if single else os.path.join(out, f"frame_{k:06d}.png")
-        draw_frame(a, run, k, cam, up, up_from, scene, colouring, under, frames, path)
+        if a.skinning:
+            draw_versus(a, run, k, cam, scene, path)
+        else:
+            draw_frame(a, run, k, cam, up, up_from, scene, colouring, under, frames, path)
         written.append(path)
     per = (clock.perf_counter() - started) / max(len(written), 1)
     print(f"wrote {len(written)} PNG files to {out} ({per:.2f} s per frame, {len(run.surface)} surface triangles)")

@@ -738,6 +738,10 @@ void OutputWriter::Impl::write_render(const SceneRecord& scene) {
   write_array(g, "triangles", H5T_NATIVE_INT, {r.triangles.size(), 3}, r.triangles.data());
   write_array(g, "tet", H5T_NATIVE_INT, {n}, r.embedding.tet.data());
   write_array(g, "weights", H5T_NATIVE_DOUBLE, {n, 4}, r.embedding.weights.data());
+  if (r.skin_bones.size() == static_cast<std::size_t>(n) && r.skin_weights.size() == r.skin_bones.size()) {
+    write_array(g, "skin_bones", H5T_NATIVE_INT, {n, 4}, r.skin_bones.data());
+    write_array(g, "skin_weights", H5T_NATIVE_DOUBLE, {n, 4}, r.skin_weights.data());
+  }
 }
 
 void OutputWriter::Impl::append_optional(std::unique_ptr<Series>& series, const char* name,

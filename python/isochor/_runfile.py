@@ -155,6 +155,7 @@ class Run:
         self.render_triangles: Optional[np.ndarray] = r["triangles"][()] if r is not None else None
         self._render_tet = r["tet"][()] if r is not None else None
         self._render_weights = r["weights"][()] if r is not None else None
+        self._skin = (r["skin_bones"][()], r["skin_weights"][()]) if r is not None and "skin_bones" in r else None
 
     # The per-frame node arrays, read when first asked for.
     def _series(self, name: str) -> Optional[np.ndarray]:
@@ -255,6 +256,18 @@ class Run:
             raise KeyError(f"{self.path}: no bone {b} (bones: {len(self.bones)})")
         p = f["bone_pose"][k][b]
         return np.asarray(p[:9], float).reshape(3, 3), np.asarray(p[9:], float)
+
+    def render_skinned(self, k: int) -> np.ndarray:
+        """(V,3) the render mesh at frame k as linear blend skinning puts it: each vertex moved by
+        its four bones' poses (/frames/bone_pose), weighted; the tissue's simulation without the
+        tissue, to compare render_positions with."""
+        if self._skin is None or "bone_pose" not in self._h5["frames"]:
+            raise Error(f"{self.path}: has no skinned render mesh (expected a run of a scene with a [character])")
+        poses = np.asarray(self._h5["frames"]["bone_pose"][self._frame_index(k)], float)  # (B,12)
+        A, b = poses[:, :9].reshape(-1, 3, 3), poses[:, 9:]
+        bones, weights = self._skin
+        moved = np.einsum("vkij,vj->vki", A[bones], self.render_rest) + b[bones]  # (V,4,3)
+        return np.einsum("vki,vk->vi", moved, weights)
 
     def zone_volume(self, name: str) -> np.ndarray:
         """(F,) the volume of a zone ("total": the whole body) at every frame."""

@@ -450,6 +450,8 @@ Character parse_character(const Section& s, const SceneFile& file, double durati
   out.render->rest = c.vertices;
   out.render->triangles = c.triangles;
   out.render->embedding = embed_points(out.mesh, c.vertices);
+  out.render->skin_bones = c.vertex_joints;  // one bone per joint, in the joints' order
+  out.render->skin_weights = c.vertex_weights;
   return out;
 }
 

@@ -3,6 +3,8 @@
 // affine map of the tet's nodes. A point inside the mesh lies in its tet (weights in [0, 1]); one
 // outside takes the nearest tet and extrapolates its affine map.
 #pragma once
+
+#include <array>
 #include <Eigen/Core>
 #include <string>
 #include <vector>
@@ -26,6 +28,10 @@ struct RenderMesh {
   Points rest;         // rest vertices, world coordinates
   std::vector<Tri> triangles;
   Embedding embedding;
+  // Its skin, where it has one: each vertex's four bones (rows of the skeleton, /bones) and their
+  // weights (summing to 1): linear blend skinning, for comparing the simulation with it.
+  std::vector<std::array<int, 4>> skin_bones;
+  std::vector<Eigen::Vector4d> skin_weights;
 };
 
 }  // namespace isochor

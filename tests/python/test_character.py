@@ -1,0 +1,103 @@
+"""A glTF character's run read back in Python: the render mesh carried by the tets
+(Run.render_positions) and the same mesh under linear blend skinning by the bones
+(Run.render_skinned), on a bar made with tools/glb.py and the export to .glb."""
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import isochor
+from paths import EXE, SOURCE
+
+sys.path.insert(0, os.path.join(SOURCE, "tools"))
+from glb import Glb  # noqa: E402
+
+ANGLE, LIFT = math.pi / 3, 0.1  # the clip: joint b turns 60 degrees about z, a rises 0.1 m
+
+
+def bar_glb(path):
+    """A bar [0, 1] x [-0.2, 0.2]^2: its x = 0 corners skinned to joint a at (0.1, 0, 0), its x = 1
+    corners to a's child b at (0.5, 0, 0), the middle vertices half and half; clip "bend" (1 s)."""
+    x = np.array([[i / 2, (k & 1) * 0.4 - 0.2, (k >> 1) * 0.4 - 0.2] for i in range(3) for k in range(4)], np.float32)
+    joints = np.array([[0, 1, 0, 0]] * 12, np.uint16)
+    weights = np.array([[1 - i / 2, i / 2, 0, 0] for i in range(3) for _ in range(4)], np.float32)
+    quad = lambda a, b, c, d: [(a, b, c), (a, c, d)]  # noqa: E731
+    tris = []
+    for i in range(2):  # the sides, between slices i and i + 1 (vertex 4 i + k)
+        s, t = 4 * i, 4 * i + 4
+        tris += quad(s + 0, t + 0, t + 1, s + 1) + quad(s + 1, t + 1, t + 3, s + 3)
+        tris += quad(s + 3, t + 3, t + 2, s + 2) + quad(s + 2, t + 2, t + 0, s + 0)
+    tris += quad(0, 1, 3, 2) + quad(8, 10, 11, 9)  # the ends
+    g = Glb()
+    prim = {"attributes": {"POSITION": g.accessor(x, bounds=True), "JOINTS_0": g.accessor(joints, component=5123),
+                           "WEIGHTS_0": g.accessor(weights)}, "indices": g.triangles(np.array(tris))}
+    g.mesh(prim)
+    g.node(mesh=0, skin=0)
+    g.node(name="a", translation=[0.1, 0, 0], children=[2])
+    g.node(name="b", translation=[0.4, 0, 0])
+    ibm = np.array([np.eye(4) for _ in range(2)])
+    ibm[0, :3, 3], ibm[1, :3, 3] = [-0.1, 0, 0], [-0.5, 0, 0]
+    g.gltf["skins"] = [{"joints": [1, 2], "inverseBindMatrices": g.accessor(
+        np.array([m.T.reshape(-1) for m in ibm], np.float32), per=16)}]
+    g.gltf["scenes"] = [{"nodes": [0, 1]}]
+    times = g.accessor(np.array([0, 0.5, 1], np.float32), bounds=True)
+    turn = [[0, 0, math.sin(f * ANGLE / 2), math.cos(f * ANGLE / 2)] for f in (0, 0.5, 1)]
+    rise = [[0.1, 0, f * LIFT] for f in (0, 0.5, 1)]
+    g.gltf["animations"] = [{"name": "bend", "samplers": [
+        {"input": times, "output": g.accessor(np.array(turn, np.float32))},
+        {"input": times, "output": g.accessor(np.array(rise, np.float32))}], "channels": [
+        {"sampler": 0, "target": {"node": 2, "path": "rotation"}},
+        {"sampler": 1, "target": {"node": 1, "path": "translation"}}]}]
+    with open(path, "wb") as f:
+        f.write(g.to_bytes())
+
+
+@pytest.fixture(scope="module")
+def bar_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("character")
+    bar_glb(d / "bar.glb")
+    out = d / "bar.h5"
+    table = {"character": {"file": "bar.glb", "clip": "bend", "edge_length": 0.1, "loop": False, "blend_in": 0.0},
+             "material": {"model": "cnh", "mu": 1e5, "lambda": 1e5}, "damping": {"beta": 0.01},
+             "forces": {"gravity": [0.0, 0.0, 0.0]}, "frames": {"rate": 10.0, "duration": 1.2}}
+    isochor.run(isochor.scene(table, directory=str(d)), out)
+    return out
+
+
+def test_the_skinned_mesh_is_the_clips_blend(bar_run):
+    """At the clip's end (and held after it) linear blend skinning moves the x = 0 corners up by
+    LIFT, turns the x = 1 corners by ANGLE about z through b's joint (0.5, 0, 0) and lifts them,
+    and puts the middle vertices half way between the two motions: the formula, not the program."""
+    with isochor.open(bar_run) as run:
+        rest = run.render_rest
+        c, s = math.cos(ANGLE), math.sin(ANGLE)
+        Rz = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+        pivot, lift = np.array([0.5, 0, 0]), np.array([0, 0, LIFT])
+        w_b = rest[:, 0]  # the middle's weight on b is 1/2 at x = 1/2: w_b = x
+        expected = (1 - w_b)[:, None] * (rest + lift) + w_b[:, None] * (pivot + (rest - pivot) @ Rz.T + lift)
+        for k in (run.num_frames - 2, run.num_frames - 1):  # t = 1.1, 1.2: the last pose held
+            np.testing.assert_allclose(run.render_skinned(k), expected, atol=1e-6)  # float32 keys
+        np.testing.assert_allclose(run.render_skinned(0), rest, atol=1e-8)  # 0.1 in float32: 1.5e-9 off
+
+
+def test_the_carried_render_mesh_starts_at_the_artists_mesh(bar_run):
+    with isochor.open(bar_run) as run:
+        np.testing.assert_allclose(run.render_positions(run.frame_positions(0)), run.render_rest, atol=1e-9)
+        frames = run.render_positions(run.positions)
+        assert frames.shape == (run.num_frames, len(run.render_rest), 3)
+        np.testing.assert_allclose(frames[3], run.render_positions(run.frame_positions(3)), atol=1e-12)
+
+
+def test_export_writes_the_render_mesh(bar_run, tmp_path):
+    """The PC2 cache holds the render mesh's vertices (the glTF's order), frame by frame."""
+    out = tmp_path / "bar.pc2"
+    subprocess.run([EXE, "export", str(bar_run), "--out", str(out)], check=True, capture_output=True)
+    with isochor.open(bar_run) as run, open(out, "rb") as f:
+        head = f.read(32)
+        points, frames = np.frombuffer(head[16:20], "<i4")[0], np.frombuffer(head[28:32], "<i4")[0]
+        assert (points, frames) == (len(run.render_rest), run.num_frames)
+        cache = np.frombuffer(f.read(), "<f4").reshape(frames, points, 3)
+        np.testing.assert_allclose(cache, run.render_positions(run.positions), atol=1e-6)
