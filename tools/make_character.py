@@ -6,11 +6,11 @@
 The render mesh is what an artist's often is: a soup of closed parts (ellipsoids and tapered
 capsules for pelvis, belly, chest, neck, head, arms, hands, thighs, shins and feet) that overlap
 and intersect, so nothing downstream may assume one closed manifold surface. Y is up, the
-character faces +z, its left is +x (glTF's convention). Nineteen joints, parents first:
+character faces +z, its left is +x (glTF's convention). Twenty-one joints, parents first:
 
     hips (the root) > spine > chest > neck > head
                             > chest > upper_arm_l > forearm_l > hand_l   (and _r)
-    hips > thigh_l > shin_l > foot_l > toes_l                           (and _r)
+    hips > thigh_l > shin_l > foot_l > toes_l, heel_l                   (and _r)
 
 Skin weights: each vertex's four nearest bones (a bone: the segment from its joint to its child,
 or a point for a leaf), weighted by 1 / (d + 1 cm)^6 and normalised, so that parts blend over a
@@ -55,6 +55,7 @@ for side, s in (("l", 1.0), ("r", -1.0)):
         (f"shin_{side}", f"thigh_{side}", (s * 0.10, 0.50, 0.0)),
         (f"foot_{side}", f"shin_{side}", (s * 0.10, 0.08, 0.0)),
         (f"toes_{side}", f"foot_{side}", (s * 0.10, 0.03, 0.11)),
+        (f"heel_{side}", f"foot_{side}", (s * 0.10, 0.035, -0.03)),
     ]
 NAMES = [j[0] for j in JOINTS]
 INDEX = {n: i for i, n in enumerate(NAMES)}
@@ -150,6 +151,8 @@ def bone_segments():
             end = REST[j] + (REST[j] - REST[PARENT[j]]) * 0.5
         if NAMES[j].startswith("toes"):
             end = REST[j] + np.array([0, 0.0, 0.05])
+        if NAMES[j].startswith("heel"):
+            end = REST[j] + np.array([0, 0.0, -0.02])
         segs.append((REST[j], end))
     return segs
 

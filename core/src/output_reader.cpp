@@ -235,6 +235,12 @@ std::map<std::string, std::vector<double>> RunFile::stat_series() const {
   return out;
 }
 
+std::array<std::size_t, 2> RunFile::render_size() const {
+  if (H5Lexists(impl_->file, "/render", H5P_DEFAULT) <= 0) return {0, 0};
+  return {static_cast<std::size_t>(impl_->dims("/render/rest")[0]),
+          static_cast<std::size_t>(impl_->dims("/render/triangles")[0])};
+}
+
 std::string describe_run(const std::string& path) {
   RunFile r(path);
   std::ostringstream s;
@@ -244,6 +250,9 @@ std::string describe_run(const std::string& path) {
     << attrs["command"] << ", scene " << attrs["scene_file"] << "\n";
   s << "  mesh        " << r.num_nodes() << " nodes, " << r.num_tets() << " tets, " << r.surface().size()
     << " surface triangles\n";
+  if (const auto render = r.render_size(); render[0] > 0)
+    s << "  render      " << render[0] << " vertices, " << render[1] << " triangles (the character's own mesh, "
+      << "carried by the tets: isochor export --format glb)\n";
   auto zones = r.zone_sizes();
   s << "  zones       " << zones.size();
   for (const auto& [name, n] : zones)

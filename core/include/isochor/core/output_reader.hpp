@@ -32,6 +32,8 @@ class RunFile {
     return node_vectors("contact", frame);
   }                                                                // per node (N); the scene must have colliders
   Points node_vectors(const std::string& name, int frame) const;   // /frames/<name>
+  // A [character]'s render mesh (/render): its vertices and triangles; {0, 0} where there is none.
+  std::array<std::size_t, 2> render_size() const;
   std::map<std::string, std::string> attributes() const;           // root attributes (strings)
   std::map<std::string, double> stat_totals() const;               // numeric attributes of /stats
   std::string stat_text(const std::string& name) const;            // a string attribute of /stats ("" if none)
