@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "isochor/core/gltf.hpp"
+#include "isochor/core/meshing.hpp"
 #include "gltf_builder.hpp"
 #include "test_util.hpp"
 
@@ -228,3 +229,66 @@ TEST(Gltf, BadFilesStopWithOneLine) {
 }
 
 }  // namespace
+
+namespace {
+
+// The unit cube's surface at `corner`, each face cut into n x n squares (two triangles each,
+// outward), without the square `hole` of its top face (-1: none).
+void add_cube(const Eigen::Vector3d& corner, int n, int hole, isochor::Points& x, std::vector<isochor::Tri>& tris) {
+  std::vector<Eigen::Vector3d> p;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      const Eigen::Vector3d u = Eigen::Vector3d::Unit((axis + 1) % 3), v = Eigen::Vector3d::Unit((axis + 2) % 3);
+      const Eigen::Vector3d origin = corner + side * Eigen::Vector3d::Unit(axis);
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          if (axis == 2 && side == 1 && i * n + j == hole) continue;
+          const Eigen::Vector3d a = origin + (u * i + v * j) / n, b = a + u / n, c = a + (u + v) / n, d = a + v / n;
+          const int base = static_cast<int>(x.cols() + p.size());
+          p.insert(p.end(), {a, b, c, d});
+          // u x v is the outward normal on the upper side (side 1): keep the order there.
+          if (side == 1)
+            tris.insert(tris.end(), {{base, base + 1, base + 2}, {base, base + 2, base + 3}});
+          else
+            tris.insert(tris.end(), {{base, base + 2, base + 1}, {base, base + 3, base + 2}});
+        }
+    }
+  x.conservativeResize(3, x.cols() + static_cast<Eigen::Index>(p.size()));
+  for (std::size_t k = 0; k < p.size(); ++k) x.col(x.cols() - static_cast<Eigen::Index>(p.size() - k)) = p[k];
+}
+
+}  // namespace
+
+// An artist's soup: two unit cubes overlapping by half (self-intersecting), each with a 0.1 m
+// square hole in its top (open), and a triangle from an edge into the inside (non-manifold: three
+// triangles on one edge). The alpha wrap (alpha 0.2 closes the holes) is one closed, outward
+// surface around the union, its vertices on the surface `offset` r = 0.01 outside it and its flat
+// triangles inside that: its volume lies between the union's (1.5 x 1 x 1) and Steiner's formula
+// for the box grown by r, V + A r + (pi/4) L r^2 + (4 pi/3) r^3 (A = 8, L = 14). Gmsh fills it.
+// A soup of degenerate triangles has nothing to wrap: one line.
+TEST(Wrap, OpenIntersectingNonManifoldSoupsBecomeOneClosedSurface) {
+  isochor::Points x(3, 0);
+  std::vector<isochor::Tri> tris;
+  add_cube(Eigen::Vector3d::Zero(), 10, 55, x, tris);
+  add_cube(Eigen::Vector3d(0.5, 0, 0), 10, 44, x, tris);
+  x.conservativeResize(3, x.cols() + 1);
+  x.col(x.cols() - 1) = Eigen::Vector3d(0.5, 0.5, 0.5);
+  tris.push_back({tris[0][0], tris[0][1], static_cast<int>(x.cols() - 1)});
+  isochor::Points wx;
+  std::vector<isochor::Tri> wt;
+  isochor::alpha_wrap(x, tris, 0.2, 0.01, wx, wt, "soup");
+  const double V = isochor::surface_volume(wx, wt);
+  const double r = 0.01, steiner = 1.5 + 8 * r + M_PI / 4 * 14 * r * r + 4 * M_PI / 3 * r * r * r;
+  EXPECT_GT(V, 1.5);
+  EXPECT_LT(V, steiner);
+  const isochor::Mesh m = isochor::mesh_closed_surface(wx, wt, 0.25, "soup's wrap");
+  isochor::test::expect_closed_outward(m);
+  double tets = 0;
+  for (int e = 0; e < m.num_tets(); ++e) tets += m.rest_volumes()[e];
+  EXPECT_NEAR(tets, V, 1e-9 * V);
+  isochor::Points flat(3, 3);
+  flat << 0, 1, 2, 0, 0, 0, 0, 0, 0;  // three points on a line
+  const std::string e = error_of([&] { isochor::alpha_wrap(flat, {{0, 1, 2}}, 0.2, 0.01, wx, wt, "flat.glb"); });
+  EXPECT_EQ(e.rfind("flat.glb: ", 0), 0u) << e;
+  EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+}

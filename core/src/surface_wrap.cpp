@@ -2,6 +2,7 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/alpha_wrap_3.h>
 
+#include <Eigen/Geometry>
 #include <array>
 #include <string>
 #include <vector>
@@ -19,10 +20,20 @@ void alpha_wrap(const Points& x, const std::vector<Tri>& tris, double alpha, dou
   std::vector<Kernel::Point_3> points;
   points.reserve(static_cast<std::size_t>(x.cols()));
   for (Eigen::Index v = 0; v < x.cols(); ++v) points.emplace_back(x(0, v), x(1, v), x(2, v));
+  // CGAL's oracle leaves out degenerate triangles and fails on a soup left empty: only triangles
+  // with an area (relative to the soup's size) are wrapped, and none is an error.
+  const double size = x.cols() ? (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).norm() : 0.0;
   std::vector<std::array<std::size_t, 3>> faces;
   faces.reserve(tris.size());
-  for (const Tri& t : tris)
-    faces.push_back({static_cast<std::size_t>(t[0]), static_cast<std::size_t>(t[1]), static_cast<std::size_t>(t[2])});
+  for (const Tri& t : tris) {
+    for (int v : t)
+      if (v < 0 || v >= x.cols())
+        throw Error(what + ": a triangle names vertex " + std::to_string(v) + " of " + std::to_string(x.cols()));
+    const double area = (x.col(t[1]) - x.col(t[0])).cross(x.col(t[2]) - x.col(t[0])).norm();
+    if (area > 1e-12 * size * size)
+      faces.push_back({static_cast<std::size_t>(t[0]), static_cast<std::size_t>(t[1]), static_cast<std::size_t>(t[2])});
+  }
+  if (faces.empty()) throw Error(what + ": every triangle is degenerate (no area; expected a surface to wrap)");
   CGAL::Surface_mesh<Kernel::Point_3> wrap;
   CGAL::alpha_wrap_3(points, faces, alpha, offset, wrap);
   if (wrap.number_of_faces() == 0) throw Error(what + ": the alpha wrap is empty (expected a surface to wrap)");

@@ -101,3 +101,23 @@ def test_export_writes_the_render_mesh(bar_run, tmp_path):
         assert (points, frames) == (len(run.render_rest), run.num_frames)
         cache = np.frombuffer(f.read(), "<f4").reshape(frames, points, 3)
         np.testing.assert_allclose(cache, run.render_positions(run.positions), atol=1e-6)
+
+
+def test_render_draws_skinned_beside_simulated(bar_run, tmp_path):
+    """`isochor render --skinning`: one picture twice as wide as tall, the render mesh drawn (its
+    skin colour: red over green over blue) in both halves; a run without a character: one line."""
+    import matplotlib.image
+
+    png = tmp_path / "versus.png"
+    subprocess.run([EXE, "render", str(bar_run), "--frames", "-1", "--skinning", "--size", "300", "--out", str(png)],
+                   check=True, capture_output=True)
+    img = matplotlib.image.imread(png)
+    assert img.shape[:2] == (300, 600)
+    skin = (img[..., 0] > img[..., 1] + 0.05) & (img[..., 1] > img[..., 2] + 0.03)
+    assert skin[:, :300].sum() > 500 and skin[:, 300:].sum() > 500
+    plain = tmp_path / "plain.h5"
+    isochor.run(isochor.scene({"mesh": {"shape": "box", "cells": [1, 1, 1]}, "frames": {"rate": 10.0, "duration": 0.1}}),
+                plain)
+    r = subprocess.run([EXE, "render", str(plain), "--frames", "0", "--skinning", "--out", str(tmp_path / "p.png")],
+                       capture_output=True, text=True)
+    assert r.returncode == 1 and "has no render mesh" in r.stderr and len(r.stderr.strip().splitlines()) == 1

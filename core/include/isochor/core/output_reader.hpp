@@ -30,8 +30,8 @@ class RunFile {
   Points loads(int frame) const { return node_vectors("load", frame); }  // per node (N); the scene must have [[load]]
   Points contact(int frame) const {
     return node_vectors("contact", frame);
-  }                                                                // per node (N); the scene must have colliders
-  Points node_vectors(const std::string& name, int frame) const;   // /frames/<name>
+  }                                                               // per node (N); the scene must have colliders
+  Points node_vectors(const std::string& name, int frame) const;  // /frames/<name>
   // A [character]'s render mesh (/render): its vertices and triangles; {0, 0} where there is none.
   std::array<std::size_t, 2> render_size() const;
   std::map<std::string, std::string> attributes() const;           // root attributes (strings)
