@@ -529,6 +529,11 @@ TEST(Character, BadInputNamesTheKey) {
       [&] { parse_scene(SceneFile::parse("[character]\nfile = \"" + bar + "\"\nclip = \"walk\"\n", "c.toml")); });
   EXPECT_NE(e.find("character.clip"), std::string::npos) << e;
   EXPECT_NE(e.find("no animation \"walk\" (expected one of \"bend\""), std::string::npos) << e;
+  // Limits before the wrap: an alpha that would make tens of millions of triangles.
+  const std::string a = test::error_of(
+      [&] { parse_scene(SceneFile::parse("[character]\nfile = \"" + bar + "\"\nwrap_alpha = 1e-5\n", "c.toml")); });
+  EXPECT_NE(a.find("character.wrap_alpha: the wrap's alpha"), std::string::npos) << a;
+  EXPECT_NE(a.find("expected at least a 2000th of its size"), std::string::npos) << a;
 }
 
 TEST(Skeleton, BadInputNamesTheBoneAndWhatWasExpected) {

@@ -495,8 +495,8 @@ def draw_versus(a, run, k, cam, scene, path):
     fig = plt.figure(figsize=(2 * a.size / 100, a.size / 100), dpi=100)
     off = np.linalg.norm(simulated - skinned, axis=1)
     for i, (x, label) in enumerate(((skinned, "skinned: the bones alone"),
-                                    (simulated, f"simulated: isochor (from skinning: max {1e3 * off.max():.0f} mm, "
-                                                f"mean {1e3 * off.mean():.0f} mm)"))):
+                                    (simulated, f"simulated: {1e3 * off.max():.0f} mm from skinning at most, "
+                                                f"{1e3 * off.mean():.0f} mm on average"))):
         ax = fig.add_axes([i / 2, 0, 0.5, 1])
         ax.set_axis_off()
         ax.set_aspect("equal")
@@ -507,7 +507,7 @@ def draw_versus(a, run, k, cam, scene, path):
         c2, _ = cam.project(scene.mid)
         ax.set_xlim(c2[0] - 0.55 * scene.span, c2[0] + 0.55 * scene.span)
         ax.set_ylim(c2[1] - 0.55 * scene.span, c2[1] + 0.55 * scene.span)
-        ax.text(0.02, 0.97, f"{label}  t = {float(run.times[k]):.3f} s", transform=ax.transAxes, fontsize=9, va="top")
+        ax.text(0.02, 0.97, f"{label}\nt = {float(run.times[k]):.3f} s", transform=ax.transAxes, fontsize=9, va="top")
     write_whole(path, lambda f: fig.savefig(f, dpi=100, format="png"), "wb")
     plt.close(fig)
 

@@ -30,6 +30,14 @@ Mesh wrap_and_fill(const Section& s, const GltfCharacter& c) {
   check_size(s, "edge_length", h);
   const double alpha = s.number("wrap_alpha", h, Range::positive());
   const double offset = s.number("wrap_offset", alpha / 20, Range::positive());
+  // Before the wrap, whose cost grows as the render mesh's area over alpha^2: an alpha below a
+  // 2000th of the character's size, or tets beyond memory by the soup's own enclosed volume (its
+  // parts counted where they overlap: an overestimate), stop here.
+  if (alpha < extent.norm() / 2000)
+    s.fail(s.has("wrap_alpha") ? "wrap_alpha" : "edge_length",
+           "the wrap's alpha: a " + std::to_string(alpha) + " m ball wraps a " + std::to_string(extent.norm()) +
+               " m character into tens of millions of triangles (expected at least a 2000th of its size)");
+  check_tets(s, "edge_length", gmsh_tets(std::abs(surface_volume(c.vertices, c.triangles)), h));
   Points x;
   std::vector<Tri> tris;
   alpha_wrap(c.vertices, c.triangles, alpha, offset, x, tris, c.path);
