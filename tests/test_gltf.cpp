@@ -292,3 +292,32 @@ TEST(Wrap, OpenIntersectingNonManifoldSoupsBecomeOneClosedSurface) {
   EXPECT_EQ(e.rfind("flat.glb: ", 0), 0u) << e;
   EXPECT_EQ(e.find('\n'), std::string::npos) << e;
 }
+
+// The demo character as tools/make_character.py makes it: 21 joints, parents first, the clips
+// "walk" (1 s) and "jump" (1.5 s), normalised weights. Its walk keeps the lower foot's ankle at its
+// rest height by sinking the hips: at 0.3 s (a key) the left thigh is 20 sin(0.6 pi) degrees
+// forward and straight, the right one as far back with its knee bent, so the left ankle is on the
+// ground's level (y = 0.08) and 0.84 sin(theta) ahead of the hip (the generator's formulas).
+TEST(Gltf, TheDemoCharacterReadsAsItsScriptMadeIt) {
+  const GltfCharacter c = read_gltf(std::string(ISOCHOR_SOURCE_DIR) + "/demos/meshes/character.glb");
+  ASSERT_EQ(c.joints.size(), 21u);
+  EXPECT_EQ(c.joints[0].name, "hips");
+  EXPECT_EQ(c.joints[0].parent, -1);
+  for (std::size_t j = 1; j < c.joints.size(); ++j) EXPECT_LT(c.joints[j].parent, static_cast<int>(j));
+  EXPECT_EQ(c.vertices.cols(), 3058);
+  EXPECT_EQ(c.triangles.size(), 6048u);
+  for (const Eigen::Vector4d& w : c.vertex_weights) EXPECT_NEAR(w.sum(), 1.0, 1e-6);
+  ASSERT_EQ(c.clips.size(), 2u);
+  const int walk = c.find_clip("walk"), jump = c.find_clip("jump");
+  EXPECT_NEAR(c.clips[walk].end - c.clips[walk].start, 1.0, 1e-6);
+  EXPECT_NEAR(c.clips[jump].end - c.clips[jump].start, 1.5, 1e-6);
+  int foot = -1;
+  for (std::size_t j = 0; j < c.joints.size(); ++j)
+    if (c.joints[j].name == "foot_l") foot = c.joints[j].node;
+  ASSERT_GE(foot, 0);
+  const double theta = 20 * std::sin(0.6 * M_PI) * M_PI / 180;
+  const Eigen::Vector3d ankle = c.node_globals(walk, 0.3)[foot].topRightCorner<3, 1>();
+  EXPECT_NEAR(ankle.x(), 0.10, 1e-6);
+  EXPECT_NEAR(ankle.y(), 0.08, 1e-5);
+  EXPECT_NEAR(ankle.z(), 0.84 * std::sin(theta), 1e-5);
+}
