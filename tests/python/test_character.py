@@ -121,3 +121,33 @@ def test_render_draws_skinned_beside_simulated(bar_run, tmp_path):
     r = subprocess.run([EXE, "render", str(plain), "--frames", "0", "--skinning", "--out", str(tmp_path / "p.png")],
                        capture_output=True, text=True)
     assert r.returncode == 1 and "has no render mesh" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_a_run_without_a_character_exports_its_surface_as_glb(tmp_path):
+    """The tet mesh's surface, one mesh per frame over its surface nodes, switched by one scale
+    channel per frame; the binary glTF's header and chunks as the specification lays them out."""
+    import json
+    import struct
+
+    run_path = tmp_path / "box.h5"
+    isochor.run(isochor.scene({"mesh": {"shape": "box", "cells": [2, 1, 1]}, "frames": {"rate": 10.0, "duration": 0.2}}),
+                run_path)
+    out = tmp_path / "box.glb"
+    subprocess.run([EXE, "export", str(run_path), "--format", "glb", "--out", str(out)], check=True, capture_output=True)
+    data = out.read_bytes()
+    magic, version, length = struct.unpack("<III", data[:12])
+    assert (magic, version, length) == (0x46546C67, 2, len(data))
+    json_length, kind = struct.unpack("<II", data[12:20])
+    assert kind == 0x4E4F534A and json_length % 4 == 0
+    doc = json.loads(data[20:20 + json_length])
+    with isochor.open(run_path) as run:
+        frames, surface_nodes = run.num_frames, len(np.unique(run.surface))
+        assert len(doc["meshes"]) == len(doc["nodes"]) == frames == 3
+        assert doc["scenes"][0]["nodes"] == list(range(frames))
+        for mesh in doc["meshes"]:
+            prim = mesh["primitives"][0]
+            assert doc["accessors"][prim["attributes"]["POSITION"]]["count"] == surface_nodes
+            assert doc["accessors"][prim["indices"]]["count"] == 3 * len(run.surface)
+        channels = doc["animations"][0]["channels"]
+        assert sorted(c["target"]["node"] for c in channels) == list(range(frames))
+        assert all(c["target"]["path"] == "scale" for c in channels)
