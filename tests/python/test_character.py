@@ -151,3 +151,12 @@ def test_a_run_without_a_character_exports_its_surface_as_glb(tmp_path):
         channels = doc["animations"][0]["channels"]
         assert sorted(c["target"]["node"] for c in channels) == list(range(frames))
         assert all(c["target"]["path"] == "scale" for c in channels)
+
+
+def test_the_demo_character_is_what_its_script_makes(tmp_path):
+    """demos/meshes/character.glb is tools/make_character.py's output, byte for byte."""
+    out = tmp_path / "character.glb"
+    subprocess.run([sys.executable, os.path.join(SOURCE, "tools", "make_character.py"), "--out", str(out)],
+                   check=True, capture_output=True)
+    with open(os.path.join(SOURCE, "demos", "meshes", "character.glb"), "rb") as f:
+        assert out.read_bytes() == f.read()
