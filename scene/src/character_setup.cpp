@@ -270,7 +270,8 @@ void keyed_motion(const std::vector<std::pair<double, Pose>>& poses, double size
   }
 }
 
-double extent(const GltfCharacter& c) {
+// The diagonal of the render mesh's bounding box (m): the scale a motion is compared with.
+double character_size(const GltfCharacter& c) {
   return (c.vertices.rowwise().maxCoeff() - c.vertices.rowwise().minCoeff()).norm();
 }
 
@@ -301,7 +302,7 @@ void clip_motion(const Section& s, const GltfCharacter& c, int clip, double dura
     }
     poses.emplace_back(t, std::move(pose));
   }
-  keyed_motion(poses, extent(c), bones);
+  keyed_motion(poses, character_size(c), bones);
 }
 
 // A BVH joint's rotation at frame f: its rotation channels in file order, body-fixed
@@ -401,7 +402,7 @@ void bvh_motion(const Section& s, const SceneFile& file, const GltfCharacter& c,
     }
     poses.emplace_back(t, std::move(pose));
   }
-  keyed_motion(poses, extent(c), bones);
+  keyed_motion(poses, character_size(c), bones);
 }
 
 // Tets whose four nodes all follow bones move rigidly: their volume needs no constraint row (it
