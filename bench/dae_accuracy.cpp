@@ -6,7 +6,7 @@
 // DAE_NEWTON_COEF (IDA's integrator.newton_coef) and DAE_NEWTON_TOL (backward Euler's
 // integrator.newton_tol), when set, replace the defaults for every run.
 //
-//   isochor_bench_dae [ida|be|all]
+//   isochor_bench_dae [ida|band|be|all]
 #include <ctime>
 #include <cstdio>
 #include <cstdlib>
@@ -65,10 +65,27 @@ void print(const char* problem, const char* method, const char* solver, double t
               o.run.stats.fresh_factorisations, o.cpu);
 }
 
+// One IDA run of `problem` with solver s at rtol = atol_q = atol_v = rtol.
+Outcome run_ida(const char* problem, const Solver& s, double rtol) {
+  auto dae = make_problem(problem);
+  return run(*dae, [&](test::TestDae& d) {
+    IdaOptions opt;
+    opt.rtol = opt.atol_q = opt.atol_v = rtol;
+    opt.linear_solver = s.kind;
+    opt.ordering = s.ordering;
+    if (std::getenv("DAE_NEWTON_COEF")) opt.newton_coef = std::atof(std::getenv("DAE_NEWTON_COEF"));
+    return std::make_unique<IdaIntegrator>(d, opt);
+  });
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
+  if (what != "all" && what != "ida" && what != "band" && what != "be") {
+    std::fprintf(stderr, "usage: isochor_bench_dae [ida|band|be|all]\n");
+    return 2;
+  }
   const Solver solvers[] = {{"klu_metis", LinearSolverKind::klu, KluOrdering::metis},
                             {"klu_colamd", LinearSolverKind::klu, KluOrdering::colamd},
                             {"klu_amd", LinearSolverKind::klu, KluOrdering::amd},
@@ -82,18 +99,17 @@ int main(int argc, char** argv) {
     if (what == "all" || what == "ida")
       for (const Solver& s : solvers) {
         if (s.kind == LinearSolverKind::amg && !amg_available()) continue;
-        for (double rtol : {1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10}) {
-          auto dae = make_problem(problem);
-          const Outcome o = run(*dae, [&](test::TestDae& d) {
-            IdaOptions opt;
-            opt.rtol = opt.atol_q = opt.atol_v = rtol;
-            opt.linear_solver = s.kind;
-            opt.ordering = s.ordering;
-            if (std::getenv("DAE_NEWTON_COEF")) opt.newton_coef = std::atof(std::getenv("DAE_NEWTON_COEF"));
-            return std::make_unique<IdaIntegrator>(d, opt);
-          });
-          print(problem, "ida", s.name, rtol, o);
-        }
+        for (double rtol : {1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10})
+          print(problem, "ida", s.name, rtol, run_ida(problem, s, rtol));
+      }
+    // The band: nine tolerances within 4% of each decade (method ida_band), to separate what a
+    // solver changes from how much one solver's error moves with the tolerance alone.
+    if (what == "all" || what == "band")
+      for (const Solver& s : solvers) {
+        if (s.kind == LinearSolverKind::amg && !amg_available()) continue;
+        for (double rtol : {1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10})
+          for (int k = -4; k <= 4; ++k)
+            print(problem, "ida_band", s.name, rtol * (1 + 0.01 * k), run_ida(problem, s, rtol * (1 + 0.01 * k)));
       }
     if (what == "all" || what == "be")
       for (const char* solver : {"reduced", "klu", "klu_exact"})

@@ -45,5 +45,33 @@ for ax, problem in zip(axes, ["pendulum", "caraxis"]):
     ax.legend(fontsize=7)
 fig.tight_layout()
 fig.savefig(f"{out}/tolerance.png", dpi=110)
+# Single tolerances: the spread between solvers at each decade's rtol, beside the band (nine
+# rtols within 4%): the largest range of one solver's digits over its band, and the spread
+# between the solvers' band medians.
+single = collections.defaultdict(dict)
+band = collections.defaultdict(lambda: collections.defaultdict(list))
+for r in rows:
+    if r["ok"] != "1":
+        continue
+    dec = round(-np.log10(float(r["tol"])))
+    pair = (float(r["digits"]), float(r["trajectory_digits"]))
+    if r["method"] == "ida":
+        single[(r["problem"], dec)][r["solver"]] = pair
+    elif r["method"] == "ida_band":
+        band[(r["problem"], dec)][r["solver"]].append(pair)
+print()
+print("| problem | rtol | solvers' spread, end / along the run | one solver's range over the band, end / along | spread of the band medians, end / along |")
+print("|---|---|---|---|---|")
+for key in sorted(single, key=lambda k: (k[0] != "pendulum", k[1])):
+    s = single[key]
+    spread = [max(v[i] for v in s.values()) - min(v[i] for v in s.values()) for i in (0, 1)]
+    b = band.get(key, {})
+    if b:
+        rng = [max(max(p[i] for p in v) - min(p[i] for p in v) for v in b.values()) for i in (0, 1)]
+        med = [[float(np.median([p[i] for p in v])) for v in b.values()] for i in (0, 1)]
+        tail = f"{rng[0]:.2f} / {rng[1]:.2f} | {max(med[0]) - min(med[0]):.2f} / {max(med[1]) - min(med[1]):.2f}"
+    else:
+        tail = "– | –"
+    print(f"| {key[0]} | 1e-{key[1]} | {spread[0]:.2f} / {spread[1]:.2f} | {tail} |")
 PY
 echo "wrote $out/runs.csv and $out/tolerance.png"

@@ -118,10 +118,14 @@ const IdaSolver kIdaSolvers[] = {{"klu_metis", LinearSolverKind::klu, KluOrderin
 // Tolerance proportionality: the correct digits along the run (the largest error over frames
 // every 10 ms, per component relative to its largest size) against -log10(rtol), rtol = atol =
 // 1e-4 .. 1e-10, fitted by least squares. Every solver's slope lies in 0.8-1.2, and the fitted
-// lines of all solvers lie within 0.1 digit of each other at rtol = 1e-7 (single tolerances
-// scatter by up to ~0.3 digit even between KLU's orderings, whose Newton iterates differ by
-// rounding: the steps IDA chooses move with them).
-void expect_one_accuracy_per_tolerance(const char* problem) {
+// lines of all solvers lie within 0.1 digit of each other at rtol = 1e-7.
+// single_tolerance: also at each rtol alone, every solver within 0.1 digit of the others, at the
+// end (the test sets' measure) and along the run. Every solver runs IDA's own Newton iteration
+// on the same matrix (reduced solves refined where they leave out a term that matters), so the
+// steps are the same until rounding moves one of IDA's choices. On the pendulum that never
+// happens; on the car axis it does, and one solver's error alone moves by up to 1.3 digits (end)
+// within 4% of an rtol (docs/results/tolerance.md): there only the fitted lines compare.
+void expect_one_accuracy_per_tolerance(const char* problem, bool single_tolerance) {
   double lowest = 1e9, highest = -1e9;
   auto make = [&]() -> std::unique_ptr<TestDae> {
     if (std::string(problem) == "pendulum") return std::make_unique<MebdfPendulum>();
@@ -129,6 +133,7 @@ void expect_one_accuracy_per_tolerance(const char* problem) {
   };
   std::vector<VectorXd> qr, vr;
   make()->reference_trajectory(dae_frames(make()->end_time()), 2e-5, qr, vr);
+  std::vector<double> end_lo(11, 1e9), end_hi(11, -1e9), run_lo(11, 1e9), run_hi(11, -1e9);
   for (const IdaSolver& s : kIdaSolvers) {
     if (s.kind == LinearSolverKind::amg && !amg_available()) continue;  // a build without hypre
     std::vector<double> x, y;
@@ -144,6 +149,8 @@ void expect_one_accuracy_per_tolerance(const char* problem) {
       x.push_back(e);
       y.push_back(r.trajectory_digits);
       newton += r.stats.newton_iterations;
+      end_lo[e] = std::min(end_lo[e], r.end_digits), end_hi[e] = std::max(end_hi[e], r.end_digits);
+      run_lo[e] = std::min(run_lo[e], r.trajectory_digits), run_hi[e] = std::max(run_hi[e], r.trajectory_digits);
     }
     const double n = static_cast<double>(x.size());
     double sx = 0, sy = 0, sxx = 0, sxy = 0;
@@ -157,13 +164,20 @@ void expect_one_accuracy_per_tolerance(const char* problem) {
     highest = std::max(highest, at7);
   }
   EXPECT_LT(highest - lowest, 0.1) << problem;
+  if (!single_tolerance) return;
+  for (int e = 4; e <= 10; ++e) {
+    std::printf("%s rtol 1e-%d: solvers' spread %.4f digits at the end, %.4f along the run\n", problem, e,
+                end_hi[e] - end_lo[e], run_hi[e] - run_lo[e]);
+    EXPECT_LT(end_hi[e] - end_lo[e], 0.1) << problem << " rtol 1e-" << e;
+    EXPECT_LT(run_hi[e] - run_lo[e], 0.1) << problem << " rtol 1e-" << e;
+  }
 }
 
 TEST(DaeAccuracy, IdaGivesThePendulumOneAccuracyPerToleranceOnEverySolver) {
-  expect_one_accuracy_per_tolerance("pendulum");
+  expect_one_accuracy_per_tolerance("pendulum", true);
 }
 TEST(DaeAccuracy, IdaGivesTheCarAxisOneAccuracyPerToleranceOnEverySolver) {
-  expect_one_accuracy_per_tolerance("caraxis");
+  expect_one_accuracy_per_tolerance("caraxis", false);
 }
 
 // Backward Euler's steps converged whatever it reuses: KLU on a KKT matrix factored a handful of

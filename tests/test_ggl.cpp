@@ -214,6 +214,42 @@ TEST(Ggl, KrylovReducedSolveEqualsADenseSolveWhenMuIsZero) { check_reduced_solve
 // A krylov setup moved to another c_j (IDA's step changed between Jacobians) solves as a setup
 // made there; a direct factor cannot move.
 TEST(Ggl, KrylovRetargetedSolveEqualsADenseSolve) { check_reduced_solve("pcg", 1e-4, true); }
+// With mu != 0 the reduction leaves sum mu_j H_j out of S (row 2 drops V H_mu dq beside c_j V dq):
+// the unrefined solve then errs, relative to the solution, by at most about ||H_mu||_inf / c_j
+// (read off the dense Jacobian's q-q block, c_j I + H_mu), and one step of refinement gives the
+// dense LU's solution.
+TEST(Ggl, ReducedSolveWhereMuIsNotZero) {
+  Fixture f;
+  const Index n = f.form.n(), m = f.form.m();
+  for (Index j = 0; j < m; ++j) f.y[2 * n + m + j] = 20.0 * (j + 1);
+  for (double cj : {50.0, 1000.0}) {
+    const Eigen::MatrixXd J = f.dense_jacobian(0.1, cj);
+    double hmu = 0;
+    for (Index i = 0; i < n; ++i) {
+      double row = 0;
+      for (Index c = 0; c < n; ++c) row += std::abs(J(i, c) - (c == i ? cj : 0.0));
+      hmu = std::max(hmu, row);
+    }
+    ASSERT_GT(hmu, 0.0);
+    std::vector<double> vals(f.form.pattern().nnz());
+    f.form.jacobian(0.1, cj, f.y.data(), f.yp.data(), vals.data());
+    ReducedSolver rs(f.form, solver_kind("cholmod"));
+    ASSERT_TRUE(rs.setup(cj, vals.data()));
+    std::mt19937 rng(7);
+    std::normal_distribution<double> nd;
+    VectorXd b(f.form.size()), x0(f.form.size()), x1(f.form.size());
+    for (Index i = 0; i < b.size(); ++i) b[i] = nd(rng);
+    const VectorXd xd = J.partialPivLu().solve(b);
+    ASSERT_TRUE(rs.solve(b.data(), x0.data()));
+    ASSERT_TRUE(rs.solve(b.data(), x1.data(), 1));
+    const double err0 = (x0 - xd).norm() / xd.norm(), err1 = (x1 - xd).norm() / xd.norm();
+    std::printf("cj %g: ||H_mu|| / c_j %.2e, error %.2e, refined %.2e\n", cj, hmu / cj, err0, err1);
+    EXPECT_GT(err0, 1e-3 * hmu / cj);  // the left-out term shows
+    EXPECT_LT(err0, hmu / cj);
+    EXPECT_LT(err1, std::max(1e-9, 10 * err0 * hmu / cj));
+  }
+}
+
 TEST(Ggl, CholmodSetupCannotRetarget) {
   Fixture f;
   std::vector<double> vals(f.form.pattern().nnz());

@@ -384,15 +384,12 @@ TEST(IdaRun, BallDropFramesAgreeAcrossLinearSolvers) {
   // The looser CG stop took fewer CG iterations per Newton iteration.
   EXPECT_LT(totals[4].at("linear_iterations") / totals[4].at("newton_iterations"),
             totals[2].at("linear_iterations") / totals[2].at("newton_iterations"));
-  // krylov follows c_j between setups (ReducedSolver::retarget), and its Newton iteration keeps
-  // the rate across a change of c_j (ida_newton.hpp); CHOLMOD's setup cannot move, and its
-  // corrections are scaled as IDA's are. So krylov takes fewer Newton iterations per step.
-  EXPECT_GT(totals[2].at("retargets"), 0.0);
+  // Between setups every solver keeps its matrix at the setup's c_j and scales the correction as
+  // IDA does; only a setup that reuses a kept Jacobian (jacobian_age) moves krylov's S to the new
+  // c_j in place (ReducedSolver::retarget).
+  EXPECT_EQ(totals[2].at("retargets"), 0.0);
+  EXPECT_GT(totals[3].at("retargets"), 0.0);
   EXPECT_EQ(totals[1].at("retargets"), 0.0);
-  const auto per_step = [&](int s) { return totals[s].at("newton_iterations") / totals[s].at("steps"); };
-  std::printf("Newton iterations per step: klu %.3f, reduced %.3f, krylov %.3f\n", per_step(0), per_step(1),
-              per_step(2));
-  EXPECT_LT(per_step(2), per_step(1));
 }
 
 TEST(BackwardEulerRun, KrylovAndCholmodStepsAgree) {

@@ -67,11 +67,13 @@ class ReducedSolver {
   // IDA's c_j moves between setups (the step or the order changed). A solve with the setup's c_j
   // then converges linearly (IDA scales the correction by 2 / (1 + c_j / c_j,setup), exact for a
   // first-order system, not for this one, whose S ~ c_j^2 M: ~0.2 per Newton iteration on the
-  // collapse). retarget moves the setup to the new c_j: S and the borders follow
-  // without new assembly, and `values` (the array given to setup, or null: IDA zeroes its matrix
-  // before each setup) get their c_j I and c_j M diagonals moved. Only where the factor of S is
-  // cheap (can_retarget: PCG, not in its CHOLMOD fallback). False when S at the new c_j cannot be
-  // solved. solve(refine > 0) reads the values: after retarget(cj, nullptr) only refine = 0.
+  // collapse). retarget moves the setup to the new c_j: S and the borders follow without new
+  // assembly, and `values` (the array given to setup, or null: IDA zeroes its matrix before each
+  // setup) get their c_j I and c_j M diagonals moved. IDA uses it for a setup that reuses the
+  // last Jacobian at a new c_j (jacobian_age); between setups it scales as IDA does, so that
+  // every solver takes the same steps. Only where the factor of S is cheap (can_retarget: PCG,
+  // not in its CHOLMOD fallback). False when S at the new c_j cannot be solved. solve(refine > 0)
+  // reads the values: after retarget(cj, nullptr) only refine = 0.
   bool can_retarget() const;
   bool retarget(double cj, double* values);
   double cj() const;  // the c_j of the current setup (or retarget)
