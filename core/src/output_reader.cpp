@@ -125,6 +125,13 @@ std::vector<Tri> RunFile::surface() const {
   return out;
 }
 
+std::vector<Tet> RunFile::tets() const {
+  const auto flat = impl_->read<int>("/mesh/tets", H5T_NATIVE_INT);
+  std::vector<Tet> t(flat.size() / 4);
+  for (std::size_t i = 0; i < t.size(); ++i) t[i] = {flat[4 * i], flat[4 * i + 1], flat[4 * i + 2], flat[4 * i + 3]};
+  return t;
+}
+
 Points RunFile::rest_positions() const {
   auto flat = impl_->read<double>("/mesh/rest_positions", H5T_NATIVE_DOUBLE);
   return Eigen::Map<Points>(flat.data(), 3, static_cast<Eigen::Index>(flat.size() / 3));

@@ -22,27 +22,35 @@ namespace {
 
 using KdTree = nanoflann::KDTreeEigenMatrixAdaptor<Points, 3, nanoflann::metric_L2_Simple, false>;
 
-// The render mesh wrapped (CGAL's alpha wrap, `wrap_alpha` and `wrap_offset` in metres) and the
-// wrap filled with tets of about `edge_length`.
-Mesh wrap_and_fill(const Section& s, const GltfCharacter& c) {
+// The wrap's keys: edge_length, wrap_alpha and wrap_offset (m), checked before any work. An alpha
+// below a 2000th of the character's size, or tets beyond memory by the soup's own enclosed volume
+// (its parts counted where they overlap: an overestimate), stop here: the wrap's cost grows as the
+// render mesh's area over alpha^2.
+struct WrapSizes {
+  double h, alpha, offset;
+};
+WrapSizes wrap_sizes(const Section& s, const GltfCharacter& c) {
   const Eigen::Vector3d extent = c.vertices.rowwise().maxCoeff() - c.vertices.rowwise().minCoeff();
   const double h = s.number("edge_length", extent.maxCoeff() / 25, Range::positive());
   check_size(s, "edge_length", h);
   const double alpha = s.number("wrap_alpha", h, Range::positive());
   const double offset = s.number("wrap_offset", alpha / 20, Range::positive());
-  // Before the wrap, whose cost grows as the render mesh's area over alpha^2: an alpha below a
-  // 2000th of the character's size, or tets beyond memory by the soup's own enclosed volume (its
-  // parts counted where they overlap: an overestimate), stop here.
   if (alpha < extent.norm() / 2000)
     s.fail(s.has("wrap_alpha") ? "wrap_alpha" : "edge_length",
            "the wrap's alpha: a " + std::to_string(alpha) + " m ball wraps a " + std::to_string(extent.norm()) +
                " m character into tens of millions of triangles (expected at least a 2000th of its size)");
   check_tets(s, "edge_length", gmsh_tets(std::abs(surface_volume(c.vertices, c.triangles)), h));
+  return {h, alpha, offset};
+}
+
+// The render mesh wrapped (CGAL's alpha wrap) and the wrap filled with tets of about edge_length.
+Mesh wrap_and_fill(const Section& s, const GltfCharacter& c) {
+  const WrapSizes w = wrap_sizes(s, c);
   Points x;
   std::vector<Tri> tris;
-  alpha_wrap(c.vertices, c.triangles, alpha, offset, x, tris, c.path);
-  check_tets(s, "edge_length", gmsh_tets(std::abs(surface_volume(x, tris)), h));
-  return mesh_closed_surface(x, std::move(tris), h, c.path + " (its alpha wrap)");
+  alpha_wrap(c.vertices, c.triangles, w.alpha, w.offset, x, tris, c.path);
+  check_tets(s, "edge_length", gmsh_tets(std::abs(surface_volume(x, tris)), w.h));
+  return mesh_closed_surface(x, std::move(tris), w.h, c.path + " (its alpha wrap)");
 }
 
 // Each tet's region: the joint with the largest skin weight at the render vertex nearest its
@@ -425,7 +433,7 @@ void prune_zones(Mesh& mesh, const std::vector<BoneSpec>& bones) {
 
 }  // namespace
 
-Character parse_character(const Section& s, const SceneFile& file, double duration) {
+Character parse_character(const Section& s, const SceneFile& file, double duration, const Mesh* filled) {
   if (!s.has("file")) s.fail("file", "missing, expected a rigged glTF character (.glb or .gltf)");
   const GltfCharacter c = read_gltf(file.resolve_path(s.string("file", "")));
   if (c.joints.empty())
@@ -441,7 +449,12 @@ Character parse_character(const Section& s, const SceneFile& file, double durati
     }
   }
   Character out;
-  out.mesh = wrap_and_fill(s, c);
+  if (filled) {
+    wrap_sizes(s, c);  // its keys checked as for a wrap
+    out.mesh = Mesh(filled->rest_positions(), filled->tets(), c.path + " (its mesh as run)");
+  } else {
+    out.mesh = wrap_and_fill(s, c);
+  }
   region_zones(s, c, out.mesh);
   out.bones = joint_bones(s, c, out.mesh);
   if (clip >= 0) {

@@ -906,14 +906,14 @@ void parse_frames(const Section& root, Scene& sc) {
 
 // [character]: a rigged glTF's mesh, zones and render mesh (the skeleton comes after the
 // boundaries, which its bones must not drive twice); it stands in for [mesh] and [skeleton].
-std::optional<Character> parse_character_block(const Section& root, Scene& sc) {
+std::optional<Character> parse_character_block(const Section& root, Scene& sc, const Mesh* filled) {
   const Section c = root.table("character");
   if (!c.exists()) return std::nullopt;
   for (const char* other : {"mesh", "skeleton"})
     if (root.table(other).exists())
       root.fail(other, std::string("a [character] brings its own mesh and skeleton (expected no [") + other + "])");
   const double duration = root.table("frames").number("duration", sc.frames.duration, Range::non_negative());
-  Character ch = parse_character(c, sc.file, duration);
+  Character ch = parse_character(c, sc.file, duration, filled);
   sc.mesh = std::move(ch.mesh);
   sc.render = ch.render;
   return ch;
@@ -930,7 +930,7 @@ std::shared_ptr<Skeleton> character_skeleton(const Section& c, const Character& 
 
 }  // namespace
 
-Scene parse_scene(SceneFile file) {
+Scene parse_scene(SceneFile file, const Mesh* character_mesh) {
   Scene sc{std::move(file),
            {},
            {},
@@ -956,7 +956,7 @@ Scene parse_scene(SceneFile file) {
            {},
            1.0};
   const Section root = sc.file.root();
-  const std::optional<Character> character = parse_character_block(root, sc);
+  const std::optional<Character> character = parse_character_block(root, sc, character_mesh);
   if (!character) {
     Section mesh = root.table("mesh");
     if (!mesh.exists()) root.fail("mesh", "missing, expected a [mesh] table with a shape or a file (or a [character])");

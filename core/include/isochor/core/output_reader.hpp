@@ -24,6 +24,7 @@ class RunFile {
   std::vector<std::array<double, 3>> energies() const;  // per frame: kinetic, elastic, external
   std::vector<Tri> surface() const;
   Points rest_positions() const;
+  std::vector<Tet> tets() const;  // /mesh/tets
   Points positions(int frame) const;
   Points velocities(int frame) const;              // every node (m/s): runs written since they could be resumed
   std::vector<double> pressures(int frame) const;  // per tet; the run must have output.pressure = true

@@ -23,7 +23,9 @@ struct Character {
 };
 
 // `duration`: the run's length (s), over which a looped clip repeats. Bad keys and files throw
-// Error naming the key or file.
-Character parse_character(const Section& s, const SceneFile& file, double duration);
+// Error naming the key or file. `filled`: the simulation mesh (nodes and tets) an earlier run of
+// this scene filled, used instead of wrapping and filling again: Gmsh's fill of the wrap varies
+// with the thread count, and a resumed run must go on with the mesh it started on.
+Character parse_character(const Section& s, const SceneFile& file, double duration, const Mesh* filled = nullptr);
 
 }  // namespace isochor

@@ -149,7 +149,8 @@ struct Scene {
 
 // Parses a scene file with overrides; every key is checked and unknown keys are errors.
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
-Scene parse_scene(SceneFile file);
+// character_mesh: a [character]'s filled mesh from an earlier run of the scene (parse_character).
+Scene parse_scene(SceneFile file, const Mesh* character_mesh = nullptr);
 // What the run file records besides the body: the up direction, the colliders and the bones (output.hpp).
 SceneRecord scene_record(const Scene& sc);
 // The skeleton's bones at time t as Frame::bone_poses holds them (12 per bone; empty without one).
