@@ -198,6 +198,16 @@ TEST(Gltf, BadFilesStopWithOneLine) {
     expect_error(g, "long.gltf",
                  "accessor 0 (mesh 0 primitive 0 POSITION): 9 elements run past the end of bufferView 0");
   }
+  {  // counts a file cannot hold (found by fuzz.gltf: they were allocated before the check, so
+     // 2^63 - 1 threw std::length_error and 2^31 hung filling 16 GB)
+    for (const char* huge : {"9223372036854775807", "2147483648"}) {
+      GltfBuilder g = one_joint();
+      g.accessors[0].replace(g.accessors[0].find("\"count\":4"), 9, std::string("\"count\":") + huge);
+      expect_error(g, "huge.gltf",
+                   std::string("accessor 0 (mesh 0 primitive 0 POSITION): ") + huge +
+                       " elements run past the end of bufferView 0");
+    }
+  }
   {  // an index past the vertices
     GltfBuilder g = one_joint();
     g.bin[48] = 9;  // the first index (the indices start after 48 bytes of positions)

@@ -33,16 +33,27 @@ struct Reader {
       fail(where + ": " + std::to_string(nc) + " components per element, expected " + std::to_string(components[0]));
     const int size = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType));
     if (size <= 0) fail(where + ": unknown componentType " + std::to_string(a.componentType));
-    std::vector<double> out(a.count * static_cast<std::size_t>(nc), 0.0);
+    // The count is checked against the bytes that hold it before anything is allocated: a view's
+    // elements must lie in it, and a sparse accessor without one (zeros but for its substitutions)
+    // may not have more elements than the file's buffers have bytes.
+    std::vector<double> out;
     if (a.bufferView >= 0) {
       const int given =
           a.bufferView < static_cast<int>(m.bufferViews.size()) ? a.ByteStride(m.bufferViews[a.bufferView]) : 0;
       const auto [data, stride] = view(a.bufferView, a.byteOffset, a.count, nc * size, given, where);
+      out.assign(a.count * static_cast<std::size_t>(nc), 0.0);
       for (std::size_t e = 0; e < static_cast<std::size_t>(a.count); ++e)
         for (int c = 0; c < nc; ++c)
           out[e * nc + c] = component(data + e * stride + c * size, a.componentType, a.normalized);
     } else if (!a.sparse.isSparse) {
       fail(where + ": no bufferView and not sparse (expected data)");
+    } else {
+      std::size_t bytes = 0;
+      for (const tinygltf::Buffer& b : m.buffers) bytes += b.data.size();
+      if (a.count > bytes)
+        fail(where + ": count " + std::to_string(a.count) + " without a bufferView, more elements than the file's " +
+             "buffers have bytes (" + std::to_string(bytes) + ")");
+      out.assign(a.count * static_cast<std::size_t>(nc), 0.0);
     }
     if (a.sparse.isSparse) sparse(a, nc, size, where, out);
     for (double v : out)

@@ -8,10 +8,10 @@
 // OUT_DIR/failure.* and its path is printed, to become a regression input in tests/data/fuzz/.
 //
 // Readers: scene (TOML, with overrides; meshing included, within a 200 MB budget), msh (Gmsh
-// v2.2 and v4.1), tetgen (.node/.ele), obj, stl (closed surfaces, read only), bvh, ply and csv
-// (paint files, carried onto a small box). The msh, ply, csv,
-// tetgen, obj and stl seeds are made here (a small Gmsh mesh of two boxes, written in each
-// format); scene and bvh seeds are given as files.
+// v2.2 and v4.1), tetgen (.node/.ele), obj, stl (closed surfaces, read only), bvh, gltf (a rigged
+// character, .glb or .gltf), ply and csv (paint files, carried onto a small box). The msh, ply,
+// csv, tetgen, obj and stl seeds are made here (a small Gmsh mesh of two boxes, written in each
+// format); scene, bvh and gltf seeds are given as files.
 #include <gmsh.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "isochor/core/bvh.hpp"
+#include "isochor/core/gltf.hpp"
 #include "isochor/base/error.hpp"
 #include "isochor/core/memory.hpp"
 #include "isochor/core/meshing.hpp"
@@ -260,6 +261,8 @@ void read_input(const std::string& reader, const fs::path& p, const std::vector<
     read_stl_surface(p.string(), x, tris);
   else if (reader == "bvh")
     (void)read_bvh(p.string());
+  else if (reader == "gltf")
+    (void)read_gltf(p.string());
   else if (reader == "ply" || reader == "csv") {  // paint files, read against a 27-node mesh
     const Mesh m = make_box({1, 1, 1}, {2, 2, 2}, Eigen::Vector3d::Zero(), 6);
     const PaintedPoints painted = read_paint(p.string(), &m.rest_positions());
