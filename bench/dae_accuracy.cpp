@@ -108,8 +108,10 @@ int main(int argc, char** argv) {
       for (const Solver& s : solvers) {
         if (s.kind == LinearSolverKind::amg && !amg_available()) continue;
         for (double rtol : {1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10})
-          for (int k = -4; k <= 4; ++k)
-            print(problem, "ida_band", s.name, rtol * (1 + 0.01 * k), run_ida(problem, s, rtol * (1 + 0.01 * k)));
+          for (int k = -4; k <= 4; ++k) {
+            const double r = rtol * (1 + 0.01 * k);
+            print(problem, "ida_band", s.name, r, run_ida(problem, s, r));
+          }
       }
     if (what == "all" || what == "be")
       for (const char* solver : {"reduced", "klu", "klu_exact"})

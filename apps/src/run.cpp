@@ -258,31 +258,19 @@ void drive_muscles(const Scene& sc, SceneSystem& sys, const std::function<std::v
 std::optional<Scene> scene_on_run_mesh(const Scene& sc, const std::string& output) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(output, ec)) return std::nullopt;
+  const std::string text = sc.file.text_as_run();
   std::optional<Mesh> stored;
   try {
     const RunFile f(output);
     const auto attributes = f.attributes();
     const auto scene = attributes.find("scene");
-    if (scene == attributes.end() || scene->second != sc.file.text_as_run()) return std::nullopt;
+    if (scene == attributes.end() || scene->second != text) return std::nullopt;
     stored.emplace(f.rest_positions(), f.tets(), output);
   } catch (const Error&) {
     return std::nullopt;
   }
-  return parse_scene(SceneFile::parse(sc.file.text_as_run(), sc.file.name(), {}, sc.file.directory()), &*stored);
+  return parse_scene(SceneFile::parse(text, sc.file.name(), {}, sc.file.directory()), &*stored);
 }
-
-RunSummary run_parsed_scene(const Scene& sc, const RunOptions& opt);
-
-}  // namespace
-
-RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
-  if (opt.mode == OutputWriter::Mode::resume && sc.render)
-    if (const std::optional<Scene> again = scene_on_run_mesh(sc, opt.output.empty() ? sc.output.path : opt.output))
-      return run_parsed_scene(*again, opt);
-  return run_parsed_scene(sc, opt);
-}
-
-namespace {
 
 RunSummary run_parsed_scene(const Scene& sc, const RunOptions& opt) {
   const BlasOnOneThread blas_on_one_thread;
@@ -365,5 +353,12 @@ RunSummary run_parsed_scene(const Scene& sc, const RunOptions& opt) {
 }
 
 }  // namespace
+
+RunSummary run_scene(const Scene& sc, const RunOptions& opt) {
+  if (opt.mode == OutputWriter::Mode::resume && sc.render)
+    if (const std::optional<Scene> again = scene_on_run_mesh(sc, opt.output.empty() ? sc.output.path : opt.output))
+      return run_parsed_scene(*again, opt);
+  return run_parsed_scene(sc, opt);
+}
 
 }  // namespace isochor
