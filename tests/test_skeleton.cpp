@@ -475,6 +475,7 @@ TEST(Character, RunExportsAGlbThatFollowsSkinning) {
 // length 0.12 instead of 0.08: other nodes, as another thread count gives) and stops after frame
 // 4; resumed with the scene as it fills now, it goes on with the file's mesh (it was refused: the
 // meshes differ), and at the end its bone-bound nodes are where the bones put that mesh's nodes.
+// Resumed with another scene text, it is refused as any run is, and the file keeps its frames.
 TEST(Character, ARunIsResumedOnTheMeshItsFileHolds) {
   const std::string bar = bar_character("bar_resume.gltf");
   const std::string h5 = (std::filesystem::path(bar).parent_path() / "resume.h5").string();
@@ -495,6 +496,17 @@ TEST(Character, ARunIsResumedOnTheMeshItsFileHolds) {
   EXPECT_THROW(run_scene(first, o), RunInterrupted);
   o.on_frame = nullptr;
   o.mode = OutputWriter::Mode::resume;
+  {  // another scene text: not parsed on the file's mesh, but refused by the writer, the file kept
+    const Scene other =
+        parse_scene(SceneFile::parse(text_with(text, "duration = 0.8", "duration = 0.9"), "other.toml"));
+    try {
+      run_scene(other, o);
+      ADD_FAILURE() << "resumed from another scene";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("was written from a different scene"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(RunFile(h5).num_frames(), 5);
+  }
   const RunSummary r = run_scene(s, o);
   EXPECT_EQ(r.resumed_from, 4);
   const RunFile f(h5);
