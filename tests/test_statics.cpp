@@ -10,6 +10,7 @@
 #include "isochor/core/output_reader.hpp"
 #include "isochor/scene/scene.hpp"
 #include "isochor/app/run.hpp"
+#include "bordered.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;
@@ -326,4 +327,99 @@ atol = 1e-10
   EXPECT_NE(zones.find("initial.from: the zone global starts"), std::string::npos) << zones;
   EXPECT_NE(zones.find("expected zones.restore_time > 0"), std::string::npos) << zones;
   EXPECT_NO_THROW(scene(dynamics, {"initial.from=\"unh.h5\"", "zones.restore_time=0.01"}));
+}
+
+namespace {
+// A bordered system of `nodes` 3-dof nodes in a chain (A: a stiffness of springs between
+// neighbours plus a small mass, SPD), `m` local rows on 2-4 nearby nodes and one wide row on every
+// dof (the global zone's shape), values random but fixed.
+struct Bordered {
+  SparsePattern A;
+  std::vector<double> a;
+  std::vector<std::vector<Index>> rows;
+  std::vector<std::vector<double>> G;
+  Eigen::MatrixXd dense_A;
+};
+Bordered chain_system(int nodes, int m, double shift_along_rows, double shift_everywhere) {
+  Bordered s;
+  const Index n = 3 * nodes;
+  std::srand(7);
+  auto uniform = [] { return std::rand() / double(RAND_MAX); };
+  s.dense_A = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 0; k + 1 < nodes; ++k) {
+    Eigen::Matrix3d B = Eigen::Matrix3d::Random();
+    const Eigen::Matrix3d E = B * B.transpose() + Eigen::Matrix3d::Identity();
+    s.dense_A.block<3, 3>(3 * k, 3 * k) += E;
+    s.dense_A.block<3, 3>(3 * k + 3, 3 * k + 3) += E;
+    s.dense_A.block<3, 3>(3 * k, 3 * k + 3) -= E;
+    s.dense_A.block<3, 3>(3 * k + 3, 3 * k) -= E;
+  }
+  s.dense_A.diagonal().array() += 0.01 - shift_everywhere;
+  for (int j = 0; j < m; ++j) {
+    const int first = static_cast<int>(uniform() * (nodes - 4)), count = 2 + j % 3;
+    std::vector<Index> r;
+    std::vector<double> g;
+    for (int k = 0; k < count; ++k)
+      for (int d = 0; d < 3; ++d) {
+        r.push_back(3 * (first + k) + d);
+        g.push_back(uniform() - 0.5);
+      }
+    // Indefinite where asked: -shift g g^T, as a pressure's Hessian makes A indefinite along the
+    // constraint directions only (the KKT matrix stays nonsingular).
+    Eigen::VectorXd full = Eigen::VectorXd::Zero(n);
+    for (std::size_t k = 0; k < r.size(); ++k) full[r[k]] = g[k];
+    s.dense_A -= shift_along_rows * full * full.transpose();
+    s.rows.push_back(r);
+    s.G.push_back(g);
+  }
+  std::vector<Index> all(n);
+  std::vector<double> wide(n);
+  for (Index i = 0; i < n; ++i) all[i] = i, wide[i] = 1.0 + 0.1 * std::sin(double(i));
+  s.rows.push_back(all);
+  s.G.push_back(wide);
+  std::vector<std::pair<Index, Index>> e;
+  for (Index c = 0; c < n; ++c)
+    for (Index r = 0; r < n; ++r)
+      if (s.dense_A(r, c) != 0.0) e.emplace_back(c, r);
+  s.A = SparsePattern::from_entries(n, e);
+  for (Index c = 0; c < n; ++c)
+    for (Index k = s.A.col_ptr[c]; k < s.A.col_ptr[c + 1]; ++k) s.a.push_back(s.dense_A(s.A.row_ind[k], c));
+  return s;
+}
+}  // namespace
+
+// Many constraints with CHOLMOD: the sparse border (a penalty rho g g^T per local row in A, CG on
+// the Schur complement) solves [A G^T; G 0] as the dense KKT matrix does: Eigen's full-pivoting LU
+// of the whole matrix is the reference, for A definite and for A indefinite along the rows (a
+// pressure's Hessian), with one wide row (the global zone) left out of the penalty. A indefinite
+// across the rows' null space too (no penalty makes it definite: not a minimum) is solved by the
+// fallback, KLU on the KKT matrix.
+TEST(Statics, TheSparseBorderSolvesTheKktSystemOfManyConstraints) {
+  struct Case {
+    double along_rows, everywhere;
+    long fallbacks;
+  };
+  for (const Case& c : {Case{0.0, 0.0, 0}, Case{2.0, 0.0, 0}, Case{0.0, 0.5, 1}}) {
+    const int nodes = 200, m = 120;
+    Bordered s = chain_system(nodes, m, c.along_rows, c.everywhere);
+    const Index n = 3 * nodes, M = m + 1;
+    BorderedSolver solver(s.A, s.rows, SymmetricSolverKind::cholmod);
+    ASSERT_TRUE(solver.sparse_border());
+    Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n + M, n + M);
+    K.topLeftCorner(n, n) = s.dense_A;
+    for (Index j = 0; j < M; ++j)
+      for (std::size_t k = 0; k < s.rows[j].size(); ++k) K(n + j, s.rows[j][k]) = K(s.rows[j][k], n + j) = s.G[j][k];
+    const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(n + M, -1.0, 2.0).array().sin();
+    const Eigen::VectorXd reference = K.fullPivLu().solve(rhs);
+    ASSERT_LT((K * reference - rhs).norm(), 1e-10 * rhs.norm());
+    Eigen::VectorXd x(n), l(M);
+    ASSERT_TRUE(solver.factor(s.a.data()));
+    ASSERT_TRUE(solver.set_borders(s.G));
+    ASSERT_TRUE(solver.solve(rhs.data(), rhs.data() + n, x.data(), l.data()));
+    EXPECT_LT((x - reference.head(n)).norm(), 1e-9 * reference.head(n).norm()) << c.along_rows << " " << c.everywhere;
+    EXPECT_LT((l - reference.tail(M)).norm(), 1e-9 * reference.tail(M).norm()) << c.along_rows << " " << c.everywhere;
+    EXPECT_EQ(solver.kkt_fallbacks(), c.fallbacks);
+    // Tens of CG iterations, not m: the penalty makes the Schur complement well conditioned.
+    if (c.fallbacks == 0) EXPECT_LT(solver.border_iterations(), 40);
+  }
 }

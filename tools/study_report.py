@@ -11,15 +11,22 @@ Reads results.csv and the cases' HDF5 files (cases/<label>.h5); writes
   stability.png/svg       for methods swept over one or two keys: each cell stable, failed (and
                           why), or ran with more than 10% of its volume lost or gained
   resolution.png/svg      for methods swept over mesh.target_tets: centre height, height/width
+  convergence.png/svg     with an [observable] (observable.toml): its value per case against the
+                          mesh size h = (volume / tets)^(1/3), the error against its reference
+                          value (or the next finer case's) log-log, and the observed orders
+                          (also convergence.csv, the fitted order per method in
+                          convergence_fit.csv; printed)
   report.md             the charts and the table
 """
 import csv
 import math
 import os
 import sys
+import tomllib
 
 import h5py
 import matplotlib
+import matplotlib.ticker
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -264,6 +271,116 @@ def resolution(rows, d):
     return save(fig, d, "resolution")
 
 
+def observable_value(run, spec):
+    """The study's [observable] on one run: a node's (nearest the point at rest) or a node set's
+    mean displacement at the frame, one component or its norm."""
+    X = run.rest_positions
+    if spec["kind"] == "point":
+        nodes = [int(np.argmin(((X - np.array(spec["point"])) ** 2).sum(axis=1)))]
+    else:
+        if spec["set"] not in run.node_sets:
+            raise Error(f"{run.path}: has no node set {spec['set']!r} (observable.set)")
+        nodes = run.node_sets[spec["set"]]
+    u = (run.frame_positions(spec.get("frame", -1)) - X)[nodes].mean(axis=0)
+    c = spec.get("component", "norm")
+    return float(np.linalg.norm(u)) if c == "norm" else float(u["xyz".index(c)])
+
+
+def observed_orders(h, q, reference):
+    """Per consecutive pair of meshes (coarse to fine): the error against the reference value and
+    the observed order log(e_k / e_k+1) / log(h_k / h_k+1); without a reference, Richardson's
+    from three meshes: log(|q_k - q_k+1| / |q_k+1 - q_k+2|) / log(h_k / h_k+1)."""
+    out = []
+    for k in range(len(h)):
+        e = abs(q[k] - reference) if reference is not None else (abs(q[k] - q[k + 1]) if k + 1 < len(h) else math.nan)
+        p = math.nan
+        if reference is not None and k + 1 < len(h):
+            e1 = abs(q[k + 1] - reference)
+            if e > 0 and e1 > 0:
+                p = math.log(e / e1) / math.log(h[k] / h[k + 1])
+        elif reference is None and k + 2 < len(h):
+            d0, d1 = abs(q[k] - q[k + 1]), abs(q[k + 1] - q[k + 2])
+            if d0 > 0 and d1 > 0:
+                p = math.log(d0 / d1) / math.log(h[k] / h[k + 1])
+        out.append((e, p))
+    return out
+
+
+def convergence(rows, d):
+    """With observable.toml: the observable per case against its mesh size, and observed orders."""
+    path = os.path.join(d, "observable.toml")
+    if not os.path.exists(path):
+        return None, []
+    with open(path, "rb") as f:
+        spec = tomllib.load(f)
+    reference = spec.get("reference")
+    colours = method_colours(rows)
+    table = []
+    for method in colours:
+        pts = []
+        for r in rows:
+            p = os.path.join(d, "cases", r["label"] + ".h5")
+            if r["method"] != method or r["status"] != "ok" or not os.path.exists(p):
+                continue
+            with Run(p) as run:
+                h = (float(run.rest_volumes.sum()) / len(run.tets)) ** (1.0 / 3.0)
+                pts.append((h, len(run.tets), observable_value(run, spec), r["label"]))
+        pts.sort(key=lambda t: -t[0])
+        orders = observed_orders([t[0] for t in pts], [t[2] for t in pts], reference)
+        table += [(method, h, tets, q, label, e, p) for (h, tets, q, label), (e, p) in zip(pts, orders)]
+    if not table:
+        return None, []
+    with open(os.path.join(d, "convergence.csv"), "w") as f:
+        f.write("method,label,h,tets,value,error,order\n")
+        for m, h, tets, q, label, e, p in table:
+            f.write(f"{m},{label},{h:.6g},{tets},{q:.10g},{e:.6g},{p:.4g}\n")
+    name = spec.get("name", "observable")
+    against = f"the reference {reference:g}" if reference is not None else "the next finer mesh"
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
+    for method, c in colours.items():
+        t = [r for r in table if r[0] == method]
+        if not t:
+            continue
+        a1.plot([r[1] for r in t], [r[3] for r in t], "o-", color=c, label=method)
+        good = [r for r in t if r[5] > 0]
+        a2.loglog([r[1] for r in good], [r[5] for r in good], "o-", color=c, label=method)
+        for r in good:
+            if not math.isnan(r[6]):
+                a2.annotate(f"{r[6]:.2f}", (r[1], r[5]), textcoords="offset points", xytext=(4, 4), fontsize=7)
+    if reference is not None:
+        a1.axhline(reference, color="k", lw=0.8, ls="--", label=f"reference {reference:g}")
+    a1.set_ylabel(name)
+    a2.set_ylabel(f"|error| against {against}")
+    sizes = sorted({r[1] for r in table})
+    for a in (a1, a2):
+        a.set_xscale("log")
+        a.set_xticks(sizes, [f"{h:.3g}" for h in sizes])
+        a.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        a.set_xlabel("mesh size h = (volume / tets)^(1/3)")
+        a.invert_xaxis()
+        a.grid(True, which="both", alpha=0.3)
+        a.legend(fontsize=7)
+    a2.set_title("observed orders beside the points", fontsize=8)
+    lines = [f"## Convergence of {name}", "",
+             f"Errors against {against}; the order between a mesh and the next finer one "
+             f"{'from the two errors' if reference is not None else 'by Richardson, from three meshes'}.", "",
+             "| method | case | h | tets | value | error | observed order |", "|---|---|---|---|---|---|---|"]
+    for m, h, tets, q, label, e, p in table:
+        lines.append(f"| {m} | {label} | {h:.4g} | {tets} | {q:.6g} | {e:.3g} | {p:.2f} |")
+    lines += ["", "Fitted order (least squares of log error against log h over the meshes; unstructured meshes "
+              "are not nested, so single pairs scatter):", ""]
+    fitted = {}
+    for method in colours:
+        t = [r for r in table if r[0] == method and r[5] > 0]
+        if len(t) >= 2:
+            fitted[method] = float(np.polyfit(np.log([r[1] for r in t]), np.log([r[5] for r in t]), 1)[0])
+            lines.append(f"- {method}: {fitted[method]:.2f}")
+    with open(os.path.join(d, "convergence_fit.csv"), "w") as f:
+        f.write("method,fitted_order\n" + "".join(f"{m},{p:.4g}\n" for m, p in fitted.items()))
+    print("\n".join(lines[4:]))
+    return save(fig, d, "convergence"), lines + [""]
+
+
 def write_h5(rows, d):
     """results.h5: the study's table as columns (its own file, not a run's)."""
     with h5py.File(os.path.join(d, "results.h5"), "w") as f:
@@ -274,7 +391,7 @@ def write_h5(rows, d):
             f[k] = np.array([r[k] for r in rows], dtype=float)
 
 
-def report(rows, d, images):
+def report(rows, d, images, extra=()):
     lines = [f"# Study `{os.path.basename(os.path.normpath(d))}`", "",
              "Every case ran in its own process on one thread; errors are measured against the reference "
              "case (relative L2 of all node positions over all frames; worst relative volume error over "
@@ -282,6 +399,7 @@ def report(rows, d, images):
     for img in images:
         if img:
             lines += [f"![{img[:-4]}]({img})", ""]
+    lines += list(extra)
     lines += equal_error_table(rows)
     lines += ["| method | case | status | frames | CPU s | error (L2) | centroid error | volume error | shape error | "
               "inverted | reason |",
@@ -300,8 +418,9 @@ def main():
     d = sys.argv[1]
     rows = load(d)
     write_h5(rows, d)
-    images = [work_precision(rows, d), *over_time(rows, d), stability(rows, d), resolution(rows, d)]
-    report(rows, d, images)
+    conv_image, conv_lines = convergence(rows, d)
+    images = [work_precision(rows, d), *over_time(rows, d), stability(rows, d), resolution(rows, d), conv_image]
+    report(rows, d, images, conv_lines)
     print(f"wrote {d}/results.h5, charts and report.md")
 
 

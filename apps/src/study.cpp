@@ -6,6 +6,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <functional>
 #include <cmath>
@@ -39,6 +40,41 @@ std::string label_of(const std::string& method, const std::vector<std::pair<std:
   }
   return l;
 }
+std::string toml_string(const std::string& v) {
+  std::string out(1, '"');
+  for (char c : v) {
+    if (c == '"' || c == '\\') out.push_back('\\');
+    out.push_back(c);
+  }
+  out.push_back('"');
+  return out;
+}
+
+// [observable]: one number per case, measured by the report (tools/study_report.py) and kept in
+// the study's directory as observable.toml, so that `isochor report DIR` finds it too.
+std::string parse_observable(const Section& o) {
+  if (!o.exists()) return "";
+  const std::string kind = o.string("kind", "", {"point", "set"});
+  if (kind.empty()) o.fail("kind", "missing, expected \"point\" or \"set\"");
+  std::string name = o.string("name", "observable");
+  if (name.empty() || std::any_of(name.begin(), name.end(), [](unsigned char c) { return c < 32; }))
+    o.fail("name", "expected a non-empty name without control characters");
+  std::ostringstream t;
+  t << "name = " << toml_string(name) << "\nkind = " << toml_string(kind) << "\n";
+  if (kind == "point") {
+    const auto p = o.vec3_opt("point");
+    if (!p) o.fail("point", "missing, expected [x, y, z]: the rest position whose nearest node is measured");
+    t << "point = [" << number_text((*p)[0]) << ", " << number_text((*p)[1]) << ", " << number_text((*p)[2]) << "]\n";
+  } else {
+    const std::string set = o.string("set", "");
+    if (set.empty()) o.fail("set", "missing, expected the name of a node set of the mesh");
+    t << "set = " << toml_string(set) << "\n";
+  }
+  t << "component = " << toml_string(o.string("component", "norm", {"x", "y", "z", "norm"})) << "\n";
+  t << "frame = " << o.integer("frame", -1, -1000000, 1000000) << "\n";
+  if (const auto r = o.number_opt("reference")) t << "reference = " << number_text(*r) << "\n";
+  return t.str();
+}
 }  // namespace
 
 Study load_study(const std::string& path, const std::vector<std::string>& overrides) {
@@ -54,13 +90,16 @@ Study load_study(const std::string& path, const std::vector<std::string>& overri
   const std::string stem = std::filesystem::path(path).stem().string();
   s.output = st.string("output", "out/studies/" + stem);
   s.jobs = static_cast<int>(st.integer("jobs", 2, 1, 64));
-  s.kind = st.string("kind", "work_precision", {"work_precision", "stability"});
+  s.kind = st.string("kind", "work_precision", {"work_precision", "stability", "convergence"});
+  s.observable = parse_observable(root.table("observable"));
   const std::vector<std::string> base = st.strings("set");
   const Section ref = root.table("reference");
   StudyCase r{"reference", "reference", base, {}, {}};
   const std::vector<std::string> ref_set =
       ref.exists() ? ref.strings("set")
-                   : std::vector<std::string>{"integrator.kind=ida", "integrator.rtol=1e-10", "integrator.atol=1e-12"};
+      : s.kind == "convergence"
+          ? std::vector<std::string>{}  // the base scene as it is
+          : std::vector<std::string>{"integrator.kind=ida", "integrator.rtol=1e-10", "integrator.atol=1e-12"};
   r.overrides.insert(r.overrides.end(), ref_set.begin(), ref_set.end());
   s.cases.push_back(r);
   for (const Section& m : root.tables("method")) {
@@ -263,6 +302,14 @@ void save_case_list(const Study& s) {
     if (!out) throw Error(tmp.string() + ": cannot be written");
   }
   std::filesystem::rename(tmp, path);  // whole or not at all, whichever process writes it last
+  if (s.observable.empty()) return;
+  const auto obs = s.output / "observable.toml", obs_tmp = s.output / ("observable.toml." + std::to_string(::getpid()));
+  {
+    std::ofstream out(obs_tmp);
+    out << s.observable;
+    if (!out) throw Error(obs_tmp.string() + ": cannot be written");
+  }
+  std::filesystem::rename(obs_tmp, obs);
 }
 
 Study load_case_list(const std::filesystem::path& dir) {

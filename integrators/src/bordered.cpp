@@ -1,18 +1,80 @@
 #include "bordered.hpp"
 
+#include "kkt.hpp"
+
+#include <algorithm>
+#include <cmath>
+
 namespace isochor {
+
+namespace {
+// A_rho's pattern: A's entries and the clique of every local row.
+SparsePattern augmented_pattern(const SparsePattern& A, const std::vector<std::vector<Index>>& rows,
+                                const std::vector<char>& local) {
+  std::vector<std::pair<Index, Index>> entries;
+  entries.reserve(A.nnz());
+  for (Index c = 0; c < A.n; ++c)
+    for (Index k = A.col_ptr[c]; k < A.col_ptr[c + 1]; ++k) entries.emplace_back(c, A.row_ind[k]);
+  for (std::size_t j = 0; j < rows.size(); ++j)
+    if (local[j])
+      for (Index a : rows[j])
+        for (Index b : rows[j]) entries.emplace_back(a, b);
+  return SparsePattern::from_entries(A.n, std::move(entries));
+}
+}  // namespace
 
 BorderedSolver::BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows,
                                SymmetricSolverKind kind, double tol)
-    : rows_(rows), n_(A.n), m_(static_cast<Index>(rows.size())), A_(make_symmetric_solver(A, kind, tol)) {
-  Gt_.setZero(n_, m_);
-  Z_.setZero(n_, m_);
+    : rows_(rows),
+      n_(A.n),
+      m_(static_cast<Index>(rows.size())),
+      sparse_(kind == SymmetricSolverKind::cholmod && m_ > kDenseBorderMax) {
+  if (!sparse_) {
+    A_ = make_symmetric_solver(A, kind, tol);
+    Gt_.setZero(n_, m_);
+    Z_.setZero(n_, m_);
+    return;
+  }
+  std::vector<char> local(m_);
+  for (Index j = 0; j < m_; ++j) local[j] = static_cast<Index>(rows[j].size()) <= kLocalDofs;
+  const SparsePattern P = augmented_pattern(A, rows, local);
+  A_ = make_symmetric_solver(P, kind, tol);
+  A_->refuse_indefinite();  // set_sparse_borders raises rho instead
+  a_slot_.resize(A.nnz());
+  for (Index c = 0; c < n_; ++c)
+    for (Index k = A.col_ptr[c]; k < A.col_ptr[c + 1]; ++k) a_slot_[k] = P.find(A.row_ind[k], c);
+  clique_begin_.assign(m_ + 1, 0);
+  for (Index j = 0; j < m_; ++j) {
+    const Index d = local[j] ? static_cast<Index>(rows[j].size()) : 0;
+    clique_begin_[j + 1] = clique_begin_[j] + d * d;
+  }
+  clique_.resize(clique_begin_[m_]);
+  for (Index j = 0; j < m_; ++j) {
+    if (!local[j]) continue;
+    std::int32_t* s = clique_.data() + clique_begin_[j];
+    for (Index a : rows[j])
+      for (Index b : rows[j]) *s++ = static_cast<std::int32_t>(P.find(b, a));
+  }
+  diag_.resize(n_);
+  for (Index i = 0; i < n_; ++i) diag_[i] = A.find(i, i);
+  a_pattern_ = A;
+  a_values_.resize(A.nnz());
+  rho_values_.resize(P.nnz());
+  rho_.setZero(m_);
 }
 
-bool BorderedSolver::factor(const double* A_values) { return A_->factor(A_values); }
+BorderedSolver::~BorderedSolver() = default;
+
+bool BorderedSolver::factor(const double* A_values) {
+  if (!sparse_) return A_->factor(A_values);
+  std::copy(A_values, A_values + a_values_.size(), a_values_.begin());  // factored with the borders
+  pending_ = true;
+  return true;
+}
 
 bool BorderedSolver::set_borders(const std::vector<std::vector<double>>& G) {
   if (m_ == 0) return true;
+  if (sparse_) return set_sparse_borders(G);
   Gt_.setZero();
   for (Index j = 0; j < m_; ++j)
     for (std::size_t k = 0; k < G[j].size(); ++k) Gt_(rows_[j][k], j) = G[j][k];
@@ -22,13 +84,182 @@ bool BorderedSolver::set_borders(const std::vector<std::vector<double>>& G) {
   return ok;
 }
 
+// rho_j = scale x |A's diagonal| over row j's dofs (mean) / |g_j|^2: the row's penalty as stiff
+// as the nodes it moves. A_rho must be positive definite for CG on its Schur complement (an
+// indefinite LDL^T made CG diverge on a cantilever with 1-ring zones, whose A = K + sum lambda H
+// is indefinite across the rows): where CHOLMOD finds it is not, the scale grows tenfold, up to
+// kRhoScaleMax (A positive definite on the rows' null space makes A_rho so for a large enough
+// scale). The next setup starts a tenth of the way back.
+bool BorderedSolver::factor_kkt() {
+  if (!kkt_) {
+    kkt_layout_ = std::make_unique<KktLayout>(a_pattern_, rows_);
+    kkt_ = std::make_unique<KktFactor>(*kkt_layout_, a_pattern_, n_ % 3 == 0 ? 3 : 1, rows_);
+    kkt_values_.resize(kkt_layout_->p.nnz());
+  }
+  kkt_layout_->fill(a_values_.data(), G_, kkt_values_.data());
+  return kkt_->factor(kkt_values_.data());
+}
+
+bool BorderedSolver::fall_back_to_kkt() {
+  on_kkt_ = true;
+  ++kkt_fallbacks_;
+  factored_ = factor_kkt();
+  return factored_;
+}
+
+bool BorderedSolver::set_sparse_borders(const std::vector<std::vector<double>>& G) {
+  if (!pending_) return factored_;  // A reused: its borders too
+  pending_ = false;
+  G_ = G;
+  if (on_kkt_) return factored_ = factor_kkt();
+  double mean_diag = 0;
+  for (Index i = 0; i < n_; ++i) mean_diag += diag_[i] >= 0 ? std::abs(a_values_[diag_[i]]) : 0.0;
+  mean_diag /= std::max<Index>(n_, 1);
+  std::vector<double> unit(m_, 0.0);  // rho_j at scale 1
+  for (Index j = 0; j < m_; ++j) {
+    const Index d = static_cast<Index>(rows_[j].size());
+    if (clique_begin_[j + 1] == clique_begin_[j] || d == 0) continue;
+    double g2 = 0, a = 0;
+    for (Index k = 0; k < d; ++k) {
+      g2 += G[j][k] * G[j][k];
+      const Index s = diag_[rows_[j][k]];
+      a += s >= 0 ? std::abs(a_values_[s]) : 0.0;
+    }
+    a = a > 0 ? a / d : mean_diag;
+    if (g2 > 0 && a > 0) unit[j] = a / g2;
+  }
+  for (rho_scale_ = std::max(kRhoScale, rho_scale_ / 10); rho_scale_ <= kRhoScaleMax; rho_scale_ *= 10) {
+    std::fill(rho_values_.begin(), rho_values_.end(), 0.0);
+    for (std::size_t k = 0; k < a_values_.size(); ++k) rho_values_[a_slot_[k]] += a_values_[k];
+    for (Index j = 0; j < m_; ++j) {
+      rho_[j] = rho_scale_ * unit[j];
+      if (rho_[j] == 0) continue;
+      const Index d = static_cast<Index>(rows_[j].size());
+      const std::int32_t* s = clique_.data() + clique_begin_[j];
+      for (Index p = 0; p < d; ++p)
+        for (Index q = 0; q < d; ++q) rho_values_[*s++] += rho_[j] * G[j][p] * G[j][q];
+    }
+    factored_ = A_->factor(rho_values_.data());
+    if (factored_) return true;
+  }
+  rho_scale_ = kRhoScaleMax;
+  return fall_back_to_kkt();
+}
+
+void BorderedSolver::apply_G(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  y.resize(m_);
+  for (Index j = 0; j < m_; ++j) {
+    double s = 0;
+    for (std::size_t k = 0; k < G_[j].size(); ++k) s += G_[j][k] * x[rows_[j][k]];
+    y[j] = s;
+  }
+}
+
+void BorderedSolver::apply_Gt(const Eigen::VectorXd& y, Eigen::VectorXd& x) const {
+  x.setZero(n_);
+  for (Index j = 0; j < m_; ++j)
+    for (std::size_t k = 0; k < G_[j].size(); ++k) x[rows_[j][k]] += G_[j][k] * y[j];
+}
+
 bool BorderedSolver::solve(const double* r1, const double* r2, double* x, double* l) {
+  if (sparse_) return solve_sparse(r1, r2, x, l);
   Eigen::Map<Eigen::VectorXd> y(x, n_);
   const bool ok = A_->solve(r1, x);
   if (m_ == 0) return ok;
   Eigen::Map<Eigen::VectorXd> dl(l, m_);
   dl = C_.solve(Gt_.transpose() * y - Eigen::Map<const Eigen::VectorXd>(r2, m_));
   y -= Z_ * dl;
+  return ok;
+}
+
+// One pass: preconditioned CG on C_rho l = G A_rho^-1 (r1 + G^T D r2) - r2, with u = A_rho^-1 G^T l
+// kept along (each iteration's solve gives A_rho^-1 G^T p), so that x = w - u needs no further
+// solve.
+bool BorderedSolver::border_pass(const Eigen::VectorXd& r1, const Eigen::VectorXd& r2, Eigen::VectorXd& x,
+                                 Eigen::VectorXd& L) {
+  Eigen::VectorXd t, w(n_), s(n_);
+  apply_Gt(rho_.cwiseProduct(r2), t);
+  t += r1;
+  bool ok = A_->solve(t.data(), w.data());
+  Eigen::VectorXd b, r, z, p, q, u = Eigen::VectorXd::Zero(n_);
+  apply_G(w, b);
+  b -= r2;
+  L.setZero(m_);
+  r = b;
+  auto precondition = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) {
+    out.resize(m_);
+    for (Index j = 0; j < m_; ++j) out[j] = rho_[j] > 0 ? rho_[j] * v[j] : v[j];
+  };
+  precondition(r, z);
+  p = z;
+  double rz = r.dot(z);
+  const double bnorm = b.norm();
+  const int max_iterations = static_cast<int>(std::min<Index>(m_ + 10, 5000));
+  bool converged = bnorm == 0;
+  for (int it = 0; it < max_iterations && !converged && ok; ++it) {
+    apply_Gt(p, t);
+    ok = A_->solve(t.data(), s.data()) && ok;
+    apply_G(s, q);
+    const double pq = p.dot(q);
+    if (!(pq > 0)) break;
+    const double alpha = rz / pq;
+    L += alpha * p;
+    u += alpha * s;
+    r -= alpha * q;
+    ++border_iterations_;
+    if (r.norm() <= kBorderTol * bnorm) converged = true;
+    precondition(r, z);
+    const double rz_new = r.dot(z);
+    p = z + (rz_new / rz) * p;
+    rz = rz_new;
+  }
+  x = w - u;
+  return ok && converged && L.allFinite() && x.allFinite();
+}
+
+// CG stops at kBorderTol, so the solution is refined against the bordered system itself (A's own
+// values, not A_rho's): up to kRefinements further passes on its residual, each kept only if it
+// lowers that residual (near-dependent rows, as 1-ring zones make, leave a residual at rounding
+// level in directions where CG on it diverges), so that Newton sees the directions a direct solve
+// of the KKT matrix gives.
+bool BorderedSolver::solve_sparse(const double* r1, const double* r2, double* x, double* l) {
+  const Eigen::Map<const Eigen::VectorXd> R1(r1, n_), R2(r2, m_);
+  Eigen::VectorXd xs, ls, e1, e2;
+  const bool ok = !on_kkt_ && border_pass(R1, R2, xs, ls);
+  if (!ok) {  // CG failed (or KLU already): the KKT matrix of this setup
+    if (!on_kkt_ && !fall_back_to_kkt()) return false;
+    if (!factored_) return false;
+    Eigen::VectorXd rhs(n_ + m_);
+    rhs << R1, R2;
+    kkt_->solve(rhs.data());
+    Eigen::Map<Eigen::VectorXd>(x, n_) = rhs.head(n_);
+    Eigen::Map<Eigen::VectorXd>(l, m_) = rhs.tail(m_);
+    return rhs.allFinite();
+  }
+  auto residual = [&](const Eigen::VectorXd& xv, const Eigen::VectorXd& lv) {
+    Eigen::VectorXd gtl, gx;
+    e1 = R1;
+    a_pattern_.add_product(a_values_.data(), xv.data(), -1.0, e1.data());
+    apply_Gt(lv, gtl);
+    e1 -= gtl;
+    apply_G(xv, gx);
+    e2 = R2 - gx;
+    return std::sqrt(e1.squaredNorm() + e2.squaredNorm());
+  };
+  const double scale = std::sqrt(R1.squaredNorm() + R2.squaredNorm());
+  double res = ok ? residual(xs, ls) : 0.0;
+  for (int k = 0; k < kRefinements && ok && res > 1e-14 * scale; ++k) {
+    Eigen::VectorXd dx, dl;
+    if (!border_pass(e1, e2, dx, dl)) break;
+    const Eigen::VectorXd xn = xs + dx, ln = ls + dl;
+    const double rn = residual(xn, ln);
+    if (!(rn < res)) break;
+    xs = xn;
+    ls = ln;
+    res = rn;
+  }
+  Eigen::Map<Eigen::VectorXd>(x, n_) = xs;
+  Eigen::Map<Eigen::VectorXd>(l, m_) = ls;
   return ok;
 }
 

@@ -129,6 +129,7 @@ int bordered_setup(SUNLinearSolver LS, SUNMatrix) {
     s.stats.factor_seconds += seconds_since(t0);
     s.stats.fresh_factorisations++;
     s.stats.factor_nnz = s.bordered->symmetric().factor_nnz();
+    s.stats.linear_fallbacks = s.bordered->kkt_fallbacks();
     s.stats.symbolic_seconds = s.bordered->symmetric().analyse_seconds();
     return ok ? sun::kSuccess : sun::kLinearFailUnrecoverable;
   });
@@ -141,7 +142,8 @@ int bordered_solve(SUNLinearSolver LS, SUNMatrix, N_Vector x, N_Vector b, sunrea
     double* y = N_VGetArrayPointer(x);
     const bool ok = s.bordered->solve(r, r + s.n, y, y + s.n);
     s.stats.solve_seconds += seconds_since(t0);
-    s.stats.linear_iterations = s.bordered->symmetric().iterations();
+    s.stats.linear_iterations = s.bordered->symmetric().iterations() + s.bordered->border_iterations();
+    s.stats.linear_fallbacks = s.bordered->kkt_fallbacks();
     return ok ? sun::kSuccess : sun::kLinearFailUnrecoverable;
   });
 }

@@ -25,7 +25,8 @@ struct Study {
   std::filesystem::path scene;          // the base scene
   std::filesystem::path output;         // directory of the study's results
   int jobs = 2;                         // processes at once
-  std::string kind = "work_precision";  // or "stability" (a map over two sweep keys)
+  std::string kind = "work_precision";  // or "stability" (a map over two sweep keys), "convergence"
+  std::string observable;               // [observable] as TOML text (observable.toml), "" if none
   std::vector<StudyCase> cases;         // the reference first
 };
 

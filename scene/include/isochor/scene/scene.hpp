@@ -58,6 +58,9 @@ struct IntegratorSpec {
   // 3-dof nodes with at most 256 constraint rows, else klu: automatic_ida_solver).
   bool ida_linear_solver_auto = false;
   StaticOptions statics;
+  // Statics' linear_solver = "auto": klu, or reduced (the sparse border) for a system of 3-dof
+  // nodes with more than 64 constraint rows (make_statics: automatic_static_solver).
+  bool statics_linear_solver_auto = false;
   BackwardEulerOptions backward_euler;  // also the semi-implicit step
   XpbdOptions xpbd;
   HongOptions hong;

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# What many zones cost in statics: demos/cook_membrane.toml at N = 16, 32, 64 (mesh.edge_length
+# 3, 1.5, 0.75) with no zones (the local penalty alone), 2-ring patches and per-node 1-ring zones,
+# on KLU (the whole KKT matrix) and on `reduced` (CHOLMOD; above 64 constraints the sparse border,
+# integrators/src/bordered.hpp). Wall seconds of the solver (median of the rounds, cases
+# interleaved; one round at N = 64), Newton iterations, CG iterations on the border, the factor's
+# entries and the corner displacement u_y (the same on both solvers). KLU with 1-ring zones or
+# patches at N = 64 is left out (more than 900 s). Writes docs/results/zones_cost.csv.
+#   bench/zones_cost.sh [build] [rounds] [sizes] [solvers] [csv]
+set -euo pipefail
+source "$(dirname "$0")/lib.sh"
+sizes=${3:-"3 1.5 0.75"}
+solvers=${4:-"klu reduced"}
+csv=${5:-docs/results/zones_cost.csv}
+tmp=$(mktemp)
+trap 'rm -f "$tmp"' EXIT
+zones_of() {
+  case $1 in
+    none) echo "--set zones.patches=0" ;;
+    patches2) echo "--set zones.patches=2" ;;
+    rings1) echo "--set zones.patches=0 --set zones.rings=1" ;;
+  esac
+}
+for h in $sizes; do
+  r=$rounds
+  [ "$h" = "0.75" ] && r=1
+  for ((k = 0; k < r; ++k)); do
+    for z in none patches2 rings1; do
+      for ls in $solvers; do
+        [ "$h" = "0.75" ] && [ "$ls" = klu ] && [ "$z" != none ] && continue
+        # shellcheck disable=SC2046
+        bench_run zones_cost demos/cook_membrane.toml --set mesh.edge_length=$h --set integrator.linear_solver=$ls $(zones_of $z)
+        /usr/bin/python3 - out/bench/zones_cost.h5 "$h" "$z" "$ls" >> "$tmp" <<'PY'
+import sys, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+X = f["/mesh/rest_positions"][()]
+x = f["/frames/positions"][-1]
+i = np.argmin((X[:, 0] - 48) ** 2 + (X[:, 1] - 60) ** 2 + X[:, 2] ** 2)
+s = f["/stats"].attrs
+zones = len(f["/zones"]) if "zones" in f else 0
+print(f"{sys.argv[2]},{sys.argv[3]},{sys.argv[4]},{f['/mesh/tets'].shape[0]},{zones},{s['wall_seconds']:.3f},"
+      f"{s['newton_iterations']},{s['linear_iterations']},{s['factor_nnz']:.0f},{x[i, 1] - X[i, 1]:.5f}")
+PY
+      done
+    done
+  done
+done
+echo "edge_length,zones,solver,tets,zone_count,wall_s,newton,border_cg,factor_nnz,corner_uy" > "$csv"
+/usr/bin/python3 - "$tmp" >> "$csv" <<'PY'
+import sys, csv, statistics
+rows = [r.strip().split(",") for r in open(sys.argv[1]) if r.strip()]
+keys = list(dict.fromkeys(tuple(r[:3]) for r in rows))
+for k in keys:
+    rr = [r for r in rows if tuple(r[:3]) == k]
+    med = statistics.median(float(r[5]) for r in rr)
+    r = rr[0]
+    print(",".join(r[:5] + [f"{med:.3f}"] + r[6:]))
+PY
+column -s, -t "$csv"
