@@ -419,7 +419,10 @@ def main():
     rows = load(d)
     write_h5(rows, d)
     conv_image, conv_lines = convergence(rows, d)
-    images = [work_precision(rows, d), *over_time(rows, d), stability(rows, d), resolution(rows, d), conv_image]
+    if conv_image:  # meshes compared with each other: no run-to-run errors, energies or maps
+        images = [conv_image]
+    else:
+        images = [work_precision(rows, d), *over_time(rows, d), stability(rows, d), resolution(rows, d)]
     report(rows, d, images, conv_lines)
     print(f"wrote {d}/results.h5, charts and report.md")
 
