@@ -196,11 +196,11 @@ scene = "nowhere.toml"
   EXPECT_NE(test::error_of([&] { load_study(bad); }).find("method[0].scene: no such file"), std::string::npos);
 }
 
-// A convergence study in one command: Cook's membrane refined (mesh.edge_length 6, 3, 2: 409 to
-// ~6.3K tets), the corner's u_y measured per case (observable.toml) against the literature's 6.93
+// A convergence study in one command: Cook's membrane refined (mesh.edge_length 6, 4, 3: 409 to
+// 1,945 tets), the corner's u_y measured per case (observable.toml) against the literature's 6.93
 // (Simo and Rifai 1990, finite strain, plane strain). CNH with the demo's 2-ring patches converges
-// (a positive fitted order, the finest mesh within 1.5%); the global zone alone without the local
-// penalty is a mechanism: above the reference by more than half and not approaching it. A bad
+// (a positive fitted order, the finest mesh within 1.5%: docs/results/cook_convergence, 0.84%); the global zone alone
+// without the local penalty is a mechanism: above the reference by more than half and not approaching it. A bad
 // [observable] is refused before any case runs.
 TEST(Study, ACookConvergenceStudyGivesTheObservedOrders) {
   const auto dir = test::temp_dir() / "cook";
@@ -220,11 +220,11 @@ component = "y"
 reference = 6.93
 [[method]]
 name = "patches"
-sweep = { "mesh.edge_length" = [6, 3, 2] }
+sweep = { "mesh.edge_length" = [6, 4, 3] }
 [[method]]
 name = "global_only"
 set = ["zones.patches=0", "zones.global=true", "material.lambda=0"]
-sweep = { "mesh.edge_length" = [6, 3, 2] }
+sweep = { "mesh.edge_length" = [6, 4, 3] }
 )");
   const std::string cmd =
       std::string(ISOCHOR_BINARY) + " study " + study + " > " + (dir / "log.txt").string() + " 2>&1";

@@ -107,6 +107,18 @@ bool BorderedSolver::fall_back_to_kkt() {
   return factored_;
 }
 
+// KLU on this setup's KKT matrix (factored here on the first fallback).
+bool BorderedSolver::solve_kkt(const Eigen::VectorXd& r1, const Eigen::VectorXd& r2, double* x, double* l) {
+  if (!on_kkt_ && !fall_back_to_kkt()) return false;
+  if (!factored_) return false;
+  Eigen::VectorXd rhs(n_ + m_);
+  rhs << r1, r2;
+  kkt_->solve(rhs.data());
+  Eigen::Map<Eigen::VectorXd>(x, n_) = rhs.head(n_);
+  Eigen::Map<Eigen::VectorXd>(l, m_) = rhs.tail(m_);
+  return rhs.allFinite();
+}
+
 bool BorderedSolver::set_sparse_borders(const std::vector<std::vector<double>>& G) {
   if (!pending_) return factored_;  // A reused: its borders too
   pending_ = false;
@@ -226,16 +238,7 @@ bool BorderedSolver::solve_sparse(const double* r1, const double* r2, double* x,
   const Eigen::Map<const Eigen::VectorXd> R1(r1, n_), R2(r2, m_);
   Eigen::VectorXd xs, ls, e1, e2;
   const bool ok = !on_kkt_ && border_pass(R1, R2, xs, ls);
-  if (!ok) {  // CG failed (or KLU already): the KKT matrix of this setup
-    if (!on_kkt_ && !fall_back_to_kkt()) return false;
-    if (!factored_) return false;
-    Eigen::VectorXd rhs(n_ + m_);
-    rhs << R1, R2;
-    kkt_->solve(rhs.data());
-    Eigen::Map<Eigen::VectorXd>(x, n_) = rhs.head(n_);
-    Eigen::Map<Eigen::VectorXd>(l, m_) = rhs.tail(m_);
-    return rhs.allFinite();
-  }
+  if (!ok) return solve_kkt(R1, R2, x, l);  // CG failed (or KLU already)
   auto residual = [&](const Eigen::VectorXd& xv, const Eigen::VectorXd& lv) {
     Eigen::VectorXd gtl, gx;
     e1 = R1;
@@ -258,9 +261,10 @@ bool BorderedSolver::solve_sparse(const double* r1, const double* r2, double* x,
     ls = ln;
     res = rn;
   }
+  if (!(res <= kResidualMax * scale)) return solve_kkt(R1, R2, x, l);  // CG's answer is not the KKT system's
   Eigen::Map<Eigen::VectorXd>(x, n_) = xs;
   Eigen::Map<Eigen::VectorXd>(l, m_) = ls;
-  return ok;
+  return true;
 }
 
 }  // namespace isochor

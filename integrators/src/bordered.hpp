@@ -39,6 +39,7 @@ class BorderedSolver {
   static constexpr double kRhoScale = 100;      // rho_j, see above
   static constexpr double kRhoScaleMax = 1e4;   // raised up to this while A_rho is indefinite
   static constexpr double kBorderTol = 1e-10;   // CG's relative residual on the Schur complement
+  static constexpr double kResidualMax = 1e-8;  // relative KKT residual above which KLU solves instead
   static constexpr int kRefinements = 1;        // passes of iterative refinement after the first
 
   // A's pattern (both triangles), the dofs of each constraint row, and the solver of A.
@@ -62,9 +63,10 @@ class BorderedSolver {
   }  // SymmetricSolver::refuse_indefinite (the sparse border always)
   bool sparse_border() const { return sparse_; }
   long border_iterations() const { return border_iterations_; }  // CG iterations on the Schur complement so far
-  // Setups the sparse border could not solve (A_rho indefinite at the largest scale, or CG on the
-  // Schur complement failed: near-dependent rows) and that KLU on the whole KKT matrix solved; from
-  // the first, the rest of the run stays on KLU.
+  // Setups the sparse border could not solve (A_rho indefinite at the largest scale, CG on the
+  // Schur complement failed, or its answer left a KKT residual above kResidualMax: near-dependent
+  // rows) and that KLU on the whole KKT matrix solved; from the first, the rest of the run stays on
+  // KLU.
   long kkt_fallbacks() const { return kkt_fallbacks_; }
 
  private:
@@ -72,6 +74,7 @@ class BorderedSolver {
   bool solve_sparse(const double* r1, const double* r2, double* x, double* l);
   bool factor_kkt();        // KLU on [A G^T; G 0] with A's values and the borders G_
   bool fall_back_to_kkt();  // from here on KLU
+  bool solve_kkt(const Eigen::VectorXd& r1, const Eigen::VectorXd& r2, double* x, double* l);
   bool border_pass(const Eigen::VectorXd& r1, const Eigen::VectorXd& r2, Eigen::VectorXd& x, Eigen::VectorXd& l);
   void apply_G(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;   // y = G x
   void apply_Gt(const Eigen::VectorXd& y, Eigen::VectorXd& x) const;  // x = G^T y
