@@ -206,7 +206,7 @@ bool BorderedSolver::border_pass(const Eigen::VectorXd& r1, const Eigen::VectorX
   p = z;
   double rz = r.dot(z);
   const double bnorm = b.norm();
-  const int max_iterations = static_cast<int>(std::min<Index>(m_ + 10, 5000));
+  const int max_iterations = static_cast<int>(std::min<Index>(m_ + 10, kBorderMaxIterations));
   bool converged = bnorm == 0;
   for (int it = 0; it < max_iterations && !converged && ok; ++it) {
     apply_Gt(p, t);
