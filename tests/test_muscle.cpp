@@ -353,7 +353,9 @@ TEST(LaplaceFibres, QuarterAnnulusRunsRoundFromOriginToInsertion) {
     std::printf("%ld cells across: mean angle from e_theta %.4f rad\n", cells, mean_angle);
     EXPECT_LT(worst_unit, 1e-12);
     EXPECT_LT(mean_angle, 0.25);  // every fibre goes round, none across
-    if (previous > 0) EXPECT_LT(mean_angle, previous / 1.6);
+    if (previous > 0) {
+      EXPECT_LT(mean_angle, previous / 1.6);
+    }
     previous = mean_angle;
   }
 }

@@ -4,6 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <string>
+
+#include "isochor/base/error.hpp"
 
 namespace isochor {
 
@@ -38,6 +42,9 @@ BorderedSolver::BorderedSolver(const SparsePattern& A, const std::vector<std::ve
   std::vector<char> local(m_);
   for (Index j = 0; j < m_; ++j) local[j] = static_cast<Index>(rows[j].size()) <= kLocalDofs;
   const SparsePattern P = augmented_pattern(A, rows, local);
+  if (P.nnz() > std::numeric_limits<std::int32_t>::max())  // the clique slots are 32-bit
+    throw Error("the sparse border's matrix has " + std::to_string(P.nnz()) +
+                " entries, more than 2^31: use integrator.linear_solver = \"klu\"");
   A_ = make_symmetric_solver(P, kind, tol);
   A_->refuse_indefinite();  // set_sparse_borders raises rho instead
   a_slot_.resize(A.nnz());
