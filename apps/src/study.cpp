@@ -43,6 +43,12 @@ std::string label_of(const std::string& method, const std::vector<std::pair<std:
 std::string toml_string(const std::string& v) {
   std::string out(1, '"');
   for (char c : v) {
+    if (static_cast<unsigned char>(c) < 32) {  // TOML basic strings hold no control characters
+      char u[8];
+      std::snprintf(u, sizeof u, "\\u%04x", static_cast<unsigned char>(c));
+      out += u;
+      continue;
+    }
     if (c == '"' || c == '\\') out.push_back('\\');
     out.push_back(c);
   }

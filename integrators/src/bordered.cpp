@@ -75,7 +75,6 @@ BorderedSolver::~BorderedSolver() = default;
 bool BorderedSolver::factor(const double* A_values) {
   if (!sparse_) return A_->factor(A_values);
   std::copy(A_values, A_values + a_values_.size(), a_values_.begin());  // factored with the borders
-  pending_ = true;
   return true;
 }
 
@@ -127,8 +126,6 @@ bool BorderedSolver::solve_kkt(const Eigen::VectorXd& r1, const Eigen::VectorXd&
 }
 
 bool BorderedSolver::set_sparse_borders(const std::vector<std::vector<double>>& G) {
-  if (!pending_) return factored_;  // A reused: its borders too
-  pending_ = false;
   G_ = G;
   if (on_kkt_) return factored_ = factor_kkt();
   double mean_diag = 0;
@@ -244,8 +241,7 @@ bool BorderedSolver::border_pass(const Eigen::VectorXd& r1, const Eigen::VectorX
 bool BorderedSolver::solve_sparse(const double* r1, const double* r2, double* x, double* l) {
   const Eigen::Map<const Eigen::VectorXd> R1(r1, n_), R2(r2, m_);
   Eigen::VectorXd xs, ls, e1, e2;
-  const bool ok = !on_kkt_ && border_pass(R1, R2, xs, ls);
-  if (!ok) return solve_kkt(R1, R2, x, l);  // CG failed (or KLU already)
+  if (on_kkt_ || !border_pass(R1, R2, xs, ls)) return solve_kkt(R1, R2, x, l);  // KLU already, or CG failed
   auto residual = [&](const Eigen::VectorXd& xv, const Eigen::VectorXd& lv) {
     Eigen::VectorXd gtl, gx;
     e1 = R1;
@@ -257,8 +253,8 @@ bool BorderedSolver::solve_sparse(const double* r1, const double* r2, double* x,
     return std::sqrt(e1.squaredNorm() + e2.squaredNorm());
   };
   const double scale = std::sqrt(R1.squaredNorm() + R2.squaredNorm());
-  double res = ok ? residual(xs, ls) : 0.0;
-  for (int k = 0; k < kRefinements && ok && res > 1e-14 * scale; ++k) {
+  double res = residual(xs, ls);
+  for (int k = 0; k < kRefinements && res > 1e-14 * scale; ++k) {
     Eigen::VectorXd dx, dl;
     if (!border_pass(e1, e2, dx, dl)) break;
     const Eigen::VectorXd xn = xs + dx, ln = ls + dl;

@@ -51,10 +51,9 @@ class BorderedSolver {
                  double tol = 1e-12);
   ~BorderedSolver();
   bool factor(const double* A_values);  // false: singular, or indefinite for PCG
-  // The borders' values (G[j][k] at rows[j][k]): Z and C for the current factor. The sparse
-  // border factors A_rho here, after factor(); without a factor() since its last call it keeps
-  // the borders it has (a reused A is reused with its borders, as a factored KKT matrix is).
-  // False if a solve or the factorisation failed.
+  // The borders' values (G[j][k] at rows[j][k]): Z and C for the current factor (the sparse
+  // border: A_rho from the values factor() kept, factored here). False if a solve or the
+  // factorisation failed.
   bool set_borders(const std::vector<std::vector<double>>& G);
   // Solves the bordered system; l has m entries. False if a solve with A failed (the sparse
   // border: or CG on the Schur complement did not converge).
@@ -104,7 +103,7 @@ class BorderedSolver {
   std::vector<double> kkt_values_;
   bool on_kkt_ = false;
   long kkt_fallbacks_ = 0;
-  bool pending_ = false, factored_ = false;  // factor() since the borders were last set; A_rho factored
+  bool factored_ = false;  // the last setup's factorisation (A_rho's, or the fallback's) succeeded
   long border_iterations_ = 0;
 };
 

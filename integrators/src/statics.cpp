@@ -149,6 +149,20 @@ int bordered_solve(SUNLinearSolver LS, SUNMatrix, N_Vector x, N_Vector b, sunrea
 }
 }  // namespace
 
+// linear_solver = "auto" for statics: KLU on the KKT matrix, but above 64 constraint rows (1-ring
+// zones, fine patches, rollers: one row per node) `reduced`, whose sparse border
+// (integrators/src/bordered.hpp) factors A + G^T D G with CHOLMOD's supernodal Cholesky where KLU
+// factors the KKT matrix without BLAS-3. Measured (bench/zones_cost.sh, docs/results/zones_cost.md,
+// one thread, medians of 3), Cook's membrane (a roller row on every node) at N = 32, 12,974 tets:
+// 17.3 s on KLU against 3.2 s with the rows alone, 99.3 s against 12.7 s with 3,267 1-ring zones;
+// at N = 64, 97,802 tets, 1,134 s against 47 s with the rows alone. At most 64 rows the dense
+// border would need A alone to be definite and m + 1 solves per setup: KLU stays.
+LinearSolverKind automatic_static_solver(const ConstrainedSystem& system) {
+  return system.dofs_per_group() == 3 && system.num_constraints() > BorderedSolver::kDenseBorderMax
+             ? LinearSolverKind::reduced
+             : LinearSolverKind::klu;
+}
+
 namespace {
 using Impl = StaticSolver::Impl;
 

@@ -23,6 +23,10 @@ struct StaticOptions {
   int substeps_on_failure = 0;
 };
 
+// linear_solver = "auto" for statics: klu, or reduced where its border is the sparse one (more
+// than 64 constraint rows on a system of 3-dof nodes). Measured in statics.cpp.
+LinearSolverKind automatic_static_solver(const ConstrainedSystem& system);
+
 class StaticSolver : public SteppingIntegrator {
  public:
   StaticSolver(ConstrainedSystem& system, StaticOptions options);
