@@ -29,7 +29,8 @@ test-mpi: build
 SANITIZE_BUILD ?= build-sanitize
 SANITIZE_SKIP ?= ^(Study\.|BackwardEulerRun\.PcgStoppedEarlyKeepsTheSteps|OptimisationStep\.FactorReuseTakesAboutExactNewtonsIterations|Xpbd\.IncompressibleStretch|Xpbd\.ApproachesTheIda|Statics\.TheSameEquilibria|Statics\.PressureCube|cli\.interrupt_and_resume|IdaRun\.BallDropFramesAgree|MassSpring\.SqueezedBall|BallDrop\.|Skeleton\.ArmStarting|Ggl\.SolversOnJacobiansCaptured|SeedScenes\.|Scene\.EveryKeyReadByTheDemosIsDocumented)
 sanitize: deps
-	cmake -S . -B $(SANITIZE_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DISOCHOR_SANITIZE=ON
+	cmake -S . -B $(SANITIZE_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DISOCHOR_SANITIZE=ON \
+	  -DISOCHOR_FUZZ_ITERATIONS=500 -DISOCHOR_FUZZ_SCENES=120
 	cmake --build $(SANITIZE_BUILD) -j$(JOBS)
 	cd $(SANITIZE_BUILD) && \
 	  ASAN_OPTIONS=suppressions=$(CURDIR)/tests/sanitize/asan.supp \

@@ -13,6 +13,7 @@
 #include "isochor/core/output.hpp"
 #include "isochor/integrators/interrupt.hpp"
 #include "isochor/scene/scene.hpp"
+#include "isochor/scene/zones_setup.hpp"
 
 namespace isochor::cli {
 
@@ -68,6 +69,7 @@ void install_signal_handlers() {
 int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& overrides, std::string out,
              bool overwrite) {
   Scene sc = load_scene(scene_path, overrides);
+  for (const std::string& note : sc.notes) std::fprintf(stderr, "%s: %s\n", scene_path.c_str(), note.c_str());
   if (out.empty()) {
     std::filesystem::path p(sc.output.path);
     out = (p.parent_path() / (p.stem().string() + "_mesh.h5")).string();
@@ -101,10 +103,18 @@ int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& over
   return 0;
 }
 
+int cmd_infsup(const std::string& scene_path, const std::vector<std::string>& overrides) {
+  const Scene sc = load_scene(scene_path, overrides);
+  const InfSup r = zones_infsup(sc);
+  std::printf("%s: %d tets, %d zones, %d free dofs: inf-sup beta_h = %.6g (next %.6g), %d zero modes\n",
+              scene_path.c_str(), sc.mesh.num_tets(), r.zones, r.dofs, r.beta, r.beta_next, r.zero_modes);
+  return 0;
+}
+
 int cmd_run(const RunCommand& c, int argc, char** argv) {
   Scene sc = load_scene(c.scene_path, c.overrides);
-  if (const std::string note = material_note(sc.material); !note.empty() && !c.quiet)
-    std::fprintf(stderr, "%s: %s\n", c.scene_path.c_str(), note.c_str());
+  if (!c.quiet)
+    for (const std::string& note : sc.notes) std::fprintf(stderr, "%s: %s\n", c.scene_path.c_str(), note.c_str());
   install_signal_handlers();
   RunOptions opt;
   opt.output = c.out_path;

@@ -13,6 +13,10 @@ void install_signal_handlers();
 // `isochor mesh`: the scene's rest configuration as frame 0.
 int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& overrides, std::string out, bool overwrite);
 
+// `isochor infsup`: the discrete inf-sup constant of the scene's zones against its free dofs
+// (models/infsup.hpp), one line.
+int cmd_infsup(const std::string& scene_path, const std::vector<std::string>& overrides);
+
 // `isochor run`: the scene to its output, a summary line; an interrupted run says how to resume.
 struct RunCommand {
   std::string scene_path, out_path;

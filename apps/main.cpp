@@ -22,6 +22,7 @@ struct Line {
   CLI::App* mesh = nullptr;
   CLI::App* run = nullptr;
   CLI::App* info = nullptr;
+  CLI::App* infsup = nullptr;
   CLI::App* study = nullptr;
   CLI::App* report = nullptr;
   CLI::App* render = nullptr;
@@ -54,6 +55,11 @@ void add_mesh_and_run(CLI::App& app, Line& l) {
       "--resume", r.resume,
       "Continue a killed, interrupted or failed run from the last complete frame of its output (same scene and --set)");
   l.run->get_option("--overwrite")->excludes("--resume");
+
+  l.infsup = app.add_subcommand(
+      "infsup", "The inf-sup constant of a scene's zones (does the zone choice lock on this mesh?), one line");
+  l.infsup->add_option("scene", r.scene_path, "Scene file (TOML)")->required();
+  l.infsup->add_option("--set", r.overrides, "Override a scene key, e.g. --set zones.patches=3")->take_all();
 
   l.info = app.add_subcommand("info", "Summarise an output file: mesh, zones, frames, volume drift, solver statistics");
   l.info->add_option("file", l.h5_path, "Output file (.h5)")->required();
@@ -126,6 +132,7 @@ int dispatch(Line& l, int argc, char** argv) {
   const RunCommand& r = l.run_cmd;
   if (l.mesh->parsed()) return cmd_mesh(r.scene_path, r.overrides, r.out_path, r.overwrite);
   if (l.run->parsed()) return cmd_run(r, argc, argv);
+  if (l.infsup->parsed()) return cmd_infsup(r.scene_path, r.overrides);
   if (l.study->parsed()) return cmd_study(l.study_cmd);
   if (l.report->parsed()) {
     // Cases run one by one (--case, a Slurm array, GNU parallel): results from what is done.

@@ -32,6 +32,7 @@ lambda = 1000.0
 gravity = [0.0, 0.0, 0.0]
 
 [zones]
+default = "global"   # one zone, whose target the tests follow
 restore_time = 0.5   # the zones start at volume 0 (IDA refuses a flattened start without it)
 
 [initial]

@@ -290,6 +290,8 @@ nu = 0.45
 gravity = [-9.81, 0.0, 0.0]
 [[boundary]]
 select = { kind = "set", name = "zmin" }
+[zones]
+default = "global"
 [integrator]
 rtol = 1e-7
 atol = 1e-10

@@ -2,6 +2,7 @@
 #include "isochor/scene/body_setup.hpp"
 #include "isochor/scene/character_setup.hpp"
 #include "isochor/scene/skeleton_setup.hpp"
+#include "isochor/scene/zones_setup.hpp"
 #include "isochor/core/paint.hpp"
 #include "isochor/scene/integrator_registry.hpp"
 
@@ -412,154 +413,6 @@ void parse_load(const Section& l, const Mesh& mesh, Scene& sc) {
   sc.loads.push_back(std::move(load));
 }
 
-// Checks a new zone's name: non-empty, no '/', '.' or ',', not defined before.
-void check_zone_name(const Section& z, std::string_view key, const std::string& name,
-                     const std::vector<std::pair<std::string, std::vector<int>>>& zones) {
-  if (name.empty()) z.fail(key, "missing, expected a zone name");
-  if (name.find_first_of("/.,") != std::string::npos) z.fail(key, "expected a name without '/', '.' or ','");
-  for (const auto& other : zones)
-    if (other.first == name) z.fail(key, "zone \"" + name + "\" is defined twice");
-}
-
-// Zones painted by the mesh file's own surface groups (Gmsh 2-D physical groups, node sets of
-// the mesh): `groups = [names]`, each a zone of that name, its paint 1 on the group's nodes.
-void parse_group_paint(const Section& p, const Mesh& mesh,
-                       std::vector<std::pair<std::string, std::vector<int>>>& zones) {
-  for (const char* key : {"file", "labels", "colors", "weights", "property"})
-    if (p.has(key)) p.fail(key, "not with groups (the mesh's surface groups are the paint)");
-  const std::vector<std::string> groups = p.strings("groups");
-  if (groups.empty()) p.fail("groups", "expected a list of the mesh's surface groups, e.g. [\"belly\", \"back\"]");
-  const std::vector<int>& nodes = mesh.surface_nodes();
-  PaintedPoints painted;
-  painted.path = "the mesh's groups";
-  painted.x.resize(3, static_cast<Eigen::Index>(nodes.size()));
-  for (std::size_t i = 0; i < nodes.size(); ++i) painted.x.col(i) = mesh.rest_positions().col(nodes[i]);
-  std::vector<std::vector<double>> membership;
-  for (const std::string& g : groups) {
-    check_zone_name(p, "groups", g, zones);
-    const auto it = mesh.node_sets.find(g);
-    if (it == mesh.node_sets.end()) {
-      std::string known;
-      for (const auto& [name, set] : mesh.node_sets) known += (known.empty() ? "" : ", ") + name;
-      p.fail("groups", "the mesh has no group \"" + g + "\" (its groups: " + (known.empty() ? "none" : known) + ")");
-    }
-    std::vector<double> m(nodes.size(), 0.0);
-    for (std::size_t i = 0; i < nodes.size(); ++i)
-      m[i] = std::binary_search(it->second.begin(), it->second.end(), nodes[i]);
-    membership.push_back(std::move(m));
-  }
-  std::vector<std::vector<int>> tets =
-      painted_zones(mesh, painted, membership, std::numeric_limits<double>::infinity());
-  for (std::size_t z = 0; z < groups.size(); ++z) {
-    if (tets[z].empty())
-      p.fail("groups", "no tet is painted by group \"" + groups[z] + "\" (expected a group of surface triangles)");
-    zones.emplace_back(groups[z], std::move(tets[z]));
-  }
-}
-
-// [[zones.paint]]: zones painted on the surface (paint.hpp), one per entry of labels, colors or
-// weights, or one per surface group of the mesh.
-void parse_paint(const Section& p, const Mesh& mesh, const SceneFile& file,
-                 std::vector<std::pair<std::string, std::vector<int>>>& zones) {
-  if (p.has("groups")) return parse_group_paint(p, mesh, zones);
-  if (!p.has("file"))
-    p.fail("file", "missing, expected a paint file (.ply, .obj or .csv) or the mesh's surface groups (groups)");
-  const std::string path = file.resolve_path(p.string("file", ""));
-  PaintRule rule;
-  const int given = p.has("labels") + p.has("colors") + p.has("weights");
-  if (given != 1)
-    p.fail(given ? "colors" : "labels", "expected exactly one of labels, colors or weights (a table from zone names)");
-  const char* key = p.has("labels") ? "labels" : p.has("colors") ? "colors" : "weights";
-  rule.by = p.has("labels") ? PaintRule::By::labels : p.has("colors") ? PaintRule::By::colors : PaintRule::By::weights;
-  const Section t = p.table(key);
-  if (!t.exists() || t.keys().empty()) p.fail(key, "expected a table from zone names, e.g. { belly = 1, back = 2 }");
-  for (const std::string& name : t.keys()) {
-    check_zone_name(t, name, name, zones);
-    rule.zones.push_back(name);
-    if (rule.by == PaintRule::By::labels) {
-      rule.labels.push_back(t.integer(name, 0, -2147483647L, 2147483647L));
-    } else if (rule.by == PaintRule::By::colors) {
-      const std::vector<double> c = t.numbers(name, Range::non_negative());
-      if (c.size() != 3) t.fail(name, "expected a colour [r, g, b] (0..1, or 0..255)");
-      Eigen::Vector3d v(c[0], c[1], c[2]);
-      if (v.maxCoeff() > 1) v /= 255.0;
-      rule.colors.push_back(v);
-    } else {
-      rule.weights.push_back(t.string(name, ""));
-    }
-  }
-  rule.property = p.string("property", "label");
-  rule.color_tolerance = p.number("color_tolerance", 0.1, Range::positive());
-  const Points& X = mesh.rest_positions();
-  const double diagonal = (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
-  const double tolerance = p.number("tolerance", 0.02 * diagonal, Range::positive());
-  const std::string disconnected = p.string("disconnected", "error", {"error", "keep", "split"});
-  std::vector<std::vector<int>> tets;
-  try {
-    const PaintedPoints painted = read_paint(path, &X);
-    tets = painted_zones(mesh, painted, paint_membership(painted, rule), tolerance);
-  } catch (const Error& e) {
-    p.fail("file", e.what());
-  }
-  for (std::size_t z = 0; z < rule.zones.size(); ++z) {
-    if (tets[z].empty())
-      t.fail(rule.zones[z], "no tet is painted " + rule.zones[z] + " (expected some painted vertex with this paint)");
-    auto pieces = connected_pieces(mesh, tets[z]);
-    if (pieces.size() > 1 && disconnected == "error")
-      t.fail(rule.zones[z],
-             "zone \"" + rule.zones[z] + "\" is painted in " + std::to_string(pieces.size()) +
-                 " disconnected pieces (of " + std::to_string(pieces[0].size()) + ", " +
-                 std::to_string(pieces[1].size()) + (pieces.size() > 2 ? ", ..." : "") +
-                 " tets): paint each piece as its own zone, or set disconnected = \"keep\" or \"split\"");
-    if (pieces.size() > 1 && disconnected == "split") {
-      for (std::size_t k = 0; k < pieces.size(); ++k) {
-        std::sort(pieces[k].begin(), pieces[k].end());
-        zones.emplace_back(rule.zones[z] + "_" + std::to_string(k + 1), std::move(pieces[k]));
-      }
-    } else {
-      zones.emplace_back(rule.zones[z], std::move(tets[z]));
-    }
-  }
-}
-
-std::vector<std::pair<std::string, std::vector<int>>> parse_zones(const Section& s, const Mesh& mesh,
-                                                                  const SceneFile& file, bool global) {
-  std::vector<std::pair<std::string, std::vector<int>>> zones;
-  if (s.boolean("global", global)) {
-    std::vector<int> all(mesh.num_tets());
-    for (int e = 0; e < mesh.num_tets(); ++e) all[e] = e;
-    zones.emplace_back("global", std::move(all));
-  }
-  if (const long k = s.integer("rings", 0, 0, 100); k > 0) {
-    // One zone per node: the tets of its k-ring (Irving et al. 2007 for k = 1).
-    const DofMap all = DofMap::make(mesh.num_nodes(), {});
-    // Nodes whose rings hold the same tets (large k on a small mesh) give one zone, not
-    // several identical constraints (which would make the KKT matrix singular).
-    const auto rings = ring_zones(mesh, static_cast<int>(k), all);
-    std::set<std::vector<int>> seen;
-    for (std::size_t v = 0; v < rings.size(); ++v)
-      if (seen.insert(rings[v]).second)
-        zones.emplace_back("ring" + std::to_string(k) + "_" + std::to_string(v), rings[v]);
-  }
-  if (const long k = s.integer("patches", 0, 0, 100); k > 0) {
-    const auto patches = patch_zones(mesh, static_cast<int>(k));
-    for (std::size_t p = 0; p < patches.size(); ++p)
-      zones.emplace_back("patch" + std::to_string(k) + "_" + std::to_string(p), patches[p]);
-  }
-  if (s.boolean("from_mesh", false))
-    for (const auto& [name, tets] : mesh.zones) zones.emplace_back(name, tets);
-  for (const Section& p : s.tables("paint")) parse_paint(p, mesh, file, zones);
-  for (const Section& z : s.tables("zone")) {
-    const std::string name = z.string("name", "");
-    check_zone_name(z, "name", name, zones);
-    Section sel = z.table("select");
-    if (!sel.exists())
-      z.fail("select", "missing, expected a selection such as { kind = \"box\", min = [..], max = [..] }");
-    zones.emplace_back(name, select_tets(mesh, Selection::parse(sel)));
-  }
-  return zones;
-}
-
 }  // namespace
 
 namespace {
@@ -954,7 +807,8 @@ Scene parse_scene(SceneFile file, const Mesh* character_mesh) {
            {},
            {},
            {},
-           1.0};
+           1.0,
+           {}};
   const Section root = sc.file.root();
   const std::optional<Character> character = parse_character_block(root, sc, character_mesh);
   if (!character) {
@@ -963,13 +817,16 @@ Scene parse_scene(SceneFile file, const Mesh* character_mesh) {
     sc.mesh = mesh_from_scene(mesh, sc.file);
   }
   sc.material = parse_material(root.table("material"));
-  sc.zones = parse_zones(root.table("zones"), sc.mesh, sc.file, sc.material.model == MaterialModel::cnh);
+  if (std::string note = material_note(sc.material); !note.empty()) sc.notes.push_back(std::move(note));
+  ZoneChoice zone_choice = parse_zones(root.table("zones"), sc.mesh, sc.file, sc.material.model == MaterialModel::cnh);
+  sc.zones = zone_choice.zones;  // [[material.region]] may name them
   sc.keep_zones = root.table("zones").boolean("keep", true);
   parse_material_regions(root.table("material"), sc);
   sc.zone_restore_time = root.table("zones").number("restore_time", 0.0, Range::non_negative());
   const std::vector<int> driven_by = parse_boundaries(root, sc);
   sc.skeleton = character ? character_skeleton(root.table("character"), *character, driven_by)
                           : parse_skeleton(root.table("skeleton"), sc.file, sc.mesh, driven_by);
+  settle_zones(root.table("zones"), std::move(zone_choice), sc);
 
   const Section forces = root.table("forces");
   sc.gravity = forces.vec3("gravity", sc.gravity);

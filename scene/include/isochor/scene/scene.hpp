@@ -137,6 +137,9 @@ struct Scene {
   };
   std::vector<MuscleSpec> muscles;
   double activation_scale = 1.0;
+  // What the user should know about the scene as written (a coarse mesh for its zones): one line
+  // each, printed by `isochor run` and `isochor mesh`.
+  std::vector<std::string> notes;
 
   // Every node driven by [[boundary]] or bound to a bone, and their positions and velocities at t.
   std::vector<int> driven_nodes() const;
