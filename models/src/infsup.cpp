@@ -115,8 +115,9 @@ InfSup infsup_constant(const Mesh& mesh, const std::vector<std::vector<int>>& zo
   const Eigen::LLT<Eigen::MatrixXd> llt(M);
   const double pivot = llt.info() == Eigen::Success ? llt.matrixLLT().diagonal().minCoeff() : 0.0;
   if (!(pivot > 1e-5 * std::sqrt(M.diagonal().maxCoeff())))
-    throw Error("inf-sup: the zones are linearly dependent (e.g. the global zone beside zones that cover the "
-                "body: their sum); expected independent zones");
+    throw Error(
+        "inf-sup: the zones are linearly dependent (e.g. the global zone beside zones that cover the "
+        "body: their sum); expected independent zones");
   Eigen::SimplicialLLT<SpMat> chol(Kr);
   if (chol.info() != Eigen::Success) throw Error("inf-sup: the H1 matrix could not be factored");
   // S = G K^-1 G^T, a block of right-hand sides at a time.
