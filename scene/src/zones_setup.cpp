@@ -249,14 +249,15 @@ void settle_zones(const Section& s, ZoneChoice c, Scene& sc) {
   }
   const bool local = std::any_of(c.zones.begin(), c.zones.end(), [](const auto& z) { return z.first != "global"; });
   const MaterialSpec& m = sc.material;
-  if (m.model == MaterialModel::cnh && local && m.lambda > 10 * m.mu) {
+  if (m.model != MaterialModel::mass_spring && local && m.lambda > 10 * m.mu) {
     char buf[400];
-    std::snprintf(buf, sizeof buf,
-                  "material.lambda is %.3g mu: where zones keep the volume, CNH's local penalty at this weight "
-                  "stiffens the body as a nearly incompressible UNH locks (Cook's membrane, 2-ring patches, "
-                  "h = 3: +0.8%% at mu, -4%% at 10 mu, -47%% at 5,000 mu; docs/results/infsup); lambda of about mu "
-                  "suffices",
-                  m.lambda / m.mu);
+    std::snprintf(
+        buf, sizeof buf,
+        "material.lambda is %.3g mu: where zones keep the volume, the volumetric term of each tet at "
+        "this weight stiffens the body as a nearly incompressible UNH locks (Cook's membrane, 2-ring patches, "
+        "h = 3: +0.8%% at mu, -4%% at 10 mu, -47%% at 5,000 mu; docs/results/infsup); lambda of about mu "
+        "suffices",
+        m.lambda / m.mu);
     sc.notes.emplace_back(buf);
   }
   sc.zones = std::move(c.zones);
