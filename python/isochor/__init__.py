@@ -12,12 +12,12 @@ isochor.Error with the one-line message the command line prints. docs/python.md 
 interface and an example study; `python3 -m isochor` (or the `isochor` command that `pip install`
 puts in an environment) is the command line.
 """
-from ._errors import Error
+from ._errors import Error, SceneNote
 from ._runfile import Bone, Collider, Run, open  # noqa: A001 (isochor.open is the name users expect)
 from ._api import Frame, RunResult, load, run, scene, study, study_cases
 from . import _api
 
-__all__ = ["Error", "Scene", "Frame", "RunResult", "Run", "Collider", "Bone", "load", "scene", "run", "open",
+__all__ = ["Error", "SceneNote", "Scene", "Frame", "RunResult", "Run", "Collider", "Bone", "load", "scene", "run", "open",
            "study", "study_cases", "executable"]
 __version__ = "0.1.0"
 

@@ -7,11 +7,12 @@ import csv
 import dataclasses
 import os
 import subprocess
+import warnings
 from typing import Any, Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
-from ._errors import Error
+from ._errors import Error, SceneNote
 
 try:
     from . import _isochor
@@ -131,6 +132,8 @@ def run(s: Union[Scene, str, os.PathLike, Mapping[str, Any]], output: Union[str,
     if overwrite and resume:
         raise ValueError("run(): overwrite excludes resume")
     sc = _as_scene(s, overrides)
+    for note in sc.notes:  # as `isochor run` prints them
+        warnings.warn(f"{sc.name}: {note}", SceneNote, stacklevel=2)
     zone_names = list(sc.zones.keys())
     callback = None
     if on_frame is not None:

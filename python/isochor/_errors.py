@@ -8,3 +8,11 @@ class Error(RuntimeError):
 
 
 Error.__module__ = "isochor"  # shown as isochor.Error
+
+
+class SceneNote(UserWarning):
+    """What to know about a scene as written (patches too coarse for the body, a locking lambda):
+    isochor.run warns with it, as `isochor run` prints it."""
+
+
+SceneNote.__module__ = "isochor"

@@ -17,6 +17,7 @@
 #include "isochor/base/error.hpp"
 #include "isochor/core/output.hpp"
 #include "isochor/scene/scene.hpp"
+#include "isochor/scene/zones_setup.hpp"
 #include "isochor/app/install.hpp"
 #include "isochor/app/run.hpp"
 #include "isochor/app/study.hpp"
@@ -335,6 +336,24 @@ void bind_scene(py::module_& m) {
       .def_property_readonly(
           "material", [](const Scene& s) { return std::string(to_string(s.material.model)); },
           "material.model: cnh, snh, unh, ...")
+      .def_property_readonly(
+          "notes", [](const Scene& s) { return s.notes; },
+          "What to know about the scene as written (patches too coarse for the body, a locking lambda): one line "
+          "each, as `isochor run` prints them")
+      .def(
+          "infsup",
+          [](const Scene& s) {
+            const InfSup r = zones_infsup(s);
+            py::dict d;
+            d["beta"] = r.beta;
+            d["beta_next"] = r.beta_next;
+            d["zero_modes"] = r.zero_modes;
+            d["zones"] = r.zones;
+            d["free_dofs"] = r.dofs;
+            return d;
+          },
+          "The inf-sup constant of the scene's zones against its free dofs (`isochor infsup`): a dict of beta, "
+          "beta_next, zero_modes, zones, free_dofs")
       .def("activations", &Scene::activations, py::arg("t"),
            "Each muscle's activation at time t as the scene gives it (activation_scale applied)")
       .def_property_readonly(

@@ -292,3 +292,22 @@ def test_bad_activations_stop_the_run_with_a_reason(tmp_path):
         isochor.run(s, tmp_path / "b.h5", activation=lambda t: {"biceps": 0.5})
     with pytest.raises(ZeroDivisionError):
         isochor.run(s, tmp_path / "c.h5", activation=lambda t: [1 / 0])
+
+
+def test_a_scene_tells_its_notes_and_inf_sup_constant_and_a_run_warns_with_them(tmp_path):
+    """A CNH beam two cells thick with no zone named: its default 2-ring patches span the
+    thickness (one note, and isochor.run warns with it); infsup() counts the scene's zones and
+    gives a constant in (0, 1.5] (the global zone's on a clamped box is about 1.3); a fine enough
+    beam has no note."""
+    table = {"mesh": {"shape": "box", "size": [1.0, 0.1, 0.1], "cells": [20, 2, 2], "center": [0.5, 0, 0]},
+             "material": {"mu": 1e6, "lambda": 1e6}, "forces": {"gravity": [0.0, 0.0, -9.81]},
+             "boundary": [{"select": {"kind": "set", "name": "xmin"}}],
+             "integrator": {"kind": "static"}, "frames": {"count": 2}}
+    sc = isochor.scene(table)
+    assert len(sc.notes) == 1 and "2-ring patches are 1.0 across" in sc.notes[0]
+    r = sc.infsup()
+    assert r["zones"] == len(sc.zones) and all(name.startswith("patch2_") for name in sc.zones)
+    assert 0 < r["beta"] <= r["beta_next"] <= 1.5 and r["zero_modes"] == 0
+    with pytest.warns(isochor.SceneNote, match="2-ring patches are 1.0 across"):
+        isochor.run(sc, tmp_path / "beam.h5")
+    assert isochor.scene(table, {"mesh.cells": [80, 8, 8]}).notes == []
