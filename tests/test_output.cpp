@@ -64,7 +64,7 @@ TEST(Output, RoundTripThroughTheReader) {
   Mesh m = test_mesh();
   const std::string path = (d / "run.h5").string();
   {
-    OutputWriter w(path, m, half_zone(m), {"[mesh]\nshape = \"box\"\n", "scene.toml", "test", {}}, true);
+    OutputWriter w(path, m, half_zone(m), {"[mesh]\nshape = \"box\"\n", "scene.toml", "test", {}, {}}, true);
     write_frames(w, m, 0, 4);
     w.set_stat("wall_seconds", 1.25);
   }
@@ -91,7 +91,7 @@ TEST(Output, MeshioReadsTheXdmfTimeSeries) {
   Mesh m = test_mesh();
   const std::string path = (d / "series.h5").string();
   {
-    OutputWriter w(path, m, half_zone(m), {"", "", "test", {}}, true);
+    OutputWriter w(path, m, half_zone(m), {"", "", "test", {}, {}}, true);
     write_frames(w, m, 0, 3);
   }
   // The Python side recomputes the expected positions from the formula above.
@@ -107,7 +107,7 @@ TEST(Output, AKilledWriterKeepsEveryFinishedFrame) {
   const std::string path = (d / "killed.h5").string();
   pid_t pid = fork();
   if (pid == 0) {
-    OutputWriter* w = new OutputWriter(path, m, half_zone(m), {"", "", "test", {}}, false);
+    OutputWriter* w = new OutputWriter(path, m, half_zone(m), {"", "", "test", {}, {}}, false);
     write_frames(*w, m, 0, 3);
     _exit(0);  // no close, no destructors: as if killed
   }
@@ -124,7 +124,7 @@ TEST(Output, ObjSequenceHasTheSurfaceOfEveryFrame) {
   Mesh m = test_mesh();
   const std::string path = (d / "seq.h5").string();
   {
-    OutputWriter w(path, m, {}, {"", "", "test", {}}, false);
+    OutputWriter w(path, m, {}, {"", "", "test", {}, {}}, false);
     write_frames(w, m, 0, 2, false);
   }
   ASSERT_EQ(export_obj_sequence(path, (d / "obj").string(), "f"), 2);
@@ -138,7 +138,9 @@ TEST(Output, ObjSequenceHasTheSurfaceOfEveryFrame) {
 
 TEST(Output, UnwritablePathIsAnError) {
   Mesh m = test_mesh();
-  std::string msg = test::error_of([&] { OutputWriter w("/proc/no/such/dir/x.h5", m, {}, {"", "", "", {}}, false); });
+  std::string msg = test::error_of([&] {
+    OutputWriter w("/proc/no/such/dir/x.h5", m, {}, {"", "", "", {}, {}}, false);
+  });
   EXPECT_NE(msg.find("/proc/no/such/dir/x.h5"), std::string::npos) << msg;
 }
 

@@ -251,6 +251,39 @@ TEST(Resume, OnlyTheSceneTheFileWasWrittenWith) {
   EXPECT_EQ(again.frames, 21);
 }
 
+// A resume reads the same input files as the run did: a mesh script changed since (here only by a
+// comment, the same mesh) is refused, naming it; the file is left as it was.
+TEST(Resume, OnlyTheInputFilesTheRunRead) {
+  const auto dir = test::temp_dir();
+  const std::string geo = R"(Point(1) = {0, 0, 0, 0.5}; Point(2) = {0, 1, 0, 0.5}; Point(3) = {0, 1, 1, 0.5};
+Point(4) = {0, 0, 1, 0.5}; Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
+Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1}; out[] = Extrude{1, 0, 0}{ Surface{1}; };
+Physical Volume("block") = {out[1]}; Physical Surface("clamp") = {1};
+)";
+  test::write_file(dir / "block.geo", geo);
+  const std::string text = R"([mesh]
+file = "block.geo"
+[material]
+mu = 1.0e4
+lambda = 1.0e4
+[[boundary]]
+select = { kind = "set", name = "clamp" }
+[frames]
+rate = 100.0
+duration = 0.05
+)";
+  auto block = [&] { return parse_scene(SceneFile::parse(text, "block.toml", {}, dir.string())); };
+  const std::string path = (dir / "block.h5").string();
+  run_until(block(), path, 2);
+  test::write_file(dir / "block.geo", geo + "// a comment\n");
+  const std::string msg = test::error_of([&] { run_scene(block(), options(path, OutputWriter::Mode::resume)); });
+  EXPECT_NE(msg.find(path + ": the scene's input block.geo changed since the run was written"), std::string::npos)
+      << msg;
+  EXPECT_EQ(RunFile(path).num_frames(), 3);  // untouched
+  test::write_file(dir / "block.geo", geo);  // as it was: the run goes on
+  EXPECT_EQ(run_scene(block(), options(path, OutputWriter::Mode::resume)).frames, 6);
+}
+
 namespace {
 Mesh small_mesh() { return make_box({0.1, 0.1, 0.1}, {2, 2, 2}, Eigen::Vector3d::Zero(), 6); }
 }  // namespace
@@ -260,7 +293,7 @@ TEST(Outputs, AnExistingOutputIsKeptUnlessOverwriteIsAsked) {
   const std::string path = (dir / "mine.h5").string();
   { std::ofstream(path) << "a user's own file\n"; }
   const Mesh m = small_mesh();
-  const std::string msg = test::error_of([&] { OutputWriter w(path, m, {}, {"", "", "run", {}}, false); });
+  const std::string msg = test::error_of([&] { OutputWriter w(path, m, {}, {"", "", "run", {}, {}}, false); });
   EXPECT_NE(msg.find(path + ": exists (pass --overwrite to replace it, or --resume"), std::string::npos) << msg;
   std::ifstream in(path);
   std::string line;
@@ -270,17 +303,19 @@ TEST(Outputs, AnExistingOutputIsKeptUnlessOverwriteIsAsked) {
   const std::string other = (dir / "other.h5").string();
   { std::ofstream((dir / "other.xdmf").string()) << "x"; }
   EXPECT_NE(test::error_of([&] {
-              OutputWriter w(other, m, {}, {"", "", "run", {}}, false);
+              OutputWriter w(other, m, {}, {"", "", "run", {}, {}}, false);
             }).find("other.xdmf: exists"),
             std::string::npos);
-  OutputWriter w(path, m, {}, {"", "", "run", {}}, false, OutputWriter::Mode::overwrite);
+  OutputWriter w(path, m, {}, {"", "", "run", {}, {}}, false, OutputWriter::Mode::overwrite);
   EXPECT_EQ(w.frames_written(), 0);
 }
 
 TEST(Outputs, AnXdmfPathIsRefused) {
   const auto dir = test::temp_dir();
   const std::string path = (dir / "run.xdmf").string();
-  const std::string msg = test::error_of([&] { OutputWriter w(path, small_mesh(), {}, {"", "", "run", {}}, false); });
+  const std::string msg = test::error_of([&] {
+    OutputWriter w(path, small_mesh(), {}, {"", "", "run", {}, {}}, false);
+  });
   EXPECT_NE(msg.find("the XDMF sidecar would overwrite the output itself"), std::string::npos) << msg;
   EXPECT_FALSE(std::filesystem::exists(path));
 }
@@ -289,10 +324,10 @@ TEST(Outputs, ASecondWriterFailsAtStartAndLeavesTheFirstIntact) {
   const auto dir = test::temp_dir();
   const std::string path = (dir / "shared.h5").string();
   const Mesh m = small_mesh();
-  OutputWriter first(path, m, {}, {"", "", "run", {}}, false);
+  OutputWriter first(path, m, {}, {"", "", "run", {}, {}}, false);
   EXPECT_TRUE(output_is_being_written(path));
   const std::string msg = test::error_of([&] {
-    OutputWriter second(path, m, {}, {"", "", "run", {}}, false, OutputWriter::Mode::overwrite);
+    OutputWriter second(path, m, {}, {"", "", "run", {}, {}}, false, OutputWriter::Mode::overwrite);
   });
   EXPECT_NE(msg.find(path + ": another process is writing it"), std::string::npos) << msg;
   Frame f;
@@ -317,7 +352,7 @@ TEST(Outputs, AFullFileSystemStopsTheRunWithEveryFrameBeforeItIntact) {
   int written = 0;
   std::vector<Points> frames;
   {
-    OutputWriter w(path, m, {}, {"", "", "run", {}}, false);
+    OutputWriter w(path, m, {}, {"", "", "run", {}, {}}, false);
     rlimit lim = old;
     lim.rlim_cur = 2 << 20;  // 2 MB: a frame is 8.7 KB of positions and as much of velocities
     ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &lim), 0);
@@ -355,7 +390,7 @@ TEST(Outputs, AFullFileSystemStopsTheRunWithEveryFrameBeforeItIntact) {
 TEST(Outputs, AWriteErrorNamesTheFileAndTheReason) {
   if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
   const std::string msg = test::error_of([&] {
-    OutputWriter w("/dev/full", small_mesh(), {}, {"", "", "run", {}}, false, OutputWriter::Mode::overwrite);
+    OutputWriter w("/dev/full", small_mesh(), {}, {"", "", "run", {}, {}}, false, OutputWriter::Mode::overwrite);
   });
   EXPECT_NE(msg.find("/dev/full: "), std::string::npos) << msg;
   EXPECT_NE(msg.find("No space left on device"), std::string::npos) << msg;

@@ -284,7 +284,8 @@ RunSummary run_parsed_scene(const Scene& sc, const RunOptions& opt) {
   const std::unique_ptr<Integrator> integrator = make_integrator(sc, *sys);
   if (!resume) check_output_room(sc, *sys, summary.output);
   // (The mass-spring model has no zones: its scene is refused with any.)
-  OutputWriter w(summary.output, sc.mesh, sc.zones, {sc.file.text_as_run(), sc.file.name(), "run", scene_record(sc)},
+  OutputWriter w(summary.output, sc.mesh, sc.zones,
+                 {sc.file.text_as_run(), sc.file.name(), "run", scene_record(sc), sc.file.input_digests()},
                  sc.output.pressure && sys->has_tets(), opt.mode);
   const ResumePoint& rp = w.resume_point();
   std::map<std::string, double> offsets;

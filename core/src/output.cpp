@@ -480,6 +480,26 @@ struct OutputWriter::Impl {
 
   std::string xdmf_file() const { return std::filesystem::path(path).replace_extension(".xdmf").string(); }
 
+  // The scene's input files as the run read them against now (files written before inputs were
+  // recorded have none, and are not checked).
+  void check_inputs(const std::string& then, const std::string& now) const {
+    if (then.empty() || then == now) return;
+    std::istringstream a(then), b(now);
+    std::string x, y;
+    while (std::getline(a, x)) {
+      const bool more = static_cast<bool>(std::getline(b, y));
+      if (more && x == y) continue;
+      const std::string name = x.substr(0, x.find('\t'));
+      throw Error(path + ": the scene's input " + name +
+                  (more && y.rfind(name + "\t", 0) == 0 ? " changed" : " is not the one it read") +
+                  " since the run was written (cannot be resumed: expected the same inputs, or --overwrite to "
+                  "start over)");
+    }
+    throw Error(path +
+                ": the scene reads other input files than the run did (cannot be resumed: expected the "
+                "same inputs, or --overwrite to start over)");
+  }
+
   // Mode::resume: the file of an earlier run of the same scene, read to its last complete frame
   // (a killed writer may have extended some series and not others). Nothing is changed until
   // continue_run(): a refused resume leaves the file and its sidecar as they were.
@@ -500,6 +520,7 @@ struct OutputWriter::Impl {
                   std::to_string(first_difference(scene, info.scene_text)) +
                   " of the scene as run differs; expected the same scene file and --set options, or --overwrite to "
                   "start over)");
+    check_inputs(read_string_attribute(file, "inputs"), info.inputs);
     frames_group = H(checked(H5Gopen2(file, "frames", H5P_DEFAULT), "open /frames"), H5Gclose);
     xdmf_group = H(checked(H5Gopen2(frames_group, "xdmf", H5P_DEFAULT), "open /frames/xdmf"), H5Gclose);
     stats_group = H(checked(H5Gopen2(file, "stats", H5P_DEFAULT), "open /stats"), H5Gclose);
@@ -631,6 +652,7 @@ void OutputWriter::Impl::write_header(const RunInfo& info) {
   string_attribute(file, "status", "running");
   string_attribute(file, "scene", info.scene_text);
   string_attribute(file, "scene_file", info.scene_file);
+  string_attribute(file, "inputs", info.inputs);
   // Where the scene's relative file names (meshes, paint) resolve, for tools that read the run
   // from another directory.
   if (!info.scene_file.empty()) {

@@ -4,6 +4,8 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstdio>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -318,8 +320,31 @@ Section SceneFile::root() const { return Section(this, root_.get(), ""); }
 
 std::string SceneFile::resolve_path(const std::string& p) const {
   std::filesystem::path path(p);
-  if (path.is_absolute() || directory_.empty()) return p;
-  return (std::filesystem::path(directory_) / path).lexically_normal().string();
+  const std::string resolved = path.is_absolute() || directory_.empty()
+                                   ? p
+                                   : (std::filesystem::path(directory_) / path).lexically_normal().string();
+  inputs_[p] = resolved;
+  return resolved;
+}
+
+std::string SceneFile::input_digests() const {
+  std::string out;
+  for (const auto& [name, path] : inputs_) {
+    std::ifstream in(path, std::ios::binary);
+    std::uint64_t hash = 1469598103934665603ull, bytes = 0;
+    char buf[1 << 16];
+    while (in) {
+      in.read(buf, sizeof buf);
+      const std::streamsize got = in.gcount();
+      for (std::streamsize i = 0; i < got; ++i) hash = (hash ^ static_cast<unsigned char>(buf[i])) * 1099511628211ull;
+      bytes += static_cast<std::uint64_t>(got);
+    }
+    char line[64];
+    std::snprintf(line, sizeof line, "\t%llu\t%016llx\n", static_cast<unsigned long long>(bytes),
+                  static_cast<unsigned long long>(hash));
+    out += name + (std::filesystem::is_regular_file(path) ? std::string(line) : std::string("\tmissing\n"));
+  }
+  return out;
 }
 
 SceneFile SceneFile::load(const std::string& path, const std::vector<std::string>& overrides) {

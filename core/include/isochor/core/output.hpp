@@ -57,6 +57,7 @@ struct RunInfo {
   std::string scene_file;  // where it came from
   std::string command;     // e.g. "run", "mesh"
   SceneRecord scene;       // written as /colliders and the root attributes up, up_source
+  std::string inputs;      // SceneFile::input_digests(): a resume refuses a changed input file
 };
 
 struct Frame {

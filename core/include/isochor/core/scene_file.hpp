@@ -108,7 +108,13 @@ class SceneFile {
   const std::string& name() const { return name_; }
   // Directory of the scene file: relative file names in the scene are resolved against it.
   const std::string& directory() const { return directory_; }
+  // A file the scene names, relative to its directory; recorded as one of its inputs.
   std::string resolve_path(const std::string& p) const;
+  // The files the scene read (as written -> as resolved), and a digest of each as it is now: one
+  // line "name<TAB>bytes<TAB>FNV-1a 64 of the content" per file, sorted ("missing" for a file that
+  // is gone). A run file keeps it, so that a resume notices an input that changed.
+  const std::map<std::string, std::string>& input_files() const { return inputs_; }
+  std::string input_digests() const;
   // The scene as run (overrides applied), as TOML text.
   std::string text_as_run() const;
   // Throws on the first key (in file order) that no parser read.
@@ -131,6 +137,7 @@ class SceneFile {
   mutable std::set<const toml::node*> read_;
   mutable std::map<std::string, std::set<std::string>> asked_;  // table path -> keys asked for
   mutable std::set<std::string> queried_;
+  mutable std::map<std::string, std::string> inputs_;
   mutable std::map<std::string, std::set<std::string>> defaults_, ranges_;
 };
 
