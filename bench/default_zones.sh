@@ -24,11 +24,5 @@ PY
   done
 done
 echo "zones,solver,zone_count,wall_s,steps,newton" > "$csv"
-/usr/bin/python3 - "$tmp" >> "$csv" <<'PY'
-import sys, statistics
-rows = [r.strip().split(",") for r in open(sys.argv[1]) if r.strip()]
-for key in dict.fromkeys(tuple(r[:2]) for r in rows):
-    rr = [r for r in rows if tuple(r[:2]) == key]
-    print(",".join(list(key) + [rr[0][2], f"{statistics.median(float(r[3]) for r in rr):.2f}"] + rr[0][4:]))
-PY
+median_rows "$tmp" 2 3 >> "$csv"
 column -s, -t "$csv"

@@ -46,14 +46,5 @@ PY
   done
 done
 echo "edge_length,zones,solver,tets,zone_count,wall_s,newton,border_cg,factor_nnz,corner_uy" > "$csv"
-/usr/bin/python3 - "$tmp" >> "$csv" <<'PY'
-import sys, csv, statistics
-rows = [r.strip().split(",") for r in open(sys.argv[1]) if r.strip()]
-keys = list(dict.fromkeys(tuple(r[:3]) for r in rows))
-for k in keys:
-    rr = [r for r in rows if tuple(r[:3]) == k]
-    med = statistics.median(float(r[5]) for r in rr)
-    r = rr[0]
-    print(",".join(r[:5] + [f"{med:.3f}"] + r[6:]))
-PY
+median_rows "$tmp" 3 5 >> "$csv"
 column -s, -t "$csv"

@@ -145,6 +145,13 @@ lambda = 1.0e6
   EXPECT_EQ(paper.zones[0].first, "global");
   EXPECT_TRUE(scene({"material.model=unh"}).zones.empty());
   EXPECT_TRUE(scene({"material.model=unh", "zones.default=global"}).zones.empty());
+  const std::string bad = test::error_of([&] {
+    scene({}, nullptr);
+    parse_scene(SceneFile::parse(beam + clamp + "[zones]\ndefault = \"paper\"\n", "beam.toml"));
+  });
+  EXPECT_NE(bad.find("beam.toml:13: zones.default: expected one of \"patches\", \"global\", got \"paper\""),
+            std::string::npos)
+      << bad;
   // A locking penalty is named.
   const Scene stiff = scene({"mesh.cells=[80, 8, 8]", "material.lambda=1e8"});
   ASSERT_EQ(stiff.notes.size(), 1u);

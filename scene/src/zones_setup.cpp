@@ -156,6 +156,7 @@ ZoneChoice parse_zones(const Section& s, const Mesh& mesh, const SceneFile& file
       if (seen.insert(rings[v]).second)
         zones.emplace_back("ring" + std::to_string(k) + "_" + std::to_string(v), rings[v]);
   }
+  c.patches_begin = zones.size();
   if (const long k = s.integer("patches", c.automatic ? kDefaultPatchRings : 0, 0, 100); k > 0) {
     c.patch_rings = static_cast<int>(k);
     const auto patches = patch_zones(mesh, static_cast<int>(k));
@@ -205,15 +206,16 @@ namespace {
 
 // A zone whose every tet has its four nodes driven (by boundaries or bones) has a zero
 // constraint row: generated ones are dropped, a named one is an error.
-void drop_driven_zones(const Section& s, ZoneChoice& c, const Scene& sc) {
-  std::vector<char> driven(sc.mesh.num_nodes(), 0);
-  for (int n : sc.driven_nodes()) driven[n] = 1;
-  std::vector<std::pair<std::string, std::vector<int>>> kept;
-  std::size_t generated = 0;
+void drop_driven_zones(const Section& s, ZoneChoice& c, const Mesh& mesh, const std::vector<int>& driven_nodes) {
+  std::vector<char> driven(mesh.num_nodes(), 0);
+  for (int n : driven_nodes) driven[n] = 1;
+  ZoneChoice kept = c;
+  kept.zones.clear();
+  kept.patches_begin = kept.generated = 0;
   for (std::size_t j = 0; j < c.zones.size(); ++j) {
     const auto& [name, tets] = c.zones[j];
     const bool moves = std::any_of(tets.begin(), tets.end(), [&](int e) {
-      const Tet& t = sc.mesh.tets()[e];
+      const Tet& t = mesh.tets()[e];
       return !(driven[t[0]] && driven[t[1]] && driven[t[2]] && driven[t[3]]);
     });
     if (!moves && j >= c.generated)
@@ -221,22 +223,20 @@ void drop_driven_zones(const Section& s, ZoneChoice& c, const Scene& sc) {
                          "\": every node of its tets is driven (by [[boundary]] or bones), so no free node keeps its "
                          "volume (expected a zone with free nodes)");
     if (!moves) continue;
-    generated += j < c.generated;
-    kept.push_back(std::move(c.zones[j]));
+    kept.patches_begin += j < c.patches_begin;
+    kept.generated += j < c.generated;
+    kept.zones.push_back(std::move(c.zones[j]));
   }
-  c.zones = std::move(kept);
-  c.generated = generated;
+  c = std::move(kept);
 }
 
 }  // namespace
 
 void settle_zones(const Section& s, ZoneChoice c, Scene& sc) {
-  if (!sc.driven_nodes().empty()) drop_driven_zones(s, c, sc);
+  if (const std::vector<int> driven = sc.driven_nodes(); !driven.empty()) drop_driven_zones(s, c, sc.mesh, driven);
   if (c.patch_rings > 0 && c.zones.size() > 1) {
-    std::vector<std::pair<std::string, std::vector<int>>> patches;
-    for (const auto& z : c.zones)
-      if (z.first.rfind("patch", 0) == 0) patches.push_back(z);
-    const ZonesAcross a = zones_across(sc.mesh, patches);
+    const ZonesAcross a = zones_across(sc.mesh, {c.zones.begin() + static_cast<std::ptrdiff_t>(c.patches_begin),
+                                                 c.zones.begin() + static_cast<std::ptrdiff_t>(c.generated)});
     if (a.across(0) < 2) {
       char buf[400];
       std::snprintf(buf, sizeof buf,

@@ -16,9 +16,11 @@ constexpr int kDefaultPatchRings = 2;
 
 struct ZoneChoice {
   std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tets
-  std::size_t generated = 0;  // the first `generated` zones are global, rings and patches (not named by the user)
-  int patch_rings = 0;        // zones.patches (or the default), 0 without patches
-  bool automatic = false;     // the default choice (no zone named in [zones])
+  // zones[0, generated) are global, rings and patches (not named by the user), the patches
+  // zones[patches_begin, generated).
+  std::size_t patches_begin = 0, generated = 0;
+  int patch_rings = 0;     // zones.patches (or the default), 0 without patches
+  bool automatic = false;  // the default choice (no zone named in [zones])
 };
 
 // Reads [zones] (bad keys throw Error naming the key); cnh: the model keeps zones by default.
