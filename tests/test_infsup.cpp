@@ -98,6 +98,11 @@ TEST(InfSup, DependentZonesAreRefused) {
   zones.push_back(whole(m)[0]);  // their sum
   const std::string e = test::error_of([&] { infsup_constant(m, zones, m.node_sets.at("xmin"), {}); });
   EXPECT_NE(e.find("the zones are linearly dependent"), std::string::npos) << e;
+  // More zones than the dense eigenproblem is allowed: refused before any work, naming the count.
+  const std::string many = test::error_of([&] { infsup_constant(m, patch_zones(m, 1), {}, {}, 3); });
+  EXPECT_NE(many.find("inf-sup: " + std::to_string(patch_zones(m, 1).size()) + " zones (expected at most 3"),
+            std::string::npos)
+      << many;
 }
 
 // Brezzi's condition: a stable choice keeps beta_h as the mesh is refined, an unstable one loses
