@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <random>
 
+#include "isochor/base/error.hpp"
 #include "isochor/models/assembly.hpp"
 #include "isochor/models/constraints.hpp"
 #include "isochor/models/drivers.hpp"
@@ -56,6 +57,18 @@ Eigen::MatrixXd fd_hessian(const Scene3x2x2& s, G&& grad) {
 }
 
 }  // namespace
+
+// A dof map in a given node order lists the free nodes in that order, skips the Dirichlet ones,
+// and refuses an order that is not a permutation of the nodes.
+TEST(DofMap, FreeNodesInTheGivenOrder) {
+  const DofMap d = DofMap::make(5, {3}, {4, 3, 0, 2, 1});
+  EXPECT_EQ(d.free_nodes, (std::vector<int>{4, 0, 2, 1}));
+  EXPECT_EQ(d.free_index, (std::vector<int>{1, 3, 2, -1, 0}));
+  EXPECT_EQ(DofMap::make(3, {}).free_nodes, (std::vector<int>{0, 1, 2}));
+  EXPECT_THROW(DofMap::make(3, {}, {0, 1}), Error);
+  EXPECT_THROW(DofMap::make(3, {}, {0, 1, 1}), Error);
+  EXPECT_THROW(DofMap::make(3, {}, {0, 1, 3}), Error);
+}
 
 TEST(Assembly, GradientAndHessianMatchFiniteDifferences) {
   Scene3x2x2 s;

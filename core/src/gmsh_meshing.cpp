@@ -1,6 +1,7 @@
 // Everything that goes through Gmsh's C++ API: curved shapes, .msh files, closed surfaces.
 #include <fcntl.h>
 #include <gmsh.h>
+#include <omp.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -25,10 +26,15 @@ namespace isochor {
 
 namespace {
 
-// Gmsh keeps global state: one session per process, used by one thread at a time.
+// Gmsh keeps global state: one session per process, used by one thread at a time. Setting
+// General.NumThreads makes Gmsh call omp_set_num_threads: the session meshes on one thread (the
+// same mesh whatever the machine) and gives the caller its OpenMP thread count back when it ends,
+// else every element pass and CG product after a Gmsh mesh would run on one thread whatever
+// OMP_NUM_THREADS says.
 class GmshSession {
  public:
-  explicit GmshSession(const std::string& model) : lock_(mutex()), exceptions_(std::uncaught_exceptions()) {
+  explicit GmshSession(const std::string& model)
+      : lock_(mutex()), exceptions_(std::uncaught_exceptions()), omp_threads_(omp_get_max_threads()) {
     static bool initialised = false;
     if (broken())
       throw Error(
@@ -61,6 +67,7 @@ class GmshSession {
   // leaves Gmsh alone: its model may be half-built, and clearing it crashed inside Gmsh 4.8 on a
   // malformed .msh (found by the fuzzer). Gmsh is then not used again in this process.
   ~GmshSession() {
+    omp_set_num_threads(omp_threads_);
     if (std::uncaught_exceptions() > exceptions_) {
       broken() = true;
       return;
@@ -89,6 +96,7 @@ class GmshSession {
   }
   std::lock_guard<std::mutex> lock_;
   int exceptions_;
+  int omp_threads_;  // the caller's OpenMP thread count
 };
 
 struct Extracted {

@@ -1,5 +1,6 @@
 // Block-Jacobi preconditioned conjugate gradients on the effective stiffness (sparse_factor.hpp).
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -24,6 +25,7 @@ class BlockJacobiPcg : public SymmetricSolver {
     inv_.resize(n_ / 3 + 1);
     r_.resize(n_), z_.resize(n_), d_.resize(n_), q_.resize(n_);
     build_blocks();
+    make_chunks();
   }
 
   bool factor(const double* values) override {
@@ -55,34 +57,90 @@ class BlockJacobiPcg : public SymmetricSolver {
 
  private:
   int max_iterations() const { return static_cast<int>(std::max<Index>(1000, n_ / 10)); }
-  // CG from x with its residual r_ = b - S x.
+  // CG from x with its residual r_ = b - S x. One parallel region for the whole iteration: the
+  // rows are cut into fixed chunks of whole nodes, and every vector update, product row and
+  // preconditioner block of a chunk is done by the thread that owns the chunk in every loop
+  // (the same static schedule), so each thread's share of S and of the vectors stays in its
+  // core's cache. Dot products are sums of the chunks' partial sums in chunk order: the same
+  // numbers for any thread count.
   bool iterate(const double* b, double* x) {
     Eigen::Map<const VectorXd> bb(b, n_);
-    Eigen::Map<VectorXd> xx(x, n_);
     const double bnorm = bb.norm();
     if (bnorm == 0) {
-      xx.setZero();
+      Eigen::Map<VectorXd>(x, n_).setZero();
       return true;
     }
     if (r_.norm() <= tol_ * bnorm) return true;
-    precondition(r_, z_);
-    d_ = z_;
-    double rz = r_.dot(z_);
-    for (int it = 0; it < max_iterations(); ++it) {
-      multiply(d_.data(), q_);
-      const double dq = d_.dot(q_);
-      if (!(dq > 0)) return false;  // S is not positive definite along d
-      const double alpha = rz / dq;
-      xx += alpha * d_;
-      r_ -= alpha * q_;
-      ++iterations_;
-      if (r_.norm() <= tol_ * bnorm) return true;
-      precondition(r_, z_);
-      const double rz_new = r_.dot(z_);
-      d_ = z_ + (rz_new / rz) * d_;
-      rz = rz_new;
+    const int K = static_cast<int>(chunk_.size()) - 1;
+    double rz = 0, alpha = 0, beta = 0;
+    bool done = false, failed = false;
+    const int max_it = max_iterations();
+#pragma omp parallel
+    {
+#pragma omp for schedule(static)
+      for (int c = 0; c < K; ++c) {
+        const Index lo = chunk_[c], len = chunk_[c + 1] - lo;
+        precondition_rows(r_, z_, lo, chunk_[c + 1]);
+        d_.segment(lo, len) = z_.segment(lo, len);
+        part1_[c] = r_.segment(lo, len).dot(z_.segment(lo, len));
+      }
+#pragma omp single
+      rz = ordered_sum(part1_);
+      for (int it = 0; it < max_it; ++it) {
+#pragma omp for schedule(static)
+        for (int c = 0; c < K; ++c) {
+          const Index lo = chunk_[c], len = chunk_[c + 1] - lo;
+          multiply_rows(d_.data(), q_, lo, chunk_[c + 1]);
+          part1_[c] = d_.segment(lo, len).dot(q_.segment(lo, len));
+        }
+#pragma omp single
+        {
+          const double dq = ordered_sum(part1_);
+          failed = !(dq > 0);  // S is not positive definite along d
+          alpha = failed ? 0 : rz / dq;
+        }
+        if (failed) break;
+#pragma omp for schedule(static)
+        for (int c = 0; c < K; ++c) {
+          const Index lo = chunk_[c], len = chunk_[c + 1] - lo;
+          Eigen::Map<VectorXd>(x + lo, len) += alpha * d_.segment(lo, len);
+          r_.segment(lo, len) -= alpha * q_.segment(lo, len);
+          part1_[c] = r_.segment(lo, len).squaredNorm();
+          precondition_rows(r_, z_, lo, chunk_[c + 1]);
+          part2_[c] = r_.segment(lo, len).dot(z_.segment(lo, len));
+        }
+#pragma omp single
+        {
+          ++iterations_;
+          done = std::sqrt(ordered_sum(part1_)) <= tol_ * bnorm;
+          const double rz_new = ordered_sum(part2_);
+          beta = rz_new / rz;
+          rz = rz_new;
+        }
+        if (done) break;
+#pragma omp for schedule(static)
+        for (int c = 0; c < K; ++c) {
+          const Index lo = chunk_[c], len = chunk_[c + 1] - lo;
+          d_.segment(lo, len) = z_.segment(lo, len) + beta * d_.segment(lo, len);
+        }
+      }
     }
-    return false;
+    return done && !failed;
+  }
+  static double ordered_sum(const std::vector<double>& parts) {
+    double s = 0;
+    for (double p : parts) s += p;
+    return s;
+  }
+  // Chunks of whole nodes (3 dofs), their number fixed by the size alone: about 1,536 dofs each,
+  // at most 256.
+  void make_chunks() {
+    const Index nodes = (n_ + 2) / 3;
+    const Index K = std::max<Index>(1, std::min<Index>(256, nodes / 512));
+    chunk_.resize(K + 1);
+    for (Index c = 0; c <= K; ++c) chunk_[c] = std::min<Index>(n_, 3 * (nodes * c / K));
+    part1_.assign(K, 0.0);
+    part2_.assign(K, 0.0);
   }
   bool invert_diagonal_blocks() {
     for (Index k = 0; 3 * k < n_; ++k) {
@@ -98,33 +156,37 @@ class BlockJacobiPcg : public SymmetricSolver {
     }
     return true;
   }
-  // out = S v. S is symmetric (both triangles stored): row c of S is its column c, so each entry
-  // of out is a gather over one column, in parallel and in the same order for any thread count.
+  // out = S v, in parallel over the chunks.
   void multiply(const double* v, VectorXd& out) const {
+    const int K = static_cast<int>(chunk_.size()) - 1;
+#pragma omp parallel for schedule(static)
+    for (int c = 0; c < K; ++c) multiply_rows(v, out, chunk_[c], chunk_[c + 1]);
+  }
+  // Rows [lo, hi) of out = S v (lo a multiple of 3). S is symmetric (both triangles stored): row
+  // c of S is its column c, so each entry of out is a gather over one column.
+  void multiply_rows(const double* v, VectorXd& out, Index lo, Index hi) const {
     if (!block_col_.empty()) {
       // Block form: out_c = sum over the blocks B of block column c of B^T v_r (S symmetric).
-      const int nb = static_cast<int>(block_col_.size()) - 1;
-#pragma omp parallel for schedule(static)
-      for (int c = 0; c < nb; ++c) {
+      for (Index c = lo / 3; c < hi / 3; ++c) {
         Eigen::Vector3d sum = Eigen::Vector3d::Zero();
         for (Index b = block_col_[c]; b < block_col_[c + 1]; ++b)
           sum.noalias() += Eigen::Map<const Eigen::Matrix3d>(block_vals_.data() + 9 * b).transpose() *
                            Eigen::Map<const Eigen::Vector3d>(v + 3 * static_cast<Index>(block_row_[b]));
-        out.segment<3>(3 * static_cast<Index>(c)) = sum;
+        out.segment<3>(3 * c) = sum;
       }
       return;
     }
     const Index* cp = p_.col_ptr.data();
     const Index* ri = p_.row_ind.data();
-#pragma omp parallel for schedule(static)
-    for (Index c = 0; c < n_; ++c) {
+    for (Index c = lo; c < hi; ++c) {
       double sum = 0;
       for (Index k = cp[c]; k < cp[c + 1]; ++k) sum += vals_[k] * v[ri[k]];
       out[c] = sum;
     }
   }
-  void precondition(const VectorXd& r, VectorXd& z) const {
-    for (Index k = 0; 3 * k < n_; ++k) {
+  // z = P r on rows [lo, hi) (lo a multiple of 3).
+  void precondition_rows(const VectorXd& r, VectorXd& z, Index lo, Index hi) const {
+    for (Index k = lo / 3; 3 * k < hi; ++k) {
       const Index m = std::min<Index>(3, n_ - 3 * k);
       if (m == 3) {
         z.segment<3>(3 * k) = inv_[k] * r.segment<3>(3 * k);
@@ -175,6 +237,8 @@ class BlockJacobiPcg : public SymmetricSolver {
   Index n_;
   const double* vals_ = nullptr;
   std::vector<Index> slot_;
+  std::vector<Index> chunk_;           // first dof of each chunk, and n
+  std::vector<double> part1_, part2_;  // a chunk's share of a dot product
   std::vector<Eigen::Matrix3d> inv_;
   VectorXd r_, z_, d_, q_;
   long iterations_ = 0;

@@ -11,15 +11,25 @@
 
 namespace isochor {
 
-DofMap DofMap::make(int num_nodes, const std::vector<int>& dirichlet) {
+DofMap DofMap::make(int num_nodes, const std::vector<int>& dirichlet, const std::vector<int>& order) {
+  if (!order.empty() && static_cast<int>(order.size()) != num_nodes)
+    throw Error("dof map: the node order lists " + std::to_string(order.size()) + " nodes, the mesh has " +
+                std::to_string(num_nodes));
   DofMap d;
   d.free_index.assign(num_nodes, 0);
   for (int v : dirichlet) d.free_index.at(v) = -1;
-  for (int v = 0; v < num_nodes; ++v)
+  std::vector<char> seen(order.empty() ? 0 : num_nodes, 0);
+  for (int k = 0; k < num_nodes; ++k) {
+    const int v = order.empty() ? k : order[k];
+    if (!order.empty()) {
+      if (v < 0 || v >= num_nodes || seen[v]) throw Error("dof map: the node order is not a permutation of the nodes");
+      seen[v] = 1;
+    }
     if (d.free_index[v] == 0) {
       d.free_index[v] = static_cast<int>(d.free_nodes.size());
       d.free_nodes.push_back(v);
     }
+  }
   return d;
 }
 
@@ -86,22 +96,32 @@ std::uint64_t morton(std::uint64_t x, std::uint64_t y, std::uint64_t z) {
 }
 }  // namespace
 
+std::vector<int> morton_order(const Points& points) {
+  const int N = static_cast<int>(points.cols());
+  std::vector<int> order(N);
+  for (int e = 0; e < N; ++e) order[e] = e;
+  if (N == 0) return order;
+  const Vec3 lo = points.rowwise().minCoeff(), hi = points.rowwise().maxCoeff();
+  const Vec3 scale = ((hi - lo).array().max(1e-300).inverse() * double((1 << 21) - 1)).matrix();
+  std::vector<std::uint64_t> key(N);
+  for (int e = 0; e < N; ++e) {
+    const Vec3 u = (points.col(e) - lo).cwiseProduct(scale);
+    key[e] =
+        morton(static_cast<std::uint64_t>(u.x()), static_cast<std::uint64_t>(u.y()), static_cast<std::uint64_t>(u.z()));
+  }
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return key[a] < key[b]; });
+  return order;
+}
+
 ElementSchedule colour_elements(int num_nodes, const std::vector<std::vector<int>>& elements, const Points* centroids,
                                 int chunk) {
   ElementSchedule s;
   const int E = static_cast<int>(elements.size());
-  s.order.resize(E);
-  for (int e = 0; e < E; ++e) s.order[e] = e;
-  if (centroids && E > 0) {
-    const Vec3 lo = centroids->rowwise().minCoeff(), hi = centroids->rowwise().maxCoeff();
-    const Vec3 scale = ((hi - lo).array().max(1e-300).inverse() * double((1 << 21) - 1)).matrix();
-    std::vector<std::uint64_t> key(E);
-    for (int e = 0; e < E; ++e) {
-      const Vec3 u = (centroids->col(e) - lo).cwiseProduct(scale);
-      key[e] = morton(static_cast<std::uint64_t>(u.x()), static_cast<std::uint64_t>(u.y()),
-                      static_cast<std::uint64_t>(u.z()));
-    }
-    std::stable_sort(s.order.begin(), s.order.end(), [&](int a, int b) { return key[a] < key[b]; });
+  if (centroids) {
+    s.order = morton_order(*centroids);
+  } else {
+    s.order.resize(E);
+    for (int e = 0; e < E; ++e) s.order[e] = e;
   }
   // Without a spatial order, chunks of one element (the plain element colouring); small meshes:
   // chunks small enough that each colour still has work for every thread.

@@ -226,7 +226,8 @@ void VolumeConstraints::add_pressure(const double* lambda, std::vector<double>& 
 
 std::vector<std::vector<int>> ring_zones(const Mesh& mesh, int k, const DofMap& dofs) {
   std::vector<std::vector<int>> zones;
-  for (int v : dofs.free_nodes) zones.push_back(mesh.tet_ring(v, k));
+  for (int v = 0; v < mesh.num_nodes(); ++v)  // node order, whatever the order of the dofs
+    if (dofs.free_index[v] >= 0) zones.push_back(mesh.tet_ring(v, k));
   return zones;
 }
 

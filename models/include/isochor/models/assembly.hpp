@@ -24,8 +24,13 @@ struct DofMap {
   std::vector<int> free_index;
   std::vector<int> free_nodes;
   int num_free() const { return static_cast<int>(free_nodes.size()); }
-  static DofMap make(int num_nodes, const std::vector<int>& dirichlet_nodes);
+  // The free nodes in the order `order` lists them (a permutation of the nodes; empty: by index).
+  static DofMap make(int num_nodes, const std::vector<int>& dirichlet_nodes, const std::vector<int>& order = {});
 };
+
+// The columns of `points` sorted along a space-filling (Morton) curve through them: neighbours in
+// space are mostly neighbours in the order.
+std::vector<int> morton_order(const Points& points);
 
 // The pattern of the free dofs: symmetric (both triangles stored), with 3x3 blocks for every pair
 // of free nodes that share one of `elements` (lists of node indices).
