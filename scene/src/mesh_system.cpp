@@ -29,7 +29,7 @@ std::shared_ptr<const Material> make_material(const MaterialSpec& m) {
 // The free nodes along a Morton curve through the rest positions, not in the mesh file's order (a
 // mesher's numbering scatters neighbours over the whole range): the rows of the matrices a node
 // touches, and the vector entries a product with them reads, lie close together, so a thread that
-// owns a range of rows reads mostly its own range (docs/decisions.md, "Dof order").
+// owns a range of rows reads mostly its own range (docs/results/threads_ida.md).
 DofMap scene_dofs(const Scene& s) {
   return DofMap::make(s.mesh.num_nodes(), s.driven_nodes(), morton_order(s.mesh.rest_positions()));
 }
