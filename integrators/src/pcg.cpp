@@ -75,7 +75,7 @@ class BlockJacobiPcg : public SymmetricSolver {
     double rz = 0, alpha = 0, beta = 0;
     bool done = false, failed = false;
     const int max_it = max_iterations();
-#pragma omp parallel
+#pragma omp parallel if (K > 1)  // one chunk: no other thread would have work, only barriers
     {
 #pragma omp for schedule(static)
       for (int c = 0; c < K; ++c) {
