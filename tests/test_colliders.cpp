@@ -574,6 +574,18 @@ TEST(Colliders, TheWaistbandHoldsTheWaistInsideItsTighteningBand) {
   EXPECT_GT(inward, 0.0);
 }
 
+// One mesh of two boxes (b's nodes after a's).
+static Mesh two_boxes(const Mesh& a, const Mesh& b) {
+  Points X(3, a.num_nodes() + b.num_nodes());
+  X << a.rest_positions(), b.rest_positions();
+  std::vector<Tet> tets = a.tets();
+  for (Tet t : b.tets()) {
+    for (int& v : t) v += a.num_nodes();
+    tets.push_back(t);
+  }
+  return Mesh(X, tets);
+}
+
 TEST(SelfContact, GradientAgainstFiniteDifferencesAndTheNodesOwnBlock) {
   // One mesh of a 0.1 m box and a 0.02 m box 0.2 m above it at rest, the small one then moved
   // down to 3 mm above the large one's top face (within the 6 mm contact thickness), every node
@@ -584,14 +596,8 @@ TEST(SelfContact, GradientAgainstFiniteDifferencesAndTheNodesOwnBlock) {
   // docs/decisions.md).
   const Mesh a = make_box(Eigen::Vector3d(0.1, 0.1, 0.1), {1, 1, 1}, Eigen::Vector3d(0, 0, 0), 6);
   const Mesh b = make_box(Eigen::Vector3d(0.02, 0.02, 0.02), {1, 1, 1}, Eigen::Vector3d(0.004, -0.007, 0.2), 6);
-  Points X(3, a.num_nodes() + b.num_nodes());
-  X << a.rest_positions(), b.rest_positions();
-  std::vector<Tet> tets = a.tets();
-  for (Tet t : b.tets()) {
-    for (int& v : t) v += a.num_nodes();
-    tets.push_back(t);
-  }
-  const Mesh m(X, tets);
+  const Mesh m = two_boxes(a, b);
+  const Points& X = m.rest_positions();
   const DofMap dofs = DofMap::make(m.num_nodes(), {});
   ElasticAssembly asm_(m, make_snh(1, 1), dofs);
   ContactLaw law{1e5, 0.006};
@@ -683,6 +689,41 @@ double deepest_below(const Mesh& m, const Points& x, int first, double z_top, do
   return deepest;
 }
 }  // namespace
+
+// The candidate pairs are found once and kept while no surface node has moved more than half
+// their skin (a Verlet list): along a walk of a small box sinking into a large one, in steps of
+// up to 0.4 or 2.4 mm against a 6 mm thickness (so the candidates are kept for some steps and found
+// again at others), the contact energy and gradient of the one object that keeps its candidates
+// equal, bit for bit, those of a new object that searches at each configuration afresh. The small
+// box also slides 6 cm across the top face, over triangles that were far at the first search.
+TEST(SelfContact, KeptCandidatesGiveWhatAFreshSearchGives) {
+  const Mesh a = make_box(Eigen::Vector3d(0.1, 0.1, 0.1), {3, 3, 3}, Eigen::Vector3d(0, 0, 0), 6);
+  const Mesh b = make_box(Eigen::Vector3d(0.03, 0.03, 0.03), {2, 2, 2}, Eigen::Vector3d(0.004, -0.007, 0.2), 6);
+  const Mesh m = two_boxes(a, b);
+  const Points& X = m.rest_positions();
+  const DofMap dofs = DofMap::make(m.num_nodes(), {});
+  ElasticAssembly asm_(m, make_snh(1, 1), dofs);
+  const ContactLaw law{1e5, 0.006};
+  const SelfContact kept(m, law, 0.02, dofs, asm_.pattern());
+  Points x = X;
+  x.rightCols(b.num_nodes()).row(2).array() -= 0.2 - 0.058 - 0.015;  // 8 mm above the top face
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int touching = 0;
+  for (int step = 0; step < 40; ++step) {
+    const double size = step % 5 == 4 ? 2.4e-3 : 4e-4;
+    x.rightCols(b.num_nodes()).row(2).array() -= 0.25 * size;               // sinks 8 mm in all,
+    x.rightCols(b.num_nodes()).row(0).array() += 1.5e-3;                    // slides 6 cm over the top face,
+    for (int i = 0; i < x.size(); ++i) x.data()[i] += 0.5 * size * u(rng);  // every node jiggled
+    Eigen::VectorXd g1 = Eigen::VectorXd::Zero(x.size()), g2 = Eigen::VectorXd::Zero(x.size());
+    const SelfContact fresh(m, law, 0.02, dofs, asm_.pattern());
+    const double E1 = kept.add_gradient(x, g1), E2 = fresh.add_gradient(x, g2);
+    ASSERT_EQ(E1, E2) << "step " << step;
+    ASSERT_EQ((g1 - g2).cwiseAbs().maxCoeff(), 0.0) << "step " << step;
+    touching += E1 > 0;
+  }
+  EXPECT_GT(touching, 10);  // the walk reached contact and stayed in it
+}
 
 TEST(SelfContact, TwoBlocksPressedTogetherDoNotPassThrough) {
   // One mesh of two 4 cm blocks 2 cm apart (a TetGen file): the lower one's base held, the upper

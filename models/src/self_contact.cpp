@@ -23,6 +23,9 @@ SelfContact::SelfContact(const Mesh& mesh, const ContactLaw& law, double exclude
       dofs_(dofs),
       area_(std::move(area)),
       tau_(smoothing > 0 ? smoothing : 0.1 * law.thickness) {
+  surface_index_.assign(mesh.num_nodes(), -1);
+  const std::vector<int>& nodes = mesh.surface_nodes();
+  for (std::size_t i = 0; i < nodes.size(); ++i) surface_index_[nodes[i]] = static_cast<int>(i);
   diag_slots_.resize(9 * static_cast<std::size_t>(dofs.num_free()));
   for (int f = 0; f < dofs.num_free(); ++f)
     for (int a = 0; a < 3; ++a)
@@ -52,39 +55,61 @@ Mat3 distance_hessian(const Vec3& p, const Vec3& q, const Vec3& w, const Vec3* c
 }
 }  // namespace
 
-const std::vector<SelfContact::Pair>& SelfContact::pairs(const Points& x) const {
-  if (cached_x_.cols() == x.cols() && cached_x_ == x) return cached_;
+// The candidates: for each triangle, the surface nodes (not near it at rest) within the cutoff
+// plus a skin of it, found at the positions `ref_` with a k-d tree. A node's distance to a
+// triangle changes by at most its own move plus the farthest corner's, so while no surface node
+// has moved more than half the skin since, every pair within the cutoff is among them: the tree is
+// built again only then (a Verlet list), not for each configuration a residual asks about. Each
+// triangle searches within the cutoff and skin plus its own reach (its corners' farthest from its
+// centroid), so that one large triangle does not widen every search.
+void SelfContact::find_candidates(const Points& xs, double radius) const {
   const auto& S = mesh_.surface();
   const Points& X = mesh_.rest_positions();
   const std::vector<int>& nodes = mesh_.surface_nodes();
-  Points xs(3, static_cast<Eigen::Index>(nodes.size()));
-  for (std::size_t i = 0; i < nodes.size(); ++i) xs.col(static_cast<Eigen::Index>(i)) = x.col(nodes[i]);
   KdTree tree(3, std::cref(xs), 10);
-  // Triangles farther than delta + 12 tau weigh less than e^-12 in the smoothed minimum of a node
-  // in contact: they are left out. Each triangle asks for the nodes within the cutoff plus its own
-  // reach (its corners' farthest from its centroid), so that one large triangle does not widen
-  // every search.
-  const double cutoff = law_.thickness + 12 * tau_;
-  std::vector<std::vector<Term>> terms(nodes.size());
+  candidates_.assign(S.size(), {});
   std::vector<std::pair<Eigen::Index, double>> found;
-  for (const Tri& t : S) {
-    const Vec3 a = x.col(t[0]), b = x.col(t[1]), cc = x.col(t[2]);
+  for (std::size_t f = 0; f < S.size(); ++f) {
+    const Tri& t = S[f];
+    const Vec3 a = xs.col(surface_index_[t[0]]), b = xs.col(surface_index_[t[1]]), cc = xs.col(surface_index_[t[2]]);
     const Vec3 centroid = (a + b + cc) / 3.0;
     const double reach = std::max({(a - centroid).norm(), (b - centroid).norm(), (cc - centroid).norm()});
-    const double r = cutoff + reach;
+    const double r = radius + reach;
     found.clear();
     tree.index->radiusSearch(centroid.data(), r * r, found, nanoflann::SearchParams(32, 0, false));
     for (const auto& item : found) {
-      const int p = nodes[static_cast<std::size_t>(item.first)];
+      const int i = static_cast<int>(item.first), p = nodes[static_cast<std::size_t>(i)];
       bool near = false;  // the node's own neighbourhood at rest
       for (int v : t) near = near || (X.col(v) - X.col(p)).squaredNorm() < exclude2_;
-      if (near) continue;
+      if (!near && (xs.col(i) - closest_on_triangle(xs.col(i), a, b, cc)).norm() < radius) candidates_[f].push_back(i);
+    }
+  }
+  ref_ = xs;
+}
+
+const std::vector<SelfContact::Pair>& SelfContact::pairs(const Points& x) const {
+  if (cached_x_.cols() == x.cols() && cached_x_ == x) return cached_;
+  const auto& S = mesh_.surface();
+  const std::vector<int>& nodes = mesh_.surface_nodes();
+  Points xs(3, static_cast<Eigen::Index>(nodes.size()));
+  for (std::size_t i = 0; i < nodes.size(); ++i) xs.col(static_cast<Eigen::Index>(i)) = x.col(nodes[i]);
+  // Triangles farther than delta + 12 tau weigh less than e^-12 in the smoothed minimum of a node
+  // in contact: they are left out.
+  const double cutoff = law_.thickness + 12 * tau_, skin = cutoff;
+  if (ref_.cols() != xs.cols() || (xs - ref_).colwise().norm().maxCoeff() > 0.5 * skin)
+    find_candidates(xs, cutoff + skin);
+  std::vector<std::vector<Term>> terms(nodes.size());
+  for (std::size_t f = 0; f < S.size(); ++f) {
+    const Tri& t = S[f];
+    const Vec3 a = x.col(t[0]), b = x.col(t[1]), cc = x.col(t[2]);
+    for (int i : candidates_[f]) {
+      const int p = nodes[static_cast<std::size_t>(i)];
       const Vec3 q = closest_on_triangle(x.col(p), a, b, cc);
       const double d = (x.col(p) - q).norm();
       if (d >= cutoff || !(d > 0)) continue;
       const Vec3 w = barycentric(q, a, b, cc);
       const Vec3* corner[3] = {&a, &b, &cc};
-      terms[static_cast<std::size_t>(item.first)].push_back(
+      terms[static_cast<std::size_t>(i)].push_back(
           {t, w, (x.col(p) - q) / d, d, 0.0, distance_hessian(x.col(p), q, w, corner)});
     }
   }

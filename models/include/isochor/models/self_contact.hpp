@@ -59,6 +59,7 @@ class SelfContact {
   // below delta. A residual and its Jacobian (gradient, Hessian, damping) ask at the same x: the
   // search is done once per configuration and kept.
   const std::vector<Pair>& pairs(const Points& x) const;
+  void find_candidates(const Points& xs, double radius) const;
   const Mesh& mesh_;
   ContactLaw law_;
   double exclude2_;
@@ -68,6 +69,9 @@ class SelfContact {
   double tau_ = 0;  // smoothing of the minimum distance, m
   mutable Points cached_x_;
   mutable std::vector<Pair> cached_;
+  std::vector<int> surface_index_;                    // a node's place among the surface nodes, or -1
+  mutable Points ref_;                                // the surface nodes where the candidates were found
+  mutable std::vector<std::vector<int>> candidates_;  // per surface triangle, surface-node places
 };
 
 }  // namespace isochor
