@@ -26,11 +26,11 @@ namespace isochor {
 
 namespace {
 
-// Gmsh keeps global state: one session per process, used by one thread at a time. Setting
-// General.NumThreads makes Gmsh call omp_set_num_threads: the session meshes on one thread (the
-// same mesh whatever the machine) and gives the caller its OpenMP thread count back when it ends,
-// else every element pass and CG product after a Gmsh mesh would run on one thread whatever
-// OMP_NUM_THREADS says.
+// Gmsh keeps global state: one session per process, used by one thread at a time. Gmsh sets
+// OpenMP's thread count to its General.NumThreads (1 by default, and 1 here) when it initialises
+// and whenever that option is set: the session meshes on one thread and gives the caller its
+// OpenMP thread count back when it ends, else every element pass and CG product after a Gmsh mesh
+// would run on one thread whatever OMP_NUM_THREADS says.
 class GmshSession {
  public:
   explicit GmshSession(const std::string& model)
