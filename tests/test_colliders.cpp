@@ -574,17 +574,25 @@ TEST(Colliders, TheWaistbandHoldsTheWaistInsideItsTighteningBand) {
   EXPECT_GT(inward, 0.0);
 }
 
-// One mesh of two boxes (b's nodes after a's).
-static Mesh two_boxes(const Mesh& a, const Mesh& b) {
-  Points X(3, a.num_nodes() + b.num_nodes());
-  X << a.rest_positions(), b.rest_positions();
-  std::vector<Tet> tets = a.tets();
-  for (Tet t : b.tets()) {
-    for (int& v : t) v += a.num_nodes();
-    tets.push_back(t);
+// One mesh of two boxes (b's nodes after a's), every node free, with the assembly whose pattern
+// the contact's Hessian fills.
+struct TwoBoxes {
+  TwoBoxes(const Mesh& a, const Mesh& b)
+      : m(join(a, b)), dofs(DofMap::make(m.num_nodes(), {})), assembly(m, make_snh(1, 1), dofs) {}
+  static Mesh join(const Mesh& a, const Mesh& b) {
+    Points X(3, a.num_nodes() + b.num_nodes());
+    X << a.rest_positions(), b.rest_positions();
+    std::vector<Tet> tets = a.tets();
+    for (Tet t : b.tets()) {
+      for (int& v : t) v += a.num_nodes();
+      tets.push_back(t);
+    }
+    return Mesh(X, tets);
   }
-  return Mesh(X, tets);
-}
+  Mesh m;
+  DofMap dofs;
+  ElasticAssembly assembly;
+};
 
 TEST(SelfContact, GradientAgainstFiniteDifferencesAndTheNodesOwnBlock) {
   // One mesh of a 0.1 m box and a 0.02 m box 0.2 m above it at rest, the small one then moved
@@ -596,10 +604,11 @@ TEST(SelfContact, GradientAgainstFiniteDifferencesAndTheNodesOwnBlock) {
   // docs/decisions.md).
   const Mesh a = make_box(Eigen::Vector3d(0.1, 0.1, 0.1), {1, 1, 1}, Eigen::Vector3d(0, 0, 0), 6);
   const Mesh b = make_box(Eigen::Vector3d(0.02, 0.02, 0.02), {1, 1, 1}, Eigen::Vector3d(0.004, -0.007, 0.2), 6);
-  const Mesh m = two_boxes(a, b);
+  const TwoBoxes boxes(a, b);
+  const Mesh& m = boxes.m;
   const Points& X = m.rest_positions();
-  const DofMap dofs = DofMap::make(m.num_nodes(), {});
-  ElasticAssembly asm_(m, make_snh(1, 1), dofs);
+  const DofMap& dofs = boxes.dofs;
+  const ElasticAssembly& asm_ = boxes.assembly;
   ContactLaw law{1e5, 0.006};
   SelfContact self(m, law, 0.05, dofs, asm_.pattern());
   Points x = X;
@@ -699,10 +708,11 @@ double deepest_below(const Mesh& m, const Points& x, int first, double z_top, do
 TEST(SelfContact, KeptCandidatesGiveWhatAFreshSearchGives) {
   const Mesh a = make_box(Eigen::Vector3d(0.1, 0.1, 0.1), {3, 3, 3}, Eigen::Vector3d(0, 0, 0), 6);
   const Mesh b = make_box(Eigen::Vector3d(0.03, 0.03, 0.03), {2, 2, 2}, Eigen::Vector3d(0.004, -0.007, 0.2), 6);
-  const Mesh m = two_boxes(a, b);
+  const TwoBoxes boxes(a, b);
+  const Mesh& m = boxes.m;
   const Points& X = m.rest_positions();
-  const DofMap dofs = DofMap::make(m.num_nodes(), {});
-  ElasticAssembly asm_(m, make_snh(1, 1), dofs);
+  const DofMap& dofs = boxes.dofs;
+  const ElasticAssembly& asm_ = boxes.assembly;
   const ContactLaw law{1e5, 0.006};
   const SelfContact kept(m, law, 0.02, dofs, asm_.pattern());
   Points x = X;

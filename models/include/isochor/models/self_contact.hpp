@@ -56,9 +56,11 @@ class SelfContact {
     std::vector<Term> terms;
   };
   // The non-excluded triangles within reach of every surface node whose smoothed distance is
-  // below delta. A residual and its Jacobian (gradient, Hessian, damping) ask at the same x: the
-  // search is done once per configuration and kept.
+  // below delta, from the kept candidates. A residual and its Jacobian (gradient, Hessian,
+  // damping) ask at the same x: the pairs are made once per configuration and kept.
   const std::vector<Pair>& pairs(const Points& x) const;
+  // The candidates of each triangle within `radius` at the surface nodes' positions xs (a k-d
+  // tree search), kept with xs until some surface node has moved more than half the skin.
   void find_candidates(const Points& xs, double radius) const;
   const Mesh& mesh_;
   ContactLaw law_;
