@@ -111,14 +111,16 @@ int cmd_infsup(const std::string& scene_path, const std::vector<std::string>& ov
   return 0;
 }
 
-int cmd_run(const RunCommand& c, int argc, char** argv) {
+int cmd_run(const RunCommand& c, int argc, char** argv, const Ranks* ranks) {
   Scene sc = load_scene(c.scene_path, c.overrides);
-  if (!c.quiet)
+  const bool speaks = !ranks || ranks->rank() == 0;
+  if (!c.quiet && speaks)
     for (const std::string& note : sc.notes) std::fprintf(stderr, "%s: %s\n", c.scene_path.c_str(), note.c_str());
   install_signal_handlers();
   RunOptions opt;
   opt.output = c.out_path;
-  opt.progress = !c.quiet;
+  opt.progress = !c.quiet && speaks;
+  opt.ranks = ranks;
   opt.mode = c.resume      ? OutputWriter::Mode::resume
              : c.overwrite ? OutputWriter::Mode::overwrite
                            : OutputWriter::Mode::create;
@@ -126,9 +128,10 @@ int cmd_run(const RunCommand& c, int argc, char** argv) {
   try {
     r = run_scene(sc, opt);
   } catch (const RunInterrupted& e) {
-    std::fprintf(stderr, "isochor: %s; continue with: %s\n", e.what(), resume_command(argc, argv).c_str());
+    if (speaks) std::fprintf(stderr, "isochor: %s; continue with: %s\n", e.what(), resume_command(argc, argv).c_str());
     return 128 + e.signal;
   }
+  if (!speaks) return 0;
   if (r.already_finished) {
     std::printf("%s: finished earlier (%d frames, t = %g s): nothing to resume\n", r.output.c_str(), r.frames,
                 r.resumed_time);
@@ -144,6 +147,7 @@ int cmd_run(const RunCommand& c, int argc, char** argv) {
       s.assembly_seconds, s.factor_seconds, s.solve_seconds);
   if (sc.skeleton) std::printf(", Simbody %.2f", r.simbody_seconds);
   std::printf(")");
+  if (ranks) std::printf(" on %d MPI ranks", ranks->size());
   if (s.line_search_cuts || s.regularisations || s.step_halvings)
     std::printf("; line search cut %ld updates, %ld matrices shifted, %ld steps halved", s.line_search_cuts,
                 s.regularisations, s.step_halvings);

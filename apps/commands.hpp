@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "isochor/app/study.hpp"
+#include "isochor/integrators/ranks.hpp"
 
 namespace isochor::cli {
 
@@ -23,7 +24,8 @@ struct RunCommand {
   std::vector<std::string> overrides;
   bool quiet = false, overwrite = false, resume = false;
 };
-int cmd_run(const RunCommand& c, int argc, char** argv);
+// ranks: the scene on P MPI ranks (mpi_ranks.hpp); rank 0 prints.
+int cmd_run(const RunCommand& c, int argc, char** argv, const Ranks* ranks = nullptr);
 
 // `isochor study`: every case (or one, the list, or over MPI ranks), then the report.
 struct StudyCommand {

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "commands.hpp"
+#include "mpi_ranks.hpp"
 #include "isochor/base/error.hpp"
 #include "isochor/core/output.hpp"
 #include "isochor/core/output_reader.hpp"
@@ -131,7 +132,7 @@ void add_viewers(CLI::App& app, Line& l) {
 int dispatch(Line& l, int argc, char** argv) {
   const RunCommand& r = l.run_cmd;
   if (l.mesh->parsed()) return cmd_mesh(r.scene_path, r.overrides, r.out_path, r.overwrite);
-  if (l.run->parsed()) return cmd_run(r, argc, argv);
+  if (l.run->parsed()) return launched_by_mpi() ? cmd_run_on_ranks(r, argc, argv) : cmd_run(r, argc, argv);
   if (l.infsup->parsed()) return cmd_infsup(r.scene_path, r.overrides);
   if (l.study->parsed()) return cmd_study(l.study_cmd);
   if (l.report->parsed()) {

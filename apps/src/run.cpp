@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <optional>
 
@@ -74,8 +75,10 @@ const char* const kCumulative[] = {
 // Each frame of the integrator, measured by the scene system and written with its statistics. A
 // resumed run's integrator starts at the file's last frame (first = its index), which is not
 // written again.
-FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, Progress& bar, RunSummary& summary,
-                           bool progress, int first, const std::map<std::string, double>& offsets,
+// On P ranks only rank 0 has a writer (w null elsewhere); every rank measures the frame (its sums
+// are collective), and all of them stop if rank 0 could not write it.
+FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter* w, const Ranks* ranks, Progress& bar,
+                           RunSummary& summary, bool progress, int first, const std::map<std::string, double>& offsets,
                            const std::function<bool(int, const Frame&)>& on_frame) {
   const auto start = std::chrono::steady_clock::now();
   const bool tets = sys.has_tets();
@@ -138,7 +141,14 @@ FrameCallback frame_writer(const Scene& sc, SceneSystem& sys, OutputWriter& w, P
                     {"resident_mb", resident_memory_mb()}});
     for (auto& [name, value] : f.stats)
       if (auto it = offsets.find(name); it != offsets.end()) value += it->second;
-    w.write_frame(f);
+    std::exception_ptr failed;
+    try {
+      if (w) w->write_frame(f);
+    } catch (...) {
+      failed = std::current_exception();
+    }
+    if (ranks && ranks->max(failed ? 1 : 0) != 0 && !failed) throw Error("rank 0 could not write its frame");
+    if (failed) std::rethrow_exception(failed);
     summary.frames = k + 1;
     if (progress) bar.update(k, t);
     if (on_frame && !on_frame(k, f)) throw Interrupted(t, 0);
@@ -272,51 +282,131 @@ std::optional<Scene> scene_on_run_mesh(const Scene& sc, const std::string& outpu
   return parse_scene(SceneFile::parse(text, sc.file.name(), {}, sc.file.directory()), &*stored);
 }
 
+// The totals of a finished run, and its status (resumed_at: NaN unless resumed).
+void write_finished(OutputWriter& w, const Scene& sc, const RunSummary& summary, const Ranks* ranks,
+                    double resumed_at) {
+  write_totals(w, summary.stats);
+  // The ranks, and the seconds rank 0 spent exchanging with the others (docs/scale.md).
+  w.set_stat("ranks", ranks ? ranks->size() : 1);
+  w.set_stat("mpi_seconds", ranks ? ranks->seconds() : 0.0);
+  if (sc.skeleton) {
+    w.set_stat("simbody_seconds", summary.simbody_seconds);
+    w.set_stat("simbody_realizations", static_cast<double>(sc.skeleton->realizations()));
+  }
+  if (!std::isnan(resumed_at)) w.set_stat("resumed_at", resumed_at);
+  w.set_status("finished");
+  w.close();
+}
+
+// Rank 0's resume point to every rank.
+void share_resume_point(const Ranks& ranks, ResumePoint& rp) {
+  std::vector<double> v;
+  std::string names = rp.status;
+  if (ranks.rank() == 0) {
+    v = {static_cast<double>(rp.frame), rp.time, static_cast<double>(rp.positions.cols()),
+         static_cast<double>(rp.multipliers.size())};
+    v.insert(v.end(), rp.positions.data(), rp.positions.data() + rp.positions.size());
+    v.insert(v.end(), rp.velocities.data(), rp.velocities.data() + rp.velocities.size());
+    v.insert(v.end(), rp.multipliers.begin(), rp.multipliers.end());
+    for (const auto& [name, value] : rp.stats) {
+      names += "\n" + name;
+      v.push_back(value);
+    }
+  }
+  ranks.broadcast(v);
+  ranks.broadcast(names);
+  if (ranks.rank() == 0) return;
+  const auto N = static_cast<Eigen::Index>(v[2]), m = static_cast<Eigen::Index>(v[3]);
+  rp.frame = static_cast<int>(v[0]);
+  rp.time = v[1];
+  const double* p = v.data() + 4;
+  rp.positions = Eigen::Map<const Points>(p, 3, N);
+  rp.velocities = Eigen::Map<const Points>(p + 3 * N, 3, N);
+  rp.multipliers.assign(p + 6 * N, p + 6 * N + m);
+  const double* value = p + 6 * N + m;
+  std::istringstream in(names);
+  std::getline(in, rp.status);
+  for (std::string name; std::getline(in, name);) rp.stats[name] = *value++;
+}
+
+// On P ranks: rank 0 opens the output (and reads where a resumed run continues); the others learn
+// whether it could, and that point. Null on the ranks that do not write.
+std::unique_ptr<OutputWriter> open_output(const Scene& sc, const SceneSystem& sys, const RunOptions& opt,
+                                          const std::string& output, ResumePoint& rp) {
+  const bool resume = opt.mode == OutputWriter::Mode::resume;
+  const Ranks* ranks = opt.ranks;
+  std::unique_ptr<OutputWriter> w;
+  std::exception_ptr failed;
+  if (!ranks || ranks->rank() == 0) try {
+      if (!resume) check_output_room(sc, sys, output);
+      // (The mass-spring model has no zones: its scene is refused with any.)
+      w = std::make_unique<OutputWriter>(
+          output, sc.mesh, sc.zones,
+          RunInfo{sc.file.text_as_run(), sc.file.name(), "run", scene_record(sc), sc.file.input_digests()},
+          sc.output.pressure && sys.has_tets(), opt.mode);
+      rp = w->resume_point();
+    } catch (...) {
+      failed = std::current_exception();
+    }
+  if (!ranks) {
+    if (failed) std::rethrow_exception(failed);
+    return w;
+  }
+  if (ranks->max(failed ? 1 : 0) != 0) {
+    if (failed) std::rethrow_exception(failed);
+    throw Error(output + ": rank 0 could not open it");
+  }
+  if (resume) share_resume_point(*ranks, rp);
+  return w;
+}
+
 RunSummary run_parsed_scene(const Scene& sc, const RunOptions& opt) {
   const BlasOnOneThread blas_on_one_thread;
   RunSummary summary;
   summary.output = opt.output.empty() ? sc.output.path : opt.output;
   const bool resume = opt.mode == OutputWriter::Mode::resume;
+  const Ranks* ranks = opt.ranks && opt.ranks->size() > 1 ? opt.ranks : nullptr;
+  if (ranks) check_ranks(sc);
   // The systems are built before the file is touched, so that a scene they refuse leaves no
   // output behind; a resumed run's start is handed to them once the file has said where it is.
-  const std::unique_ptr<SceneSystem> sys = make_scene_system(sc);
+  const std::unique_ptr<SceneSystem> sys = make_scene_system(sc, ranks);
   if (opt.activation) drive_muscles(sc, *sys, opt.activation);
   const std::unique_ptr<Integrator> integrator = make_integrator(sc, *sys);
-  if (!resume) check_output_room(sc, *sys, summary.output);
-  // (The mass-spring model has no zones: its scene is refused with any.)
-  OutputWriter w(summary.output, sc.mesh, sc.zones,
-                 {sc.file.text_as_run(), sc.file.name(), "run", scene_record(sc), sc.file.input_digests()},
-                 sc.output.pressure && sys->has_tets(), opt.mode);
-  const ResumePoint& rp = w.resume_point();
+  ResumePoint rp;
+  RunOptions on_ranks = opt;
+  on_ranks.ranks = ranks;
+  const std::unique_ptr<OutputWriter> writer = open_output(sc, *sys, on_ranks, summary.output, rp);
+  OutputWriter* const w = writer.get();
   std::map<std::string, double> offsets;
   StartState start;
   if (resume && !resume_from(rp, *sys, summary, start, offsets)) return summary;
   const std::vector<double> all_times = sc.frames.times();
   const std::vector<double> times = times_from(all_times, resume ? rp.frame : -1, rp.time, summary.output);
-  if (resume) w.continue_run();
+  if (resume && w) w->continue_run();
   Progress bar(sc.file.name(), static_cast<int>(all_times.size()) - 1, times.front(), times.back(),
                opt.progress ? stderr : nullptr, last_step_time);
   // A new output that failed before its first frame is removed (nothing in it to keep or
   // resume); otherwise the file says why it stopped. Returns what the message says of the frames.
   auto finish_failed = [&](const std::string& status, const std::vector<std::pair<std::string, double>>& numbers,
                            const std::string& failure) -> std::string {
-    if (!resume && w.frames_written() == 0 && status == "failed") {
-      w.discard();
+    if (!w) return std::to_string(summary.frames) + " frames saved in " + summary.output;
+    if (!resume && w->frames_written() == 0 && status == "failed") {
+      w->discard();
       return "no frame was written, so " + summary.output + " was removed";
     }
     // Best effort: the file may be what failed (a full disk).
     try {
-      for (const auto& [name, value] : numbers) w.set_stat(name, value);
-      if (!failure.empty()) w.set_stat("failure", failure);
-      w.set_status(status);
-      w.close();
+      for (const auto& [name, value] : numbers) w->set_stat(name, value);
+      if (!failure.empty()) w->set_stat("failure", failure);
+      w->set_status(status);
+      w->close();
     } catch (...) {
     }
     return std::to_string(summary.frames) + " frames saved in " + summary.output;
   };
   try {
-    summary.stats = integrator->run(
-        times, frame_writer(sc, *sys, w, bar, summary, opt.progress, resume ? rp.frame : -1, offsets, opt.on_frame));
+    summary.stats = integrator->run(times, frame_writer(sc, *sys, w, ranks, bar, summary, opt.progress,
+                                                        resume ? rp.frame : -1, offsets, opt.on_frame));
   } catch (const Interrupted& e) {
     add_offsets(summary.stats, offsets);
     finish_failed("interrupted", {{"interrupted_at", e.time}, {"signal", static_cast<double>(e.signal)}}, "");
@@ -331,8 +421,8 @@ RunSummary run_parsed_scene(const Scene& sc, const RunOptions& opt) {
   } catch (const IntegrationError& e) {
     const std::string kept = finish_failed("failed", {{"failed_at_time", e.time}}, e.what());
     throw Error(sc.file.name() + ": " + e.what() + "; " + kept);
-  } catch (const Error& e) {                   // the output could not be written (a full disk, a size limit)
-    if (!resume && w.frames_written() == 0) {  // the writer's message says no frame was written
+  } catch (const Error& e) {                         // the output could not be written (a full disk, a size limit)
+    if (w && !resume && w->frames_written() == 0) {  // the writer's message says no frame was written
       finish_failed("failed", {}, e.what());
       throw Error(std::string(e.what()) + "; " + summary.output + " was removed");
     }
@@ -340,15 +430,9 @@ RunSummary run_parsed_scene(const Scene& sc, const RunOptions& opt) {
     throw;
   }
   add_offsets(summary.stats, offsets);
-  write_totals(w, summary.stats);
-  if (sc.skeleton) {
-    summary.simbody_seconds = sc.skeleton->simbody_seconds();
-    w.set_stat("simbody_seconds", summary.simbody_seconds);
-    w.set_stat("simbody_realizations", static_cast<double>(sc.skeleton->realizations()));
-  }
-  if (resume) w.set_stat("resumed_at", rp.time);
-  w.set_status("finished");
-  w.close();
+  if (sc.skeleton) summary.simbody_seconds = sc.skeleton->simbody_seconds();
+  if (!w) return summary;
+  write_finished(*w, sc, summary, ranks, resume ? rp.time : std::numeric_limits<double>::quiet_NaN());
   bar.finish();
   return summary;
 }

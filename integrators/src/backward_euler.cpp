@@ -44,6 +44,11 @@ struct BackwardEuler::Impl {
         n((check_system(s), s.num_dofs())),
         m(s.num_constraints()),
         use_kkt(o.linear_solver == LinearSolverKind::klu || m > o.schur_max_constraints) {
+    if (use_kkt && s.partition())
+      throw Error("backward Euler: " + std::to_string(m) + " constraint rows (more than " +
+                  std::to_string(o.schur_max_constraints) +
+                  ") take KLU on the whole KKT matrix, which runs on one process (on MPI ranks: fewer zones, or "
+                  "integrator.kind = \"ida\")");
     if (o.project_hessian && !s.set_hessian_projection(true))
       throw Error("integrator.hessian = \"projected\": this model has no element Hessians to project");
     if (use_kkt) {
@@ -68,7 +73,7 @@ struct BackwardEuler::Impl {
     if (!b) {
       b = std::make_unique<BorderedSolver>(
           sys.pattern(), sys.constraint_rows(), symmetric_solver_of(kind),
-          opt.linear_tol > 0 ? opt.linear_tol : BackwardEulerOptions::kDefaultLinearTol);
+          opt.linear_tol > 0 ? opt.linear_tol : BackwardEulerOptions::kDefaultLinearTol, sys.partition());
       if (refuse_indefinite) b->refuse_indefinite();
     }
     return *b;
@@ -720,11 +725,13 @@ void BackwardEuler::begin(const std::vector<double>& times, const FrameCallback&
   s.refuse_indefinite = s.line_search;
   if (!s.use_kkt) {
     LinearSolverKind kind = s.opt.linear_solver;
+    // On P ranks "auto" is PCG throughout: it is the solver whose work the ranks split.
+    const bool ranks = s.sys.partition() != nullptr;
     if (s.opt.automatic_linear_solver)
-      kind = s.line_search && s.n >= BackwardEulerOptions::kAutoKrylovMinDofs ? LinearSolverKind::krylov
-                                                                              : LinearSolverKind::reduced;
+      kind = ranks || (s.line_search && s.n >= BackwardEulerOptions::kAutoKrylovMinDofs) ? LinearSolverKind::krylov
+                                                                                         : LinearSolverKind::reduced;
     s.make_step_solver(kind);
-    s.choosing = s.opt.automatic_linear_solver && s.line_search;
+    s.choosing = s.opt.automatic_linear_solver && s.line_search && !ranks;
   }
   if (s.variational) s.Dn.assign(s.sys.pattern().nnz(), 0.0);
   auto step = [&s](double t, double t1, const VectorXd& qn, const VectorXd& vn, VectorXd& q1, VectorXd& v1,

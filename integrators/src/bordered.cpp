@@ -28,13 +28,13 @@ SparsePattern augmented_pattern(const SparsePattern& A, const std::vector<std::v
 }  // namespace
 
 BorderedSolver::BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows,
-                               SymmetricSolverKind kind, double tol)
+                               SymmetricSolverKind kind, double tol, const DofPartition* partition)
     : rows_(rows),
       n_(A.n),
       m_(static_cast<Index>(rows.size())),
       sparse_(kind == SymmetricSolverKind::cholmod && m_ > kDenseBorderMax) {
   if (!sparse_) {
-    A_ = make_symmetric_solver(A, kind, tol);
+    A_ = make_symmetric_solver(A, kind, tol, partition);
     Gt_.setZero(n_, m_);
     Z_.setZero(n_, m_);
     return;

@@ -47,8 +47,9 @@ class BorderedSolver {
 
   // A's pattern (both triangles), the dofs of each constraint row, and the solver of A.
   // tol: the relative residual of an iterative solver of A (make_symmetric_solver).
+  // partition: A's rows over the ranks (ranks.hpp), for PCG.
   BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows, SymmetricSolverKind kind,
-                 double tol = 1e-12);
+                 double tol = 1e-12, const DofPartition* partition = nullptr);
   ~BorderedSolver();
   bool factor(const double* A_values);  // false: singular, or indefinite for PCG
   // The borders' values (G[j][k] at rows[j][k]): Z and C for the current factor (the sparse

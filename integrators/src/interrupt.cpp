@@ -8,6 +8,7 @@ namespace isochor {
 namespace {
 std::atomic<int> requested{0};
 std::atomic<double> reached{std::numeric_limits<double>::quiet_NaN()};
+int (*agreement)(int) = nullptr;
 static_assert(std::atomic<int>::is_always_lock_free, "a signal handler may only touch lock-free atomics");
 }  // namespace
 
@@ -17,8 +18,11 @@ void clear_stop_request() noexcept { requested.store(0, std::memory_order_relaxe
 
 void step_boundary(double t) {
   reached.store(t, std::memory_order_relaxed);
-  if (const int s = stop_requested()) throw Interrupted(t, s);
+  const int own = stop_requested();
+  if (const int s = agreement ? agreement(own) : own) throw Interrupted(t, s);
 }
+
+void set_stop_agreement(int (*agree)(int)) { agreement = agree; }
 
 double last_step_time() noexcept { return reached.load(std::memory_order_relaxed); }
 

@@ -1,4 +1,7 @@
 // Block-Jacobi preconditioned conjugate gradients on the effective stiffness (sparse_factor.hpp).
+// On P ranks (ranks.hpp) each rank multiplies and preconditions its own rows, the search
+// direction is shared before every product and the dot products are summed across the ranks:
+// every rank takes the same iterations and ends with the same x.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -14,7 +17,13 @@ namespace {
 
 class BlockJacobiPcg : public SymmetricSolver {
  public:
-  BlockJacobiPcg(const SparsePattern& p, double tol) : p_(p), tol_(tol), n_(p.n) {
+  BlockJacobiPcg(const SparsePattern& p, double tol, const DofPartition* part)
+      : p_(p), tol_(tol), n_(p.n), lo_(part ? part->begin() : 0), hi_(part ? part->end() : p.n) {
+    if (part) {
+      ranks_ = part->ranks;
+      offsets_ = part->offsets;
+      halo_ = Halo(p, *part);
+    }
     // The slots of each node's 3x3 diagonal block (dofs 3k .. 3k+2 belong to node k).
     slot_.assign(static_cast<std::size_t>(n_) * 3, -1);
     for (Index c = 0; c < n_; ++c)
@@ -44,12 +53,12 @@ class BlockJacobiPcg : public SymmetricSolver {
   bool solve(const double* b, double* x) override {
     Eigen::Map<VectorXd>(x, n_).setZero();
     r_ = Eigen::Map<const VectorXd>(b, n_);
-    return iterate(b, x);
+    return finish(iterate(b, x), x);
   }
   bool solve_from(const double* b, double* x) override {
     multiply(x, r_);
-    r_ = Eigen::Map<const VectorXd>(b, n_) - r_;
-    return iterate(b, x);
+    r_.segment(lo_, hi_ - lo_) = Eigen::Map<const VectorXd>(b + lo_, hi_ - lo_) - r_.segment(lo_, hi_ - lo_);
+    return finish(iterate(b, x), x);
   }
   double factor_nnz() const override { return 0; }
   long iterations() const override { return iterations_; }
@@ -57,6 +66,20 @@ class BlockJacobiPcg : public SymmetricSolver {
 
  private:
   int max_iterations() const { return static_cast<int>(std::max<Index>(1000, n_ / 10)); }
+  // On P ranks: every rank's rows of x to every rank, and the same verdict everywhere.
+  bool finish(bool ok, double* x) const {
+    if (!ranks_) return ok;
+    ranks_->share(x, offsets_);
+    return ranks_->max(ok ? 0 : 1) == 0;
+  }
+  // The sums over the ranks of n partial sums (in place); nothing on one process.
+  void across_ranks(double* v, int n) const {
+    if (ranks_) ranks_->sum(v, n);
+  }
+  double global(double v) const {
+    across_ranks(&v, 1);
+    return v;
+  }
   // CG from x with its residual r_ = b - S x. One parallel region for the whole iteration: the
   // rows are cut into fixed chunks of whole nodes, and every vector update, product row and
   // preconditioner block of a chunk is done by the thread that owns the chunk in every loop
@@ -70,11 +93,13 @@ class BlockJacobiPcg : public SymmetricSolver {
       Eigen::Map<VectorXd>(x, n_).setZero();
       return true;
     }
-    if (r_.norm() <= tol_ * bnorm) return true;
+    if (std::sqrt(global(r_.segment(lo_, hi_ - lo_).squaredNorm())) <= tol_ * bnorm) return true;
     const int K = static_cast<int>(chunk_.size()) - 1;
     double rz = 0, alpha = 0, beta = 0;
     bool done = false, failed = false;
     const int max_it = max_iterations();
+    double sums[2];
+    // MPI is called by the master thread only (MPI_THREAD_FUNNELED); a barrier follows every call.
 #pragma omp parallel if (K > 1)  // one chunk: no other thread would have work, only barriers
     {
 #pragma omp for schedule(static)
@@ -84,21 +109,29 @@ class BlockJacobiPcg : public SymmetricSolver {
         d_.segment(lo, len) = z_.segment(lo, len);
         part1_[c] = r_.segment(lo, len).dot(z_.segment(lo, len));
       }
-#pragma omp single
-      rz = ordered_sum(part1_);
+#pragma omp master
+      rz = global(ordered_sum(part1_));
+#pragma omp barrier
       for (int it = 0; it < max_it; ++it) {
+        if (ranks_) {
+#pragma omp master
+          halo_.update(d_.data());
+#pragma omp barrier
+        }
 #pragma omp for schedule(static)
         for (int c = 0; c < K; ++c) {
           const Index lo = chunk_[c], len = chunk_[c + 1] - lo;
           multiply_rows(d_.data(), q_, lo, chunk_[c + 1]);
           part1_[c] = d_.segment(lo, len).dot(q_.segment(lo, len));
         }
-#pragma omp single
+#pragma omp barrier
+#pragma omp master
         {
-          const double dq = ordered_sum(part1_);
+          const double dq = global(ordered_sum(part1_));
           failed = !(dq > 0);  // S is not positive definite along d
           alpha = failed ? 0 : rz / dq;
         }
+#pragma omp barrier
         if (failed) break;
 #pragma omp for schedule(static)
         for (int c = 0; c < K; ++c) {
@@ -109,14 +142,18 @@ class BlockJacobiPcg : public SymmetricSolver {
           precondition_rows(r_, z_, lo, chunk_[c + 1]);
           part2_[c] = r_.segment(lo, len).dot(z_.segment(lo, len));
         }
-#pragma omp single
+#pragma omp barrier
+#pragma omp master
         {
           ++iterations_;
-          done = std::sqrt(ordered_sum(part1_)) <= tol_ * bnorm;
-          const double rz_new = ordered_sum(part2_);
-          beta = rz_new / rz;
-          rz = rz_new;
+          sums[0] = ordered_sum(part1_);
+          sums[1] = ordered_sum(part2_);
+          across_ranks(sums, 2);
+          done = std::sqrt(sums[0]) <= tol_ * bnorm;
+          beta = sums[1] / rz;
+          rz = sums[1];
         }
+#pragma omp barrier
         if (done) break;
 #pragma omp for schedule(static)
         for (int c = 0; c < K; ++c) {
@@ -132,18 +169,19 @@ class BlockJacobiPcg : public SymmetricSolver {
     for (double p : parts) s += p;
     return s;
   }
-  // Chunks of whole nodes (3 dofs), their number fixed by the size alone: about 1,536 dofs each,
-  // at most 256.
+  // Chunks of whole nodes (3 dofs) of this rank's rows, their number fixed by the size alone:
+  // about 1,536 dofs each, at most 256.
   void make_chunks() {
-    const Index nodes = (n_ + 2) / 3;
+    const Index nodes = (hi_ - lo_ + 2) / 3;
     const Index K = std::max<Index>(1, std::min<Index>(256, nodes / 512));
     chunk_.resize(K + 1);
-    for (Index c = 0; c <= K; ++c) chunk_[c] = std::min<Index>(n_, 3 * (nodes * c / K));
+    for (Index c = 0; c <= K; ++c) chunk_[c] = std::min<Index>(hi_, lo_ + 3 * (nodes * c / K));
     part1_.assign(K, 0.0);
     part2_.assign(K, 0.0);
   }
   bool invert_diagonal_blocks() {
-    for (Index k = 0; 3 * k < n_; ++k) {
+    bool ok = true;
+    for (Index k = lo_ / 3; 3 * k < hi_ && ok; ++k) {
       Eigen::Matrix3d B = Eigen::Matrix3d::Identity();
       for (int a = 0; a < 3 && 3 * k + a < n_; ++a)
         for (int b = 0; b < 3 && 3 * k + b < n_; ++b) {
@@ -151,10 +189,10 @@ class BlockJacobiPcg : public SymmetricSolver {
           B(a, b) = s >= 0 ? vals_[s] : (a == b ? 1.0 : 0.0);
         }
       Eigen::LLT<Eigen::Matrix3d> llt(B);
-      if (llt.info() != Eigen::Success) return false;  // a non-positive diagonal block: S is indefinite
-      inv_[k] = llt.solve(Eigen::Matrix3d::Identity());
+      ok = llt.info() == Eigen::Success;  // a non-positive diagonal block: S is indefinite
+      if (ok) inv_[k] = llt.solve(Eigen::Matrix3d::Identity());
     }
-    return true;
+    return !ranks_ ? ok : ranks_->max(ok ? 0 : 1) == 0;
   }
   // out = S v, in parallel over the chunks.
   void multiply(const double* v, VectorXd& out) const {
@@ -235,6 +273,10 @@ class BlockJacobiPcg : public SymmetricSolver {
   const SparsePattern& p_;
   double tol_;
   Index n_;
+  Index lo_, hi_;                 // this rank's rows (all of them on one process)
+  const Ranks* ranks_ = nullptr;  // null on one process
+  std::vector<Index> offsets_;
+  Halo halo_;  // the entries of the search direction that this rank's rows read of the other ranks' rows
   const double* vals_ = nullptr;
   std::vector<Index> slot_;
   std::vector<Index> chunk_;           // first dof of each chunk, and n
@@ -247,10 +289,10 @@ class BlockJacobiPcg : public SymmetricSolver {
 }  // namespace
 
 std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, SymmetricSolverKind kind,
-                                                       double tol) {
+                                                       double tol, const DofPartition* partition) {
   switch (kind) {
     case SymmetricSolverKind::pcg:
-      return std::make_unique<BlockJacobiPcg>(pattern, tol);
+      return std::make_unique<BlockJacobiPcg>(pattern, tol, partition && partition->ranks ? partition : nullptr);
     case SymmetricSolverKind::amg:
       return make_amg_solver(pattern, tol);
     case SymmetricSolverKind::cholmod:

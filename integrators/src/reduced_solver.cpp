@@ -71,7 +71,7 @@ struct ReducedSolver::Impl {
       : form(f),
         n(f.n()),
         m(f.m()),
-        S(make_symmetric_solver(f.system().pattern(), kind, pcg_tol)),
+        S(make_symmetric_solver(f.system().pattern(), kind, pcg_tol, f.system().partition())),
         fallback(kind != SymmetricSolverKind::cholmod) {
     Sx.resize(f.system().pattern().nnz());
     Ax.resize(Sx.size());

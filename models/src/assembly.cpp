@@ -216,13 +216,16 @@ double ElasticAssembly::energy(const Points& x) const {
   const int T = mesh_.num_tets();
 #pragma omp parallel for reduction(+ : E) schedule(static)
   for (int k = 0; k < T; ++k) {
+    if (tet_counted(k, 1.0) == 0.0) continue;
     const Vec12 xe = gather(x, tets_[k]);
     E += tet_energy(material_at(k), shapes_[k], xe, nullptr, nullptr) +
          fibre_term(k, xe, nullptr, nullptr, nullptr, nullptr);
   }
   const int S = static_cast<int>(tri_area_.size());
   for (int f = 0; f < S; ++f)
-    E += epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, mesh_.surface()[f]), nullptr, nullptr);
+    if (tri_counted(f, 1.0) != 0.0)
+      E += epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, mesh_.surface()[f]), nullptr,
+                            nullptr);
   return E;
 }
 
@@ -281,46 +284,50 @@ double ElasticAssembly::evaluate(const Points& x, const ElementPass& p) const {
   // path's formulas without its 12- and 9-vectors: P = 2 W_I F + W_J cof F, node a gets V P b_a.
   const bool gradient_only = p.grad && !p.values && !p.values2 && !p.Kv;
   const double tets =
-      gradient_only ? for_each_coloured(tet_colours_,
-                                        [&](int e) {
-                                          const Tet& t = tets_[e];
-                                          const TetShape& s = shapes_[e];
-                                          const Vec3 x0 = x.col(t[0]);
-                                          Mat3 Ds;
-                                          Ds << x.col(t[1]) - x0, x.col(t[2]) - x0, x.col(t[3]) - x0;
-                                          const Mat3 F = Ds * s.Dm_inv;
-                                          const Mat3 C = cofactor(F);
-                                          const InvariantDerivatives w =
-                                              material_at(e).first_invariants(F.squaredNorm(), F.col(0).dot(C.col(0)));
-                                          Mat3 P = (2.0 * w.W_I) * F + w.W_J * C;
-                                          double psi = w.W;
-                                          if (has_fibres()) add_fibre_stress(e, F, P, psi);
-                                          const Mat3 G = s.rest_volume * (P * s.Dm_inv.transpose());
-                                          Eigen::VectorXd& g = *p.grad;
-                                          g.segment<3>(3 * static_cast<Index>(t[0])) -= G.col(0) + G.col(1) + G.col(2);
-                                          for (int k = 1; k < 4; ++k)
-                                            g.segment<3>(3 * static_cast<Index>(t[k])) += G.col(k - 1);
-                                          return s.rest_volume * psi;
-                                        })
-                    : for_each_coloured(tet_colours_, [&](int e) {
-                        const Tet& t = tets_[e];
-                        return element_pass<4>(p, t, tet_slots_.data() + 144 * static_cast<std::size_t>(e),
-                                               [&](Vec12* g, Mat12* H, const Vec12* d, Vec12* Hd) {
-                                                 const Vec12 xe = gather(x, t);
-                                                 return tet_energy(material_at(e), shapes_[e], xe, g, H, d, Hd) +
-                                                        fibre_term(e, xe, g, H, d, Hd);
-                                               });
-                      });
+      gradient_only
+          ? for_each_coloured(tet_colours_,
+                              [&](int e) {
+                                if (skip_tet(e)) return 0.0;
+                                const Tet& t = tets_[e];
+                                const TetShape& s = shapes_[e];
+                                const Vec3 x0 = x.col(t[0]);
+                                Mat3 Ds;
+                                Ds << x.col(t[1]) - x0, x.col(t[2]) - x0, x.col(t[3]) - x0;
+                                const Mat3 F = Ds * s.Dm_inv;
+                                const Mat3 C = cofactor(F);
+                                const InvariantDerivatives w =
+                                    material_at(e).first_invariants(F.squaredNorm(), F.col(0).dot(C.col(0)));
+                                Mat3 P = (2.0 * w.W_I) * F + w.W_J * C;
+                                double psi = w.W;
+                                if (has_fibres()) add_fibre_stress(e, F, P, psi);
+                                const Mat3 G = s.rest_volume * (P * s.Dm_inv.transpose());
+                                Eigen::VectorXd& g = *p.grad;
+                                g.segment<3>(3 * static_cast<Index>(t[0])) -= G.col(0) + G.col(1) + G.col(2);
+                                for (int k = 1; k < 4; ++k) g.segment<3>(3 * static_cast<Index>(t[k])) += G.col(k - 1);
+                                return tet_counted(e, s.rest_volume * psi);
+                              })
+          : for_each_coloured(tet_colours_, [&](int e) {
+              if (skip_tet(e)) return 0.0;
+              const Tet& t = tets_[e];
+              return tet_counted(e, element_pass<4>(p, t, tet_slots_.data() + 144 * static_cast<std::size_t>(e),
+                                                    [&](Vec12* g, Mat12* H, const Vec12* d, Vec12* Hd) {
+                                                      const Vec12 xe = gather(x, t);
+                                                      return tet_energy(material_at(e), shapes_[e], xe, g, H, d, Hd) +
+                                                             fibre_term(e, xe, g, H, d, Hd);
+                                                    }));
+            });
   const double tris = for_each_coloured(tri_colours_, [&](int f) {
+    if (skip_tri(f)) return 0.0;
     const Tri& t = mesh_.surface()[f];
-    return element_pass<3>(
-        p, t, tri_slots_.data() + 81 * static_cast<std::size_t>(f), [&](Vec9n* g, Mat9n* H, const Vec9n* d, Vec9n* Hd) {
-          Mat9n Hl;
-          Mat9n* Hp = H ? H : (Hd ? &Hl : nullptr);
-          const double E = epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma, gather_tri(x, t), g, Hp);
-          if (Hd) *Hd = *Hp * *d;
-          return E;
-        });
+    return tri_counted(f, element_pass<3>(p, t, tri_slots_.data() + 81 * static_cast<std::size_t>(f),
+                                          [&](Vec9n* g, Mat9n* H, const Vec9n* d, Vec9n* Hd) {
+                                            Mat9n Hl;
+                                            Mat9n* Hp = H ? H : (Hd ? &Hl : nullptr);
+                                            const double E = epidermis_energy(tri_area_[f], epi_.lambda_e, epi_.gamma,
+                                                                              gather_tri(x, t), g, Hp);
+                                            if (Hd) *Hd = *Hp * *d;
+                                            return E;
+                                          }));
   });
   return tets + tris;
 }
@@ -442,6 +449,19 @@ void ElasticAssembly::add_fibre_stress(int k, const Mat3& F, Mat3& P, double& ps
   double fibre_psi = 0;
   P += fibre_stress_tensor(muscles_[m], activation_[m], fibre_dir_[k], F, &fibre_psi);
   psi += fibre_psi;
+}
+
+void ElasticAssembly::keep_rank(const std::vector<int>& node_rank, int rank) {
+  auto mark = [&](const int* nodes, int k, char& here, char& counted) {
+    const int lowest = *std::min_element(nodes, nodes + k);
+    counted = node_rank[lowest] == rank;
+    here = counted;
+    for (int a = 0; a < k; ++a) here |= dofs_.free_index[nodes[a]] >= 0 && node_rank[nodes[a]] == rank;
+  };
+  const int T = mesh_.num_tets(), S = static_cast<int>(tri_area_.size());
+  tet_here_.resize(T), tet_counted_.resize(T), tri_here_.resize(S), tri_counted_.resize(S);
+  for (int k = 0; k < T; ++k) mark(tets_[k].data(), 4, tet_here_[k], tet_counted_[k]);
+  for (int f = 0; f < S; ++f) mark(mesh_.surface()[f].data(), 3, tri_here_[f], tri_counted_[f]);
 }
 
 int ElasticAssembly::inverted_tets(const Points& x) const {

@@ -239,9 +239,9 @@ Eigen::VectorXd MassSpringSystem::weights(const Eigen::Vector3d& center, double 
   return w * (n / w.sum());
 }
 
-std::unique_ptr<SceneSystem> make_scene_system(const Scene& scene) {
+std::unique_ptr<SceneSystem> make_scene_system(const Scene& scene, const Ranks* ranks) {
   if (scene.material.model == MaterialModel::mass_spring) return std::make_unique<MassSpringSystem>(scene);
-  return std::make_unique<MeshSystem>(scene);
+  return std::make_unique<MeshSystem>(scene, ranks);
 }
 
 }  // namespace isochor

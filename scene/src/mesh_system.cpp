@@ -30,8 +30,31 @@ std::shared_ptr<const Material> make_material(const MaterialSpec& m) {
 // mesher's numbering scatters neighbours over the whole range): the rows of the matrices a node
 // touches, and the vector entries a product with them reads, lie close together, so a thread that
 // owns a range of rows reads mostly its own range (docs/results/threads_ida.md).
-DofMap scene_dofs(const Scene& s) {
-  return DofMap::make(s.mesh.num_nodes(), s.driven_nodes(), morton_order(s.mesh.rest_positions()));
+DofMap scene_dofs(const Scene& s) { return scene_dofs(s, {}); }
+
+// On P ranks, rank after rank, each rank's nodes along the curve: each rank's dofs are one range.
+DofMap scene_dofs(const Scene& s, const std::vector<int>& node_rank) {
+  std::vector<int> order = morton_order(s.mesh.rest_positions());
+  if (!node_rank.empty())
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return node_rank[a] < node_rank[b]; });
+  return DofMap::make(s.mesh.num_nodes(), s.driven_nodes(), order);
+}
+
+std::vector<int> scene_node_ranks(const Scene& s, int parts) {
+  const int N = s.mesh.num_nodes();
+  std::vector<std::vector<Index>> nbr(N);
+  for (const Tet& t : s.mesh.tets())
+    for (int a : t)
+      for (int b : t)
+        if (a != b) nbr[a].push_back(b);
+  std::vector<Index> ptr{0}, adj;
+  for (auto& list : nbr) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    adj.insert(adj.end(), list.begin(), list.end());
+    ptr.push_back(static_cast<Index>(adj.size()));
+  }
+  return partition_graph(ptr, adj, parts);
 }
 
 std::vector<std::vector<int>> scene_zone_tets(const Scene& s) {
@@ -40,12 +63,23 @@ std::vector<std::vector<int>> scene_zone_tets(const Scene& s) {
   return z;
 }
 
-MeshSystem::MeshSystem(const Scene& scene)
-    : scene_(scene), dofs_(scene_dofs(scene)), material_(make_material(scene.material)) {
+MeshSystem::MeshSystem(const Scene& scene, const Ranks* ranks)
+    : scene_(scene),
+      node_rank_(ranks && ranks->size() > 1 ? scene_node_ranks(scene, ranks->size()) : std::vector<int>()),
+      dofs_(scene_dofs(scene, node_rank_)),
+      material_(make_material(scene.material)) {
   if (dofs_.num_free() == 0)
     throw Error(scene.file.name() + ": every node is driven (by [[boundary]] or a bone): nothing to simulate");
   elastic_ = std::make_unique<ElasticAssembly>(
       scene.mesh, material_, dofs_, EpidermisSpec{scene.material.epidermis_lambda, scene.material.epidermis_gamma});
+  if (!node_rank_.empty()) {
+    elastic_->keep_rank(node_rank_, ranks->rank());
+    partition_.ranks = ranks;
+    partition_.offsets.assign(ranks->size() + 1, 0);
+    for (int v : dofs_.free_nodes) partition_.offsets[node_rank_[v] + 1] += 3;
+    for (int r = 0; r < ranks->size(); ++r) partition_.offsets[r + 1] += partition_.offsets[r];
+    value_offsets_ = partition_.value_offsets(elastic_->pattern());
+  }
   if (!scene.muscles.empty()) elastic_->set_fibres(scene_fibre_field(scene));
   const TetMaterials regions = scene_tet_materials(scene);
   elastic_->set_tet_materials(regions.materials, regions.material_of);
@@ -142,6 +176,7 @@ void MeshSystem::add_force_jacobians(double t, const VectorXd& q, const VectorXd
   if (damping_on_) external_->add_damping_jacobians(x_, xdot_, neg_dfdq, neg_dfdv);
   if (neg_dfdv && damping.alpha != 0)
     RayleighDamping{damping.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
+  share(nullptr, neg_dfdq, neg_dfdv);
 }
 
 void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd& v, VectorXd& f, double* neg_dfdq,
@@ -181,6 +216,20 @@ void MeshSystem::force_and_jacobians(double t, const VectorXd& q, const VectorXd
   }
   if (neg_dfdv && damping.alpha != 0)
     RayleighDamping{damping.alpha, 0.0}.add_matrix(*elastic_, node_mass_, x_, 1.0, neg_dfdv);
+  share(&f, neg_dfdq, neg_dfdv);
+}
+
+void MeshSystem::share(VectorXd* f, double* neg_dfdq, double* neg_dfdv) const {
+  if (!partition_.ranks) return;
+  if (f) partition_.ranks->share(f->data(), partition_.offsets);
+  if (neg_dfdq) partition_.ranks->share(neg_dfdq, value_offsets_);
+  if (neg_dfdv) partition_.ranks->share(neg_dfdv, value_offsets_);
+}
+
+double MeshSystem::elastic_energy() const {
+  double E = elastic_->energy(x_);
+  if (partition_.ranks) partition_.ranks->sum(&E, 1);
+  return E;
 }
 
 void MeshSystem::loads(Points& out) const {
@@ -232,14 +281,14 @@ void MeshSystem::constraint_velocity_jacobian(double t, const VectorXd& q, const
 bool MeshSystem::potential(double t, const VectorXd& q, double& V) {
   if (!pressure_loads_->empty()) return false;  // follower loads have no potential
   set_positions(t, q);
-  V = elastic_->energy(x_) + external_->energy(x_);
+  V = elastic_energy() + external_->energy(x_);
   return true;
 }
 
 std::array<double, 3> MeshSystem::energies() const {
   double kinetic = 0;
   for (int n = 0; n < x_.cols(); ++n) kinetic += 0.5 * node_mass_[n] * xdot_.segment<3>(3 * n).squaredNorm();
-  return {kinetic, elastic_->energy(x_), external_->energy(x_)};
+  return {kinetic, elastic_energy(), external_->energy(x_)};
 }
 
 std::vector<double> MeshSystem::volumes() const {

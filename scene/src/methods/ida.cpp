@@ -40,6 +40,7 @@ void parse_ida(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
 constexpr int kAutoKrylovMaxConstraints = 256;
 
 LinearSolverKind automatic_ida_solver(const ConstrainedSystem& system) {
+  if (system.partition()) return LinearSolverKind::krylov;  // the solver whose work MPI ranks split
   return system.dofs_per_group() == 3 && system.num_constraints() <= kAutoKrylovMaxConstraints
              ? LinearSolverKind::krylov
              : LinearSolverKind::klu;

@@ -33,6 +33,22 @@ std::unique_ptr<Integrator> make_integrator(const Scene& scene, SceneSystem& sys
   return integrator_entry(scene.integrator.kind).make(scene, system);
 }
 
+void check_ranks(const Scene& sc) {
+  const IntegratorSpec& in = sc.integrator;
+  const IntegratorKind k = in.kind;
+  const std::string at = sc.file.name() + ": ";
+  if (k != IntegratorKind::ida && k != IntegratorKind::backward_euler && k != IntegratorKind::semi_implicit)
+    throw Error(at + "integrator.kind = \"" + to_string(k) +
+                "\" runs on one process (on MPI ranks: \"ida\", \"backward_euler\" or \"semi_implicit\")");
+  const bool automatic =
+      k == IntegratorKind::ida ? in.ida_linear_solver_auto : in.backward_euler.automatic_linear_solver;
+  const LinearSolverKind ls = k == IntegratorKind::ida ? in.ida.linear_solver : in.backward_euler.linear_solver;
+  if (!automatic && ls != LinearSolverKind::krylov)
+    throw Error(at + "integrator.linear_solver = \"" + to_string(ls) +
+                "\" solves on one process (on MPI ranks: \"krylov\", or \"auto\" with integrator.kind = \"ida\" or "
+                "\"backward_euler\")");
+}
+
 long parse_max_steps(const Section& in) { return in.integer("max_steps", kDefaultMaxSteps, 1, 1000000000000L); }
 
 double parse_dt(const Section& in) { return in.number("dt", kDefaultFixedStep, Range::positive()); }

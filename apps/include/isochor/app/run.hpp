@@ -5,6 +5,7 @@
 
 #include "isochor/base/error.hpp"
 #include "isochor/core/output.hpp"
+#include "isochor/integrators/ranks.hpp"
 #include "isochor/integrators/run_stats.hpp"
 #include "isochor/scene/scene.hpp"
 
@@ -35,6 +36,9 @@ struct RunOptions {
   // frames' times among them), one value per muscle in [0, 1]. What it returns at a frame is what
   // /frames/activation records.
   std::function<std::vector<double>(double)> activation;
+  // On P MPI ranks (ranks.hpp; null or one rank: one process): every rank calls run_scene with
+  // the same scene, rank 0 writes the file and the progress.
+  const Ranks* ranks = nullptr;
 };
 
 // A run stopped by a signal (SIGINT, SIGTERM) at a step boundary: the frames so far are in the

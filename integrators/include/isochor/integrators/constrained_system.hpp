@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "isochor/integrators/ranks.hpp"
 #include "isochor/integrators/sparse_pattern.hpp"
 
 namespace isochor {
@@ -94,6 +95,10 @@ class ConstrainedSystem {
   // Typical size of constraint j's value (a zone's rest volume), so that solvers measure g_j
   // relative to it.
   virtual double constraint_scale(int /*j*/) const { return 1.0; }
+  // On P ranks (ranks.hpp): the dofs each rank owns. The system then fills force() and the
+  // Jacobians on every rank in full (each rank's rows shared with the others), and the
+  // integrators' iterative solvers split their products by it. Null on one process.
+  virtual const DofPartition* partition() const { return nullptr; }
 };
 
 }  // namespace isochor

@@ -15,6 +15,10 @@ void clear_stop_request() noexcept;
 // time reached (for progress lines between frames) and throws Interrupted(t, signal) when a stop
 // was asked for.
 void step_boundary(double t);
+// On P ranks (ranks.hpp) a signal may reach the ranks at different steps: `agree` (set while a
+// run lasts, null after) takes each rank's own request at every step boundary and returns the
+// one all of them act on, so that they stop at the same step.
+void set_stop_agreement(int (*agree)(int signal));
 // The time of the last step boundary (NaN before the first).
 double last_step_time() noexcept;
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "isochor/integrators/sparse_pattern.hpp"
+#include "isochor/integrators/ranks.hpp"
 
 namespace isochor {
 
@@ -51,9 +52,11 @@ class SymmetricSolver {
 // amg: conjugate gradients preconditioned by one V-cycle of hypre's BoomerAMG (nodal coarsening,
 // symmetric Gauss-Seidel), same tolerance; only where isochor was built with hypre
 // (amg_available()).
+// partition (ranks.hpp, for the system's own pattern): pcg splits its rows over the ranks; the
+// others solve the whole matrix on every rank.
 enum class SymmetricSolverKind { cholmod, pcg, amg };
 std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, SymmetricSolverKind kind,
-                                                       double tol = 1e-12);
+                                                       double tol = 1e-12, const DofPartition* partition = nullptr);
 bool amg_available();
 std::unique_ptr<SymmetricSolver> make_amg_solver(const SparsePattern& pattern, double tol);
 // BoomerAMG-preconditioned CG on rows [lo, hi) of S, spread over the ranks of MPI_COMM_WORLD

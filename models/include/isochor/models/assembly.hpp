@@ -129,8 +129,20 @@ class ElasticAssembly {
   void set_activations(const std::vector<double>& activation);
   const std::vector<double>& activations() const { return activation_; }
   bool has_fibres() const { return !muscles_.empty(); }
+  // On P ranks (ranks.hpp): node_rank[v] is the rank that owns node v. From now on the passes
+  // evaluate only the elements with a free node of `rank` (its nodes' gradient entries and
+  // Hessian columns are then whole, the others partial), and energies count each element on one
+  // rank only, the owner of its lowest-numbered node.
+  void keep_rank(const std::vector<int>& node_rank, int rank);
 
  private:
+  // Whether element k (its position in the pass's order) is evaluated on this rank, and its
+  // energy E as this rank counts it.
+  bool skip_tet(int k) const { return !tet_here_.empty() && !tet_here_[k]; }
+  double tet_counted(int k, double E) const { return tet_counted_.empty() || tet_counted_[k] ? E : 0.0; }
+  bool skip_tri(int f) const { return !tri_here_.empty() && !tri_here_[f]; }
+  double tri_counted(int f, double E) const { return tri_counted_.empty() || tri_counted_[f] ? E : 0.0; }
+  std::vector<char> tet_here_, tet_counted_, tri_here_, tri_counted_;  // empty on one process
   // Tet k's material (k its position in the pass's order).
   const Material& material_at(int k) const {
     return tet_material_.empty() ? *material_ : *materials_[tet_material_[k]];

@@ -27,6 +27,9 @@ const std::vector<IntegratorEntry>& integrator_registry();
 const IntegratorEntry& integrator_entry(IntegratorKind kind);
 // The scene's integrator on its system.
 std::unique_ptr<Integrator> make_integrator(const Scene& scene, SceneSystem& system);
+// Stops with one line naming the key where the scene asks for what runs on one process only: a
+// scene on MPI ranks (ranks.hpp) runs IDA, backward Euler or the semi-implicit step on PCG.
+void check_ranks(const Scene& scene);
 // IDA's linear_solver = "auto" for a system (models/src/integrators/ida.cpp says why): krylov for
 // 3-dof nodes with at most 256 constraint rows, else klu.
 LinearSolverKind automatic_ida_solver(const ConstrainedSystem& system);

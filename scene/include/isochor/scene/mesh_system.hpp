@@ -17,6 +17,10 @@ namespace isochor {
 std::shared_ptr<const Material> make_material(const MaterialSpec& m);
 // The scene's free and driven nodes, and the tets of each zone (in scene order).
 DofMap scene_dofs(const Scene& s);
+// The same with each rank's free nodes together, rank after rank (node_rank: each node's rank;
+// empty: one process), and each node's rank from METIS's partition of the node graph.
+DofMap scene_dofs(const Scene& s, const std::vector<int>& node_rank);
+std::vector<int> scene_node_ranks(const Scene& s, int parts);
 std::vector<std::vector<int>> scene_zone_tets(const Scene& s);
 // The free nodes' rest positions and the scene's initial velocity, as (q, v) of the free dofs.
 void scene_initial_state(const Scene& s, const DofMap& dofs, const StartState* start, VectorXd& q, VectorXd& v);
@@ -25,7 +29,8 @@ void scene_at_time(const Scene& s, double t, Points& x, Eigen::VectorXd& xdot, E
 
 class MeshSystem : public SceneSystem {
  public:
-  explicit MeshSystem(const Scene& scene);
+  // ranks (ranks.hpp): split the elements over them (null or one rank: one process).
+  explicit MeshSystem(const Scene& scene, const Ranks* ranks = nullptr);
 
   int num_dofs() const override { return 3 * dofs_.num_free(); }
   int num_constraints() const override { return static_cast<int>(rows_.size()); }
@@ -59,6 +64,7 @@ class MeshSystem : public SceneSystem {
     return true;
   }
   double constraint_scale(int j) const override { return row_scale_[j]; }
+  const DofPartition* partition() const override { return partition_.ranks ? &partition_ : nullptr; }
 
   // Positions and velocities of every node (3 N) for a state of the unknowns at time t
   // (driven nodes from their drivers, evaluated once per distinct t).
@@ -89,7 +95,14 @@ class MeshSystem : public SceneSystem {
 
  private:
   const Scene& scene_;
+  std::vector<int> node_rank_;  // on P ranks: each node's rank (empty on one process)
   DofMap dofs_;
+  DofPartition partition_;
+  std::vector<Index> value_offsets_;  // each rank's columns in the pattern's values
+  // On P ranks: each rank's rows of f and of the Jacobians to every rank.
+  void share(VectorXd* f, double* neg_dfdq, double* neg_dfdv) const;
+  // The elastic energy of the whole mesh (summed over the ranks).
+  double elastic_energy() const;
   std::shared_ptr<const Material> material_;
   std::unique_ptr<ElasticAssembly> elastic_;
   std::unique_ptr<ExternalPotential> external_;

@@ -62,7 +62,8 @@ class SceneSystem : public ConstrainedSystem {
   const StartState* start_ = nullptr;
 };
 
-// The scene's system: MassSpringSystem for material.model = "mass_spring", else MeshSystem.
-std::unique_ptr<SceneSystem> make_scene_system(const Scene& scene);
+// The scene's system: MassSpringSystem for material.model = "mass_spring", else MeshSystem (split
+// over `ranks` where given, ranks.hpp).
+std::unique_ptr<SceneSystem> make_scene_system(const Scene& scene, const Ranks* ranks = nullptr);
 
 }  // namespace isochor
