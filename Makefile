@@ -17,7 +17,8 @@ test: build
 test-long: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) -L long
 
-# The MPI study executor against the local one (mpirun -n 2; CI runs it).
+# MPI (CI runs it): one scene on 2 and 3 ranks against one process (tests/run_mpi.sh), and the
+# MPI study executor against the local one.
 test-mpi: build
 	cd $(BUILD) && ctest --output-on-failure -L mpi
 

@@ -28,7 +28,7 @@ bool launched_by_mpi() {
 namespace {
 
 class MpiRanks : public Ranks {
-  // Adds the wall time of its scope to seconds_.
+  // Adds the wall time of its scope to one of seconds_.
   struct Timed {
     explicit Timed(double& s) : total(s), start(MPI_Wtime()) {}
     ~Timed() { total += MPI_Wtime() - start; }
@@ -44,7 +44,7 @@ class MpiRanks : public Ranks {
   int size() const override { return size_; }
   int rank() const override { return rank_; }
   void share(double* x, const std::vector<Index>& offsets) const override {
-    const Timed timed(seconds_);
+    const Timed timed(seconds_.share);
     std::vector<int> counts(size_), displs(size_);
     for (int r = 0; r < size_; ++r) {
       if (offsets[r + 1] > INT_MAX)
@@ -55,7 +55,7 @@ class MpiRanks : public Ranks {
     MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, x, counts.data(), displs.data(), MPI_DOUBLE, MPI_COMM_WORLD);
   }
   void sum(double* values, int n) const override {
-    const Timed timed(seconds_);
+    const Timed timed(seconds_.reduce);
     std::vector<double> all(static_cast<std::size_t>(n) * size_);
     MPI_Allgather(values, n, MPI_DOUBLE, all.data(), n, MPI_DOUBLE, MPI_COMM_WORLD);
     for (int i = 0; i < n; ++i) {
@@ -65,14 +65,14 @@ class MpiRanks : public Ranks {
     }
   }
   int max(int value) const override {
-    const Timed timed(seconds_);
+    const Timed timed(seconds_.reduce);
     int m = value;
     MPI_Allreduce(&value, &m, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     return m;
   }
   void exchange(const double* send, const std::vector<int>& send_offsets, double* recv,
                 const std::vector<int>& recv_offsets) const override {
-    const Timed timed(seconds_);
+    const Timed timed(seconds_.exchange);
     std::vector<int> sc(size_), rc(size_);
     for (int r = 0; r < size_; ++r) {
       sc[r] = send_offsets[r + 1] - send_offsets[r];
@@ -82,25 +82,25 @@ class MpiRanks : public Ranks {
                   MPI_COMM_WORLD);
   }
   void broadcast(std::vector<double>& v) const override {
-    const Timed timed(seconds_);
+    const Timed timed(seconds_.reduce);
     long long n = static_cast<long long>(v.size());
     MPI_Bcast(&n, 1, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
     v.resize(static_cast<std::size_t>(n));
     if (n > 0) MPI_Bcast(v.data(), static_cast<int>(n), MPI_DOUBLE, 0, MPI_COMM_WORLD);
   }
   void broadcast(std::string& s) const override {
-    const Timed timed(seconds_);
+    const Timed timed(seconds_.reduce);
     long long n = static_cast<long long>(s.size());
     MPI_Bcast(&n, 1, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
     s.resize(static_cast<std::size_t>(n));
     if (n > 0) MPI_Bcast(s.data(), static_cast<int>(n), MPI_CHAR, 0, MPI_COMM_WORLD);
   }
 
-  double seconds() const override { return seconds_; }
+  Seconds seconds() const override { return seconds_; }
 
  private:
   int rank_ = 0, size_ = 1;
-  mutable double seconds_ = 0;
+  mutable Seconds seconds_;
 };
 
 // Every rank stops at the step where any of them was asked to (the signal of the largest number).

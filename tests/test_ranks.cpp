@@ -79,7 +79,7 @@ class ThreadRanks : public Ranks {
     broadcast(v);
     s.assign(v.begin(), v.end());
   }
-  double seconds() const override { return 0; }
+  Seconds seconds() const override { return {}; }
 
  private:
   Bus& bus_;

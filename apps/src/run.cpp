@@ -287,8 +287,11 @@ void write_finished(OutputWriter& w, const Scene& sc, const RunSummary& summary,
                     double resumed_at) {
   write_totals(w, summary.stats);
   // The ranks, and the seconds rank 0 spent exchanging with the others (docs/scale.md).
+  const Ranks::Seconds mpi = ranks ? ranks->seconds() : Ranks::Seconds{};
   w.set_stat("ranks", ranks ? ranks->size() : 1);
-  w.set_stat("mpi_seconds", ranks ? ranks->seconds() : 0.0);
+  w.set_stat("mpi_seconds", mpi.share + mpi.exchange + mpi.reduce);
+  w.set_stat("mpi_share_seconds", mpi.share);
+  w.set_stat("mpi_halo_seconds", mpi.exchange);
   if (sc.skeleton) {
     w.set_stat("simbody_seconds", summary.simbody_seconds);
     w.set_stat("simbody_realizations", static_cast<double>(sc.skeleton->realizations()));

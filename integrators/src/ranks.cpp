@@ -51,20 +51,22 @@ void Halo::update(double* x) const {
   for (std::size_t k = 0; k < recv_index_.size(); ++k) x[recv_index_[k]] = recv_[k];
 }
 
-std::vector<int> partition_graph(const std::vector<Index>& ptr, const std::vector<Index>& adj, int parts) {
+std::vector<int> partition_graph(const std::vector<Index>& ptr, const std::vector<Index>& adj, int parts,
+                                 const std::vector<int>& weights) {
   const idx_t nv = static_cast<idx_t>(ptr.size()) - 1;
   std::vector<int> part(static_cast<std::size_t>(nv), 0);
   if (parts <= 1 || nv == 0) return part;
   // METIS keeps global state (GKlib's memory and signal handling): one call at a time in a process.
   static std::mutex one_at_a_time;
   const std::lock_guard<std::mutex> lock(one_at_a_time);
-  std::vector<idx_t> xadj(ptr.begin(), ptr.end()), adjncy(adj.begin(), adj.end()), where(nv);
+  std::vector<idx_t> xadj(ptr.begin(), ptr.end()), adjncy(adj.begin(), adj.end()), where(nv),
+      vwgt(weights.begin(), weights.end());
   idx_t nvert = nv, ncon = 1, np = parts, cut = 0;
   idx_t options[METIS_NOPTIONS];
   METIS_SetDefaultOptions(options);
   options[METIS_OPTION_SEED] = 1;  // the same parts on every rank and in every run
-  if (METIS_PartGraphKway(&nvert, &ncon, xadj.data(), adjncy.data(), nullptr, nullptr, nullptr, &np, nullptr, nullptr,
-                          options, &cut, where.data()) != METIS_OK)
+  if (METIS_PartGraphKway(&nvert, &ncon, xadj.data(), adjncy.data(), vwgt.empty() ? nullptr : vwgt.data(), nullptr,
+                          nullptr, &np, nullptr, nullptr, options, &cut, where.data()) != METIS_OK)
     throw Error("METIS could not split the mesh's " + std::to_string(nv) + " nodes into " + std::to_string(parts) +
                 " parts");
   for (idx_t v = 0; v < nv; ++v) part[static_cast<std::size_t>(v)] = static_cast<int>(where[v]);

@@ -104,14 +104,18 @@ struct ReducedSolver::Impl {
   }
   // out = X x, X a symmetric block of the Jacobian (v-v: V, v-q: A, q-q: c I + H_mu) by columns
   // (cp, ri, xv): row i of X is its column i, so each out[i] is a gather (parallel, and summed in
-  // the same order for any thread count).
+  // the same order for any thread count). On P ranks each rank gathers its own rows and shares
+  // them.
   void times(const Index* cp, const Index* ri, const double* xv, const double* x, double* out, bool add = false) const {
+    const DofPartition* part = form.system().partition();
+    const Index lo = part ? part->begin() : 0, hi = part ? part->end() : n;
 #pragma omp parallel for schedule(static)
-    for (Index i = 0; i < n; ++i) {
+    for (Index i = lo; i < hi; ++i) {
       double sum = 0;
       for (Index k = cp[i]; k < cp[i + 1]; ++k) sum += xv[k] * x[ri[k]];
       out[i] = add ? out[i] + sum : sum;
     }
+    if (part) part->ranks->share(out, part->offsets);
   }
   void times(const Compact& X, const double* x, double* out, bool add = false) const {
     times(X.ptr.data(), X.idx.data(), X.val.data(), x, out, add);

@@ -36,8 +36,12 @@ class Ranks {
   // Rank 0's v (or s) to every rank, sized as rank 0 has it.
   virtual void broadcast(std::vector<double>& v) const = 0;
   virtual void broadcast(std::string& s) const = 0;
-  // Wall seconds this rank has spent in the calls above (waiting for the others included).
-  virtual double seconds() const = 0;
+  // Wall seconds this rank has spent in the calls above, waiting for the others included: in
+  // share(), in exchange(), and in the rest (sums, maxima, broadcasts).
+  struct Seconds {
+    double share = 0, exchange = 0, reduce = 0;
+  };
+  virtual Seconds seconds() const = 0;
 };
 
 // The rows of a system's unknowns that each rank owns: rank r owns dofs offsets[r] ..
@@ -74,7 +78,9 @@ class Halo {
 };
 
 // METIS's k-way partition of a graph (ptr/adj: each vertex's neighbours, no self loops) into
-// `parts` parts: each vertex's part. The same graph gives the same parts on every rank.
-std::vector<int> partition_graph(const std::vector<Index>& ptr, const std::vector<Index>& adj, int parts);
+// `parts` parts of about equal weight (weights: one per vertex, >= 0; empty: 1 each): each
+// vertex's part. The same graph gives the same parts on every rank.
+std::vector<int> partition_graph(const std::vector<Index>& ptr, const std::vector<Index>& adj, int parts,
+                                 const std::vector<int>& weights = {});
 
 }  // namespace isochor
