@@ -7,8 +7,11 @@
 # included), the solver's (/stats wall_seconds) and its parts, the seconds rank 0 spent in MPI
 # calls (waiting for the other rank included) and rank 0's peak memory, with the steps, Newton
 # and CG iterations (the same on 1 and 2 ranks where the runs agree). Writes
-# docs/results/distributed.csv (or the CSV named third).
-#   bench/mpi_ranks.sh [build] [rounds] [csv]
+# docs/results/distributed.csv (or the CSV named third). SCENES (environment) picks among cube,
+# ball, ball125k and ball253k (the fine ball's window at 125K and 253K tets); default "cube ball".
+# BASE=DIR (environment) adds, in the same
+# rounds, one process of the build in DIR (one built without MPI ranks: is P = 1 any slower?).
+#   [BASE=OLD_BUILD] bench/mpi_ranks.sh [build] [rounds] [csv]
 set -euo pipefail
 source "$(dirname "$0")/lib.sh"
 csv=${3:-docs/results/distributed.csv}
@@ -18,22 +21,29 @@ trap 'rm -f "$tmp"' EXIT
 cube=(demos/pinned_cube.toml --set mesh.cells=26 frames.duration=0.25)
 ball=(demos/ball_drop.toml --set mesh.target_tets=64000 integrator.rtol=1e-4 integrator.atol=1e-6
   frames.duration=0.035)
+ball125k=("${ball[@]}" mesh.target_tets=125000)
+ball253k=("${ball[@]}" mesh.target_tets=253000)
 for ((k = 0; k < rounds; ++k)); do
-  for name in cube ball; do
+  for name in ${SCENES:-cube ball}; do
     declare -n args=$name
-    for ranks in 1 2; do
+    for setting in this:1 this:2 ${BASE:+base:1}; do
+      ranks=${setting#*:}
+      exe=$build/isochor
+      [ "${setting%:*}" = base ] && exe=$BASE/isochor
       launch=()
       [ $ranks -gt 1 ] && launch=(mpirun -n $ranks)
+      rm -f out/bench/mpi_ranks.h5 out/bench/mpi_ranks.xdmf
       start=$(date +%s.%N)
-      "${launch[@]}" "$build/isochor" run "${args[@]}" --overwrite -q -o out/bench/mpi_ranks.h5 > /dev/null
+      "${launch[@]}" "$exe" run "${args[@]}" -q -o out/bench/mpi_ranks.h5 > /dev/null
       end=$(date +%s.%N)
-      /usr/bin/python3 - out/bench/mpi_ranks.h5 "$name" "$ranks" "$start" "$end" >> "$tmp" <<'PY'
+      /usr/bin/python3 - out/bench/mpi_ranks.h5 "$name" "$setting" "$start" "$end" >> "$tmp" <<'PY'
 import sys, h5py
 s = h5py.File(sys.argv[1], "r")["/stats"].attrs
 name, ranks, start, end = sys.argv[2], sys.argv[3], float(sys.argv[4]), float(sys.argv[5])
+ranks = ranks.split(":")[1] if ranks.startswith("this:") else "1 (base build)"
 counts = f"{s['steps']:.0f},{s['newton_iterations']:.0f},{s['linear_iterations']:.0f}"
 values = {"process": end - start, "solver": s["wall_seconds"], "assembly": s["assembly_seconds"],
-          "solve": s["solve_seconds"], "mpi": s["mpi_seconds"], "peak_memory_mb": s["peak_memory_mb"]}
+          "solve": s["solve_seconds"], "mpi": s.get("mpi_seconds", 0.0), "peak_memory_mb": s["peak_memory_mb"]}
 for part, v in values.items():
     print(f"{name},{ranks},{part},{v:.3f},{counts}")
 PY
