@@ -17,6 +17,9 @@
 #include <limits>
 #include <sstream>
 
+#include "file_room.hpp"
+#include "hdf5_util.hpp"
+#include "xdmf_sidecar.hpp"
 #include "isochor/base/error.hpp"
 
 #ifndef ISOCHOR_VERSION
@@ -29,238 +32,9 @@ namespace isochor {
 const char* isochor_version() { return ISOCHOR_VERSION; }
 const char* isochor_git_revision() { return ISOCHOR_GIT_REVISION; }
 
+using namespace h5;
+
 namespace {
-
-// Closes an HDF5 handle with the right call when it goes out of scope.
-class H {
- public:
-  H() = default;
-  H(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
-  H(H&& o) noexcept : id_(o.id_), close_(o.close_) { o.id_ = -1; }
-  H& operator=(H&& o) noexcept {
-    reset();
-    id_ = o.id_;
-    close_ = o.close_;
-    o.id_ = -1;
-    return *this;
-  }
-  ~H() { reset(); }
-  void reset() {
-    if (id_ >= 0 && close_) close_(id_);
-    id_ = -1;
-  }
-  operator hid_t() const { return id_; }
-  bool valid() const { return id_ >= 0; }
-
- private:
-  hid_t id_ = -1;
-  herr_t (*close_)(hid_t) = nullptr;
-};
-
-// The innermost message of HDF5's error stack: the system's reason when there is one ("No space
-// left on device", "File too large"), else HDF5's description.
-herr_t innermost(unsigned n, const H5E_error2_t* e, void* out) {
-  if (n != 0 || !e->desc) return 0;
-  std::string d = e->desc;
-  const std::string key = "error message = '";
-  const std::size_t at = d.find(key);
-  if (at != std::string::npos) {
-    const std::size_t end = d.find('\'', at + key.size());
-    d = d.substr(at + key.size(), end == std::string::npos ? std::string::npos : end - at - key.size());
-  }
-  *static_cast<std::string*>(out) = d;
-  return 0;
-}
-std::string hdf5_reason() {
-  std::string r;
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost, &r);
-  H5Eclear2(H5E_DEFAULT);
-  return r.empty() ? "" : " (" + r + ")";
-}
-
-void check(herr_t status, const std::string& what) {
-  if (status < 0) throw Error("HDF5: " + what + " failed" + hdf5_reason());
-}
-hid_t checked(hid_t id, const std::string& what) {
-  if (id < 0) throw Error("HDF5: " + what + " failed" + hdf5_reason());
-  return id;
-}
-
-H group(hid_t loc, const std::string& name) {
-  return H(checked(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "create group " + name),
-           H5Gclose);
-}
-
-void write_array(hid_t loc, const std::string& name, hid_t type, const std::vector<hsize_t>& dims, const void* data) {
-  H space(checked(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), "dataspace"), H5Sclose);
-  H ds(checked(H5Dcreate2(loc, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "create " + name),
-       H5Dclose);
-  check(H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), "write " + name);
-}
-
-void string_attribute(hid_t loc, const std::string& name, const std::string& value) {
-  if (H5Aexists(loc, name.c_str()) > 0) H5Adelete(loc, name.c_str());
-  H type(H5Tcopy(H5T_C_S1), H5Tclose);
-  H5Tset_size(type, H5T_VARIABLE);
-  H5Tset_cset(type, H5T_CSET_UTF8);
-  H space(H5Screate(H5S_SCALAR), H5Sclose);
-  H attr(checked(H5Acreate2(loc, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT), "attribute " + name), H5Aclose);
-  const char* p = value.c_str();
-  check(H5Awrite(attr, type, &p), "write attribute " + name);
-}
-
-void number_attribute(hid_t loc, const std::string& name, double value) {
-  if (H5Aexists(loc, name.c_str()) > 0) H5Adelete(loc, name.c_str());
-  H space(H5Screate(H5S_SCALAR), H5Sclose);
-  H attr(
-      checked(H5Acreate2(loc, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT), "attribute " + name),
-      H5Aclose);
-  check(H5Awrite(attr, H5T_NATIVE_DOUBLE, &value), "write attribute " + name);
-}
-
-void vector_attribute(hid_t loc, const std::string& name, const double* values, hsize_t n) {
-  if (H5Aexists(loc, name.c_str()) > 0) H5Adelete(loc, name.c_str());
-  H space(H5Screate_simple(1, &n, nullptr), H5Sclose);
-  H attr(
-      checked(H5Acreate2(loc, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT), "attribute " + name),
-      H5Aclose);
-  check(H5Awrite(attr, H5T_NATIVE_DOUBLE, values), "write attribute " + name);
-}
-
-// A dataset growing along its first dimension, one frame (row) at a time.
-struct Series {
-  H ds;
-  std::vector<hsize_t> row;  // shape of one frame
-  hid_t type = H5T_NATIVE_DOUBLE;
-
-  Series(hid_t loc, const std::string& name, std::vector<hsize_t> row_shape, hid_t t)
-      : row(std::move(row_shape)), type(t) {
-    std::vector<hsize_t> dims{0}, maxdims{H5S_UNLIMITED}, chunk{1};
-    for (hsize_t d : row) {
-      dims.push_back(d);
-      maxdims.push_back(d);
-      chunk.push_back(std::max<hsize_t>(d, 1));
-    }
-    H space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxdims.data()), H5Sclose);
-    H dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
-    // A chunk holds about 1024 values: many frames of a small row (a reader of a long run's
-    // volumes or energies reads few chunks, not one per frame: 1e5 frames of the volume took 2.9 s
-    // to read at one frame per chunk, 0.01 s at 512), one frame of a row of 1024 values or more.
-    hsize_t values = 1;
-    for (hsize_t d : row) values *= std::max<hsize_t>(d, 1);
-    chunk[0] = std::max<hsize_t>(1, 1024 / values);
-    H5Pset_chunk(dcpl, static_cast<int>(chunk.size()), chunk.data());
-    ds = H(checked(H5Dcreate2(loc, name.c_str(), type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT), "create " + name),
-           H5Dclose);
-  }
-
-  // An existing series of the file (resume).
-  Series(hid_t loc, const std::string& name, hid_t t) : type(t) {
-    ds = H(checked(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), "open " + name), H5Dclose);
-    H space(H5Dget_space(ds), H5Sclose);
-    std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
-    H5Sget_simple_extent_dims(space, dims.data(), nullptr);
-    if (dims.empty()) throw Error("HDF5: " + name + " is not a per-frame series");
-    row.assign(dims.begin() + 1, dims.end());
-  }
-
-  hsize_t rows() const {
-    H space(H5Dget_space(ds), H5Sclose);
-    std::vector<hsize_t> dims(row.size() + 1);
-    H5Sget_simple_extent_dims(space, dims.data(), nullptr);
-    return dims[0];
-  }
-
-  void truncate(hsize_t frames) {
-    std::vector<hsize_t> dims{frames};
-    dims.insert(dims.end(), row.begin(), row.end());
-    check(H5Dset_extent(ds, dims.data()), "shrink dataset");
-  }
-
-  // Frame `frame` into `out` (row-major, the row's size).
-  void read(hsize_t frame, double* out) const {
-    std::vector<hsize_t> start{frame}, count{1};
-    for (hsize_t d : row) {
-      start.push_back(0);
-      count.push_back(d);
-    }
-    H file_space(H5Dget_space(ds), H5Sclose);
-    check(H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr), "select");
-    H mem_space(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr), H5Sclose);
-    check(H5Dread(ds, H5T_NATIVE_DOUBLE, mem_space, file_space, H5P_DEFAULT, out), "read frame");
-  }
-
-  void append(hsize_t frame, const void* data) {
-    std::vector<hsize_t> dims{frame + 1}, start{frame}, count{1};
-    for (hsize_t d : row) {
-      dims.push_back(d);
-      start.push_back(0);
-      count.push_back(d);
-    }
-    check(H5Dset_extent(ds, dims.data()), "extend dataset");
-    H file_space(H5Dget_space(ds), H5Sclose);
-    check(H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr), "select");
-    H mem_space(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr), H5Sclose);
-    check(H5Dwrite(ds, type, mem_space, file_space, H5P_DEFAULT, data), "write frame");
-  }
-};
-
-std::string frame_name(int k) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%06d", k);
-  return buf;
-}
-
-std::string read_string_attribute(hid_t loc, const std::string& name) {
-  if (H5Aexists(loc, name.c_str()) <= 0) return "";
-  H attr(checked(H5Aopen(loc, name.c_str(), H5P_DEFAULT), "open attribute " + name), H5Aclose);
-  H type(H5Aget_type(attr), H5Tclose);
-  if (H5Tget_class(type) != H5T_STRING) return "";
-  H mem(H5Tcopy(H5T_C_S1), H5Tclose);
-  H5Tset_size(mem, H5T_VARIABLE);
-  H5Tset_cset(mem, H5T_CSET_UTF8);
-  char* p = nullptr;
-  if (!H5Tis_variable_str(type) || H5Aread(attr, mem, &p) < 0 || !p) return "";
-  std::string v = p;
-  H5free_memory(p);
-  return v;
-}
-
-void delete_attribute(hid_t loc, const std::string& name) {
-  if (H5Aexists(loc, name.c_str()) > 0) H5Adelete(loc, name.c_str());
-}
-
-// The writer's lock on its output: an open-file-description lock (F_OFD_SETLK) on the file
-// itself, held while the descriptor is open. Unlike flock (HDF5's own locking) and process-wide
-// fcntl locks, HDF5 opening and closing the same file in this process does not release it.
-bool try_lock(int fd) {
-  struct flock l {};
-  l.l_type = F_WRLCK;
-  l.l_whence = SEEK_SET;
-  return ::fcntl(fd, F_OFD_SETLK, &l) == 0;
-}
-
-// Bytes free on the file system of `path`'s nearest existing directory, and the file size
-// limit (ulimit -f); infinity where unknown or unlimited.
-double free_bytes(const std::string& path) {
-  std::error_code ec;
-  std::filesystem::path dir = std::filesystem::absolute(path, ec).parent_path();
-  if (ec)  // a relative path, and the working directory was deleted under the program
-    throw Error(path + ": cannot be placed (" + ec.message() +
-                "; a relative path needs the working directory, which no longer exists: give an absolute path)");
-  while (!dir.empty() && !std::filesystem::exists(dir, ec) && dir != dir.parent_path()) dir = dir.parent_path();
-  struct statvfs fs {};
-  if (::statvfs(dir.c_str(), &fs) != 0) return std::numeric_limits<double>::infinity();
-  return static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize);
-}
-double file_size_limit() {
-  struct rlimit lim {};
-  if (::getrlimit(RLIMIT_FSIZE, &lim) != 0 || lim.rlim_cur == RLIM_INFINITY)
-    return std::numeric_limits<double>::infinity();
-  return static_cast<double>(lim.rlim_cur);
-}
-
-std::string kb(double bytes) { return std::to_string(static_cast<long long>(bytes / 1024 + 0.5)) + " KB"; }
 
 // The first line where two texts differ (1-based), for the resume check's message.
 int first_difference(const std::string& a, const std::string& b) {
@@ -392,87 +166,19 @@ struct OutputWriter::Impl {
          H5Dclose);
   }
 
-  // The XDMF sidecar: a header, one <Grid> per frame, a fixed tail. The first write replaces the
-  // file atomically (header and tail); each frame then overwrites the tail with its own <Grid>
-  // followed by the tail again, in one pwrite at `xdmf_tail`: the cost of a frame does not grow
-  // with the frames before it, and the file is complete after every frame (a killed run's
-  // sidecar lists every frame written, and a single write leaves no gap to be killed in).
-  static constexpr const char* kXdmfTail = "  </Grid>\n </Domain>\n</Xdmf>\n";
-  int xdmf_fd = -1;
-  off_t xdmf_tail = 0;
-
-  std::string xdmf_frame(int k, double time) const {
-    std::ostringstream x;
-    x.precision(17);
-    const std::string f = frame_name(k);
-    x << "   <Grid Name=\"frame_" << f << "\" GridType=\"Uniform\">\n"
-      << "    <Time Value=\"" << time << "\"/>\n"
-      << "    <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" << tets << "\">\n"
-      << "     <DataItem Dimensions=\"" << tets << " 4\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" << h5_name
-      << ":/mesh/tets</DataItem>\n    </Topology>\n"
-      << "    <Geometry GeometryType=\"XYZ\">\n"
-      << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
-      << h5_name << ":/frames/xdmf/position_" << f << "</DataItem>\n    </Geometry>\n"
-      << "    <Attribute Name=\"position\" AttributeType=\"Vector\" Center=\"Node\">\n"
-      << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
-      << h5_name << ":/frames/xdmf/position_" << f << "</DataItem>\n    </Attribute>\n";
-    for (const auto& [name, series] : node_series)
-      x << "    <Attribute Name=\"" << name << "\" AttributeType=\"Vector\" Center=\"Node\">\n"
-        << "     <DataItem Dimensions=\"" << nodes << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
-        << h5_name << ":/frames/xdmf/" << name << "_" << f << "</DataItem>\n    </Attribute>\n";
-    if (zone_index)
-      x << "    <Attribute Name=\"zone\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
-        << "     <DataItem Dimensions=\"" << tets << "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" << h5_name
-        << ":/mesh/zone</DataItem>\n    </Attribute>\n";
-    if (pressure)
-      x << "    <Attribute Name=\"pressure\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
-        << "     <DataItem Dimensions=\"" << tets << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
-        << h5_name << ":/frames/xdmf/pressure_" << f << "</DataItem>\n    </Attribute>\n";
-    x << "   </Grid>\n";
-    return x.str();
+  // The sidecar (xdmf_sidecar.hpp), written as the frames are.
+  XdmfSidecar sidecar;
+  XdmfLayout layout() const {
+    XdmfLayout l{h5_name, nodes, tets, {}, zone_index, pressure};
+    for (const auto& [name, series] : node_series) l.node_vectors.push_back(name);
+    return l;
   }
-
-  // The header, the <Grid>s of the frames already in the file (`times`: a resumed run's) and the
-  // tail, written to a temporary file and renamed over the sidecar.
-  void start_xdmf(const std::vector<double>& times = {}) {
-    const std::string header =
-        "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-        "  <Grid Name=\"isochor\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-    const std::string xp = xdmf_file(), tmp = xp + ".tmp";
-    off_t size = static_cast<off_t>(header.size());
-    {
-      std::ofstream out(tmp);
-      out << header;
-      for (std::size_t k = 0; k < times.size(); ++k) {
-        const std::string grid = xdmf_frame(static_cast<int>(k), times[k]);
-        out << grid;
-        size += static_cast<off_t>(grid.size());
-      }
-      out << kXdmfTail;
-      if (!out) {
-        std::filesystem::remove(tmp);
-        throw Error(xp + ": cannot be written (" + std::strerror(errno) + ")");
-      }
-    }
-    std::filesystem::rename(tmp, xp);
-    xdmf_fd = ::open(xp.c_str(), O_WRONLY);
-    if (xdmf_fd < 0) throw Error(xp + ": cannot be opened for writing");
-    xdmf_tail = size;
-  }
-
-  // Frame k's <Grid>, where the tail was, and the tail after it.
+  void start_xdmf(const std::vector<double>& times = {}) { sidecar.start(xdmf_file(), layout(), times); }
   void append_xdmf(int k, double time) {
-    if (xdmf_fd < 0) start_xdmf();
-    const std::string block = xdmf_frame(k, time) + kXdmfTail;
-    if (::pwrite(xdmf_fd, block.data(), block.size(), xdmf_tail) != static_cast<ssize_t>(block.size()))
-      throw Error(xdmf_file() + ": cannot be written (frame " + std::to_string(k) + ")");
-    xdmf_tail += static_cast<off_t>(block.size() - std::char_traits<char>::length(kXdmfTail));
+    if (!sidecar.is_open()) start_xdmf();
+    sidecar.append(layout(), k, time);
   }
-
-  void close_xdmf() {
-    if (xdmf_fd >= 0) ::close(xdmf_fd);
-    xdmf_fd = -1;
-  }
+  void close_xdmf() { sidecar.close(); }
   ~Impl() {
     close_xdmf();
     if (lock_fd >= 0) ::close(lock_fd);
@@ -984,7 +690,7 @@ void OutputWriter::close() {
   Impl& m = *impl_;
   if (!m.file.valid()) return;
   // No frames: the sidecar still names the run's (empty) series; a resume not continued leaves it.
-  if (m.xdmf_fd < 0 && !m.resume_pending) m.start_xdmf();
+  if (!m.sidecar.is_open() && !m.resume_pending) m.start_xdmf();
   m.close_xdmf();
   m.time.reset();
   m.positions.reset();
