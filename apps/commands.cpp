@@ -4,6 +4,7 @@
 
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 #include "isochor/app/install.hpp"
@@ -38,9 +39,16 @@ std::vector<double> zone_volumes(const Mesh& mesh, const Points& x,
   return v;
 }
 
-// How to continue a run: the command as given, with --resume (and without --overwrite).
-std::string resume_command(int argc, char** argv) {
-  std::string cmd = "isochor";
+// How to continue a run: the command as given, with --resume (and without --overwrite); on P
+// ranks behind the launcher that started them (srun under Slurm, else mpirun) with P.
+std::string resume_command(int argc, char** argv, const Ranks* ranks) {
+  std::string cmd;
+  if (ranks && ranks->size() > 1) {
+    cmd = std::getenv("SLURM_PROCID") ? "srun -n " : "mpirun -n ";
+    cmd += std::to_string(ranks->size());
+    cmd += ' ';
+  }
+  cmd += "isochor";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--overwrite" || a == "--resume") continue;
@@ -128,7 +136,7 @@ int cmd_run(const RunCommand& c, int argc, char** argv, const Ranks* ranks) {
   try {
     r = run_scene(sc, opt);
   } catch (const RunInterrupted& e) {
-    if (speaks) std::fprintf(stderr, "isochor: %s; continue with: %s\n", e.what(), resume_command(argc, argv).c_str());
+    if (speaks) std::fprintf(stderr, "isochor: %s; continue with: %s\n", e.what(), resume_command(argc, argv, ranks).c_str());
     return 128 + e.signal;
   }
   if (!speaks) return 0;

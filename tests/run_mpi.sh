@@ -100,6 +100,8 @@ wait $pid && fail "the stopped run exited 0"
 "$exe" info stopped.h5 | grep -q "status      interrupted" || fail "not marked interrupted: $("$exe" info stopped.h5)"
 kept=$("$exe" info stopped.h5 | sed -n 's/^  frames *\([0-9]*\).*/\1/p')
 [ "$kept" -lt 601 ] || fail "the run ended before the signal"
+grep -Eq "continue with: mpirun -n 2 isochor run .* --resume$" stopped.log ||
+  fail "the continue line does not name mpirun -n 2: $(cat stopped.log)"
 mpirun -n 2 "$exe" run "${cube[@]}" -o stopped.h5 --resume > resumed.log 2>&1 || fail "resume: $(cat resumed.log)"
 compare whole.h5 stopped.h5 1e-8
 echo "ok: the ball, the arm, the collider scene and a stop and resume on 2 ranks (stopped after $kept frames)"
