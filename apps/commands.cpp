@@ -136,7 +136,8 @@ int cmd_run(const RunCommand& c, int argc, char** argv, const Ranks* ranks) {
   try {
     r = run_scene(sc, opt);
   } catch (const RunInterrupted& e) {
-    if (speaks) std::fprintf(stderr, "isochor: %s; continue with: %s\n", e.what(), resume_command(argc, argv, ranks).c_str());
+    if (speaks)
+      std::fprintf(stderr, "isochor: %s; continue with: %s\n", e.what(), resume_command(argc, argv, ranks).c_str());
     return 128 + e.signal;
   }
   if (!speaks) return 0;
