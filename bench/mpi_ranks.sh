@@ -8,7 +8,8 @@
 # calls (waiting for the other rank included) and rank 0's peak memory, with the steps, Newton
 # and CG iterations (the same on 1 and 2 ranks where the runs agree). Writes
 # docs/results/distributed.csv (or the CSV named third). SCENES (environment) picks among cube,
-# ball, ball125k and ball253k (the fine ball's window at 125K and 253K tets); default "cube ball".
+# ball, ball125k and ball253k (the fine ball's window at 125K and 253K tets), cube_amg and ball_amg
+# (linear_solver = "amg": hypre's BoomerAMG across the ranks); default "cube ball".
 # BASE=DIR (environment) adds, in the same
 # rounds, one process of the build in DIR (one built without MPI ranks: is P = 1 any slower?).
 #   [BASE=OLD_BUILD] bench/mpi_ranks.sh [build] [rounds] [csv]
@@ -23,6 +24,8 @@ ball=(demos/ball_drop.toml --set mesh.target_tets=64000 integrator.rtol=1e-4 int
   frames.duration=0.035)
 ball125k=("${ball[@]}" mesh.target_tets=125000)
 ball253k=("${ball[@]}" mesh.target_tets=253000)
+ball_amg=("${ball[@]}" integrator.linear_solver=amg)
+cube_amg=("${cube[@]}" integrator.linear_solver=amg)
 for ((k = 0; k < rounds; ++k)); do
   for name in ${SCENES:-cube ball}; do
     declare -n args=$name

@@ -288,12 +288,40 @@ class BlockJacobiPcg : public SymmetricSolver {
 
 }  // namespace
 
+namespace {
+// A solver that each rank runs on its own rows (hypre's BoomerAMG-preconditioned CG across the
+// ranks): after a solve every rank's rows of x go to every rank, and every rank takes the same
+// verdict, as with PCG on ranks.
+class RowsOnRanks : public SymmetricSolver {
+ public:
+  RowsOnRanks(std::unique_ptr<SymmetricSolver> rows, const DofPartition& part) : rows_(std::move(rows)), part_(part) {}
+  bool factor(const double* values) override { return agreed(rows_->factor(values)); }
+  bool solve(const double* b, double* x) override {
+    const bool ok = rows_->solve(b, x);
+    part_.ranks->share(x, part_.offsets);
+    return agreed(ok);
+  }
+  double factor_nnz() const override { return 0; }
+  long iterations() const override { return rows_->iterations(); }
+
+ private:
+  bool agreed(bool ok) const { return part_.ranks->max(ok ? 0 : 1) == 0; }
+  std::unique_ptr<SymmetricSolver> rows_;
+  DofPartition part_;
+};
+}  // namespace
+
 std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, SymmetricSolverKind kind,
                                                        double tol, const DofPartition* partition) {
+  const bool ranks = partition && partition->ranks && partition->ranks->size() > 1;
   switch (kind) {
     case SymmetricSolverKind::pcg:
       return std::make_unique<BlockJacobiPcg>(pattern, tol, partition && partition->ranks ? partition : nullptr);
     case SymmetricSolverKind::amg:
+      if (ranks) {
+        auto rows = make_distributed_amg_solver(pattern, partition->begin(), partition->end(), tol);
+        return rows ? std::make_unique<RowsOnRanks>(std::move(rows), *partition) : nullptr;
+      }
       return make_amg_solver(pattern, tol);
     case SymmetricSolverKind::cholmod:
       return std::make_unique<SymmetricFactor>(pattern);

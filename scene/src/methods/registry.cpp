@@ -43,10 +43,10 @@ void check_ranks(const Scene& sc) {
   const bool automatic =
       k == IntegratorKind::ida ? in.ida_linear_solver_auto : in.backward_euler.automatic_linear_solver;
   const LinearSolverKind ls = k == IntegratorKind::ida ? in.ida.linear_solver : in.backward_euler.linear_solver;
-  if (!automatic && ls != LinearSolverKind::krylov)
+  if (!automatic && ls != LinearSolverKind::krylov && ls != LinearSolverKind::amg)
     throw Error(at + "integrator.linear_solver = \"" + to_string(ls) +
-                "\" solves on one process (on MPI ranks: \"krylov\", or \"auto\" with integrator.kind = \"ida\" or "
-                "\"backward_euler\")");
+                "\" solves on one process (on MPI ranks: \"krylov\" or \"amg\", or \"auto\" with integrator.kind = "
+                "\"ida\" or \"backward_euler\")");
 }
 
 long parse_max_steps(const Section& in) { return in.integer("max_steps", kDefaultMaxSteps, 1, 1000000000000L); }
