@@ -93,7 +93,7 @@ def model_of(table):
 
 
 def chart(table, fits, path):
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    fig, ax = plt.subplots(figsize=(8.8, 4.4))
     ps = [2 ** k for k in range(9)]
     for scene, (t1, f) in fits.items():
         measured = [(int(r), e["solver"]) for r, e in table[scene].items() if r.isdigit()]
@@ -105,7 +105,7 @@ def chart(table, fits, path):
     ax.set_ylabel("solver wall time (s)")
     ax.set_title("one scene on P ranks (dotted: T(1)/P)", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     fig.tight_layout()
     fig.savefig(path, dpi=100)
 
@@ -133,7 +133,7 @@ def main():
     chart(table, fits, os.path.join(out, "distributed.png"))
     lines += ["", "![solver time against ranks, log-log](distributed.png)", ""]
     with open(md, "w") as f:
-        f.write("\n".join(lines) + "\n" + (("\n" + reading) if reading else ""))
+        f.write("\n".join(lines) + "\n" + reading)
     print(f"wrote {md} and distributed.png ({len(table)} scenes)")
 
 
