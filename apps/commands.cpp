@@ -82,7 +82,7 @@ int cmd_mesh(const std::string& scene_path, const std::vector<std::string>& over
     std::filesystem::path p(sc.output.path);
     out = (p.parent_path() / (p.stem().string() + "_mesh.h5")).string();
   }
-  RunInfo info{sc.file.text_as_run(), scene_path, "mesh", scene_record(sc), sc.file.input_digests()};
+  const RunInfo info = run_info(sc, "mesh");
   OutputWriter w(out, sc.mesh, sc.zones, info, false,
                  overwrite ? OutputWriter::Mode::overwrite : OutputWriter::Mode::create);
   Frame f;

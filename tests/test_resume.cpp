@@ -385,15 +385,35 @@ TEST(Outputs, AFullFileSystemStopsTheRunWithEveryFrameBeforeItIntact) {
   for (int k = 0; k < written; ++k) EXPECT_EQ((f.positions(k) - frames[k]).cwiseAbs().maxCoeff(), 0.0) << k;
 }
 
-// A file system that refuses every write (/dev/full: ENOSPC): the error names the file and the
-// system's reason.
+// A write that the system refuses while the file is created (a 1 KB file size limit, SIGXFSZ
+// ignored: EFBIG): the error names the file and the system's reason. (HDF5's clean-up at exit
+// crashes after such a failed flush; the command line and the Python module turn it off too.)
 TEST(Outputs, AWriteErrorNamesTheFileAndTheReason) {
+  hdf5_no_cleanup_at_exit();
+  const std::string path = (test::temp_dir() / "efbig.h5").string();
+  std::signal(SIGXFSZ, SIG_IGN);
+  rlimit old{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old), 0);
+  rlimit lim = old;
+  lim.rlim_cur = 1024;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &lim), 0);
+  const std::string msg = test::error_of([&] {
+    OutputWriter w(path, small_mesh(), {}, {"", "", "run", {}, {}}, false);
+  });
+  setrlimit(RLIMIT_FSIZE, &old);
+  EXPECT_NE(msg.find(path + ": "), std::string::npos) << msg;
+  EXPECT_NE(msg.find("File too large"), std::string::npos) << msg;
+}
+
+// A device is no output, --overwrite or not (/dev/full: its rename or truncation would replace or
+// write the device): refused naming its kind, and the device is left a device.
+TEST(Outputs, ADeviceIsNoOutput) {
   if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
   const std::string msg = test::error_of([&] {
     OutputWriter w("/dev/full", small_mesh(), {}, {"", "", "run", {}, {}}, false, OutputWriter::Mode::overwrite);
   });
-  EXPECT_NE(msg.find("/dev/full: "), std::string::npos) << msg;
-  EXPECT_NE(msg.find("No space left on device"), std::string::npos) << msg;
+  EXPECT_EQ(msg, "/dev/full: is a character device, not a regular file (expected a path for the run's output)");
+  EXPECT_TRUE(std::filesystem::is_character_file("/dev/full"));
 }
 
 // XPBD keeps no state between steps but the positions and velocities: resumed, it repeats the

@@ -29,7 +29,7 @@ import sys
 
 import numpy as np
 
-from run_file import Error, Run, write_whole
+from run_file import Error, Run, note_input, write_whole
 
 CHUNK = 500  # frames per read
 
@@ -62,6 +62,7 @@ def write_glb(h5_path, out, frames=0, render=True):
     """The baked animated glTF; returns (vertices, frames)."""
     from glb import Glb
 
+    note_input(h5_path)
     with Run(h5_path) as run:
         frames = min(run.num_frames, frames or run.num_frames)
         if run.render_rest is not None and render:
@@ -96,6 +97,7 @@ def write_glb(h5_path, out, frames=0, render=True):
 
 def write_cache(h5_path, out, fmt="pc2", all_nodes=False, frames=0, render=False):
     """Writes the cache (the first `frames` frames, 0: all); returns (what, points, frames)."""
+    note_input(h5_path)
     with Run(h5_path) as run:
         times = run.times
         frames = min(run.num_frames, frames or run.num_frames)

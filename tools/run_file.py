@@ -2,6 +2,7 @@
 tools/: pure Python (h5py, NumPy), no compiled module needed. No script indexes the file's
 layout or parses the scene's text itself."""
 import os
+import stat
 import sys
 
 
@@ -19,9 +20,35 @@ sys.path.insert(0, _package_root())
 from isochor import Collider, Error, Run  # noqa: E402,F401
 
 
+_INPUTS = []  # the files this process read (open_run, note_input): no output replaces one
+
+
+def note_input(path):
+    """Records `path` as read: write_whole refuses to write over it."""
+    _INPUTS.append(path)
+
+
+def check_output(path, what="the output"):
+    """One line and exit 1 where `path` holds something other than a regular file (a directory, a
+    FIFO, a device: a rename would replace it) or is a file this process read."""
+    if not os.path.lexists(path):
+        return
+    st = os.stat(path)
+    kind = ("a directory" if stat.S_ISDIR(st.st_mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(st.st_mode)
+            else "a character device" if stat.S_ISCHR(st.st_mode) else "a block device" if stat.S_ISBLK(st.st_mode)
+            else "a socket" if stat.S_ISSOCK(st.st_mode) else None)
+    if kind:
+        sys.exit(f"{path}: is {kind}, not a regular file (expected a path for {what})")
+    for p in _INPUTS:
+        if os.path.exists(p) and os.path.samefile(p, path):
+            sys.exit(f"{path}: is the input {p} (writing {what} there would destroy it; expected another path)")
+
+
 def write_whole(path, write, mode="w"):
     """Writes `path` through write(file) into PATH.part and renames it into place: a failed
-    write (a full disk) leaves neither a partial file nor a traceback, one line and exit 1."""
+    write (a full disk) leaves neither a partial file nor a traceback, one line and exit 1.
+    Never over a directory, a device or a file this process read (check_output)."""
+    check_output(path)
     part = path + ".part"
     try:
         with open(part, mode) as f:
@@ -43,6 +70,7 @@ def open_run(path, tool=""):
     """The run at `path`; one line naming the file and exit 1 when it is missing or not a run."""
     if not os.path.exists(path):
         sys.exit(f"{tool + ': ' if tool else ''}{path}: no such file")
+    note_input(path)
     try:
         return Run(path)
     except Error as e:

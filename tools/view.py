@@ -227,12 +227,29 @@ def handler(model, static):
     return Handler
 
 
+EXPORT_ENTRIES = {"index.html", "viewer.js", "style.css", "data"}
+
+
+def earlier_export(out):
+    """True where OUT may be replaced by an export: nothing is there, or a folder holding only what
+    an export writes (a folder of the user's, the run's own folder or a file is never removed)."""
+    if not os.path.lexists(out):
+        return True
+    if os.path.islink(out) or not os.path.isdir(out):
+        return False
+    entries = set(os.listdir(out))
+    return "index.html" in entries and entries <= EXPORT_ENTRIES
+
+
 def export(model, static, out, every):
     """A folder that opens from disk: the page, its meta and every `every`-th frame as scripts.
     Written into OUT.part and renamed into place (an earlier OUT replaced only then): a full disk
     or a file size limit leaves OUT as it was and no part folder, with one line."""
     out = os.path.normpath(out)
     part = out + ".part"
+    if not earlier_export(out):
+        sys.exit(f"isochor view: {out}: exists and is not a folder this command wrote (expected a new path, or an "
+                 "earlier export to replace); nothing was written")
     frames = list(range(0, model.run.num_frames, max(1, every)))
     try:
         shutil.rmtree(part, ignore_errors=True)

@@ -343,10 +343,8 @@ std::unique_ptr<OutputWriter> open_output(const Scene& sc, const SceneSystem& sy
   if (!ranks || ranks->rank() == 0) try {
       if (!resume) check_output_room(sc, sys, output);
       // (The mass-spring model has no zones: its scene is refused with any.)
-      w = std::make_unique<OutputWriter>(
-          output, sc.mesh, sc.zones,
-          RunInfo{sc.file.text_as_run(), sc.file.name(), "run", scene_record(sc), sc.file.input_digests()},
-          sc.output.pressure && sys.has_tets(), opt.mode);
+      w = std::make_unique<OutputWriter>(output, sc.mesh, sc.zones, run_info(sc, "run"),
+                                         sc.output.pressure && sys.has_tets(), opt.mode);
       rp = w->resume_point();
     } catch (...) {
       failed = std::current_exception();

@@ -47,6 +47,20 @@ void check_input_file(const std::string& path, const std::string& what, double m
                 " may have here");
 }
 
+void check_output_file(const std::string& path, const std::vector<std::string>& inputs, const std::string& what) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return;  // nothing there (or unreachable: the writer says why)
+  if (S_ISDIR(st.st_mode)) throw Error(path + ": is a directory (expected a path for " + what + ")");
+  if (!S_ISREG(st.st_mode))
+    throw Error(path + ": is " + kind_of(st.st_mode) + ", not a regular file (expected a path for " + what + ")");
+  for (const std::string& input : inputs) {
+    struct stat in {};
+    if (::stat(input.c_str(), &in) == 0 && in.st_dev == st.st_dev && in.st_ino == st.st_ino)
+      throw Error(path + ": is the input " + input + " (writing " + what +
+                  " there would destroy it; expected another path)");
+  }
+}
+
 std::string read_input_file(const std::string& path, const std::string& what, double max_bytes) {
   check_input_file(path, what, max_bytes);
   std::ifstream in(path, std::ios::binary);

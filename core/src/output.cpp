@@ -1,4 +1,5 @@
 #include "isochor/core/output.hpp"
+#include "isochor/core/input_file.hpp"
 
 #include <hdf5.h>
 
@@ -311,6 +312,8 @@ void OutputWriter::Impl::lock_path(Mode mode, const RunInfo& info) {
   if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory (expected an output file path)");
   if (std::filesystem::is_directory(xp, ec))
     throw Error(xp + ": is a directory (the run's XDMF sidecar is written there; expected a file or nothing)");
+  check_output_file(path, info.input_files, "the " + info.command + "'s output");
+  check_output_file(xp, info.input_files, "the " + info.command + "'s XDMF sidecar");
   existed = std::filesystem::exists(path, ec);
   if (mode == Mode::create && (existed || std::filesystem::exists(xp, ec)))
     throw Error((existed ? path : xp) + ": exists (pass --overwrite to replace it" +

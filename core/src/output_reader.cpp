@@ -350,7 +350,9 @@ int export_obj_sequence(const std::string& h5_path, const std::string& dir, cons
     std::string num = std::to_string(f);
     num.insert(0, static_cast<std::size_t>(std::max(0, width - static_cast<int>(num.size()))), '0');
     std::string file = (std::filesystem::path(dir) / (prefix + "_" + num + ".obj")).string();
-    // Written beside and renamed into place: a failed write (a full disk) leaves no partial file.
+    // Written beside and renamed into place: a failed write (a full disk) leaves no partial file;
+    // never over a device, a FIFO or the run itself.
+    check_output_file(file, {h5_path}, "an OBJ frame");
     const std::string part = file + ".part";
     {
       std::ofstream out(part);

@@ -711,6 +711,14 @@ void check_run_length(const Section& fr, const Section& in, const Scene& sc) {
                   sc.frames.duration, sc.frames.rate, frames);
     fr.fail(fr.has("duration") ? "duration" : "rate", buf);
   }
+  if (sc.frames.duration > 0 && sc.frames.duration * sc.frames.rate < 1 - 1e-9) {
+    char buf[240];
+    std::snprintf(buf, sizeof buf,
+                  "%g frames per second put the frame after t = 0 at %g s, past the run's end (frames.duration = %g "
+                  "s): only the start would be written (expected a rate of at least 1/duration)",
+                  sc.frames.rate, 1 / sc.frames.rate, sc.frames.duration);
+    fr.fail(fr.has("rate") ? "rate" : "duration", buf);
+  }
   double dt = 0;
   long max_steps = 0;
   if (ig.kind == IntegratorKind::backward_euler || ig.kind == IntegratorKind::semi_implicit) {

@@ -97,4 +97,11 @@ void bone_poses(const Scene& sc, double t, std::vector<double>& out) {
   }
 }
 
+RunInfo run_info(const Scene& sc, const std::string& command) {
+  RunInfo info{sc.file.text_as_run(), sc.file.name(), command, scene_record(sc), sc.file.input_digests(), {}};
+  info.input_files.push_back(sc.file.name());
+  for (const auto& [name, path] : sc.file.input_files()) info.input_files.push_back(path);
+  return info;
+}
+
 }  // namespace isochor

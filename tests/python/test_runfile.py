@@ -1,6 +1,7 @@
 """The one reader of run files (isochor._runfile): pure Python, so tools/ read runs without the
 compiled module; the colliders, their poses and scales, and up as the run recorded them."""
 import os
+import stat
 import subprocess
 import sys
 import tomllib
@@ -107,3 +108,19 @@ def test_bones_and_their_poses_are_where_the_joint_puts_them(tmp_path):
             np.testing.assert_allclose(b, 0, atol=1e-12)
             np.testing.assert_allclose(run.frame_positions(k)[bound], X[bound] @ A.T + b, atol=1e-12)
         assert run.num_frames == 5
+
+
+def test_a_tool_never_writes_over_what_it_reads_or_over_a_device(swing_with_colliders, tmp_path):
+    # export --out onto the run it reads, onto a FIFO and onto a directory: one line, exit 1, the
+    # run byte for byte as it was and the FIFO still a FIFO (a rename would have replaced it).
+    run = swing_with_colliders
+    before = open(run, "rb").read()
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    export = os.path.join(SOURCE, "tools", "export.py")
+    for out, message in ((run, "is the input"), (fifo, "is a FIFO (named pipe), not a regular file"),
+                         (tmp_path, "is a directory")):
+        p = subprocess.run([sys.executable, export, str(run), "--out", str(out)], capture_output=True, text=True)
+        assert p.returncode == 1 and len(p.stderr.splitlines()) == 1 and message in p.stderr, p.stderr
+    assert open(run, "rb").read() == before
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)

@@ -162,3 +162,25 @@ def test_an_export_onto_a_full_disk_is_one_line_and_leaves_the_old_folder(swing,
     assert "cannot be written" in p.stderr and "nothing was written" in p.stderr
     assert (out / "index.html").read_text() == "an earlier export"
     assert not os.path.exists(str(out) + ".part")
+
+
+def test_an_export_never_removes_a_folder_it_did_not_write(swing, tmp_path):
+    # A folder with the user's own files (here the run itself): refused in one line, every file
+    # kept; an earlier export (only what an export writes) is replaced.
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep me")
+    (mine / "index.html").write_text("mine too")
+    p = subprocess.run([EXE, "view", str(swing), "--export", str(mine)], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 1 and len(p.stderr.splitlines()) == 1, p.stderr
+    assert "is not a folder this command wrote" in p.stderr
+    assert (mine / "notes.txt").read_text() == "keep me" and (mine / "index.html").read_text() == "mine too"
+    here = subprocess.run([EXE, "view", str(swing), "--export", str(swing.parent)], capture_output=True, text=True,
+                          timeout=60)
+    assert here.returncode == 1 and os.path.exists(swing)
+    page = tmp_path / "page"
+    for _ in range(2):  # the second replaces the first
+        ok = subprocess.run([EXE, "view", str(swing), "--export", str(page), "--every", "10"], capture_output=True,
+                            text=True, timeout=60)
+        assert ok.returncode == 0, ok.stderr
+    assert (page / "index.html").exists()

@@ -4,6 +4,7 @@
 // it is read.
 #pragma once
 #include <string>
+#include <vector>
 
 namespace isochor {
 
@@ -21,6 +22,13 @@ constexpr double kRun = 1024.0 * 1024 * 1024 * 1024;  // HDF5 run files
 // a character device / ..., not a regular file", or "...: N MB, more than the M MB a WHAT may
 // have", naming what was expected.
 void check_input_file(const std::string& path, const std::string& what, double max_bytes);
+
+// Before an output is written at `path`: where something is there already, it must be a regular
+// file other than every file in `inputs` (the scene, its mesh, a run being exported...). Throws
+// Error "PATH: is a directory / a FIFO ..., not a regular file (expected a path for WHAT)" or
+// "PATH: is the input INPUT (writing WHAT there would destroy it; expected another path)".
+// Nothing there is fine (a new file); whether it may be replaced is the caller's rule.
+void check_output_file(const std::string& path, const std::vector<std::string>& inputs, const std::string& what);
 
 // The whole file, after check_input_file.
 std::string read_input_file(const std::string& path, const std::string& what, double max_bytes);

@@ -58,6 +58,8 @@ struct RunInfo {
   std::string command;     // e.g. "run", "mesh"
   SceneRecord scene;       // written as /colliders and the root attributes up, up_source
   std::string inputs;      // SceneFile::input_digests(): a resume refuses a changed input file
+  // The files the scene read (the scene file first): the output must not be one of them.
+  std::vector<std::string> input_files;
 };
 
 struct Frame {

@@ -159,6 +159,9 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 Scene parse_scene(SceneFile file, const Mesh* character_mesh = nullptr);
 // What the run file records besides the body: the up direction, the colliders and the bones (output.hpp).
 SceneRecord scene_record(const Scene& sc);
+// What an output of the scene records of it (`command`: "run", "mesh"): its text as run, its file,
+// the record above, its inputs' digests and paths (an output never replaces one of them).
+RunInfo run_info(const Scene& sc, const std::string& command);
 // The skeleton's bones at time t as Frame::bone_poses holds them (12 per bone; empty without one).
 void bone_poses(const Scene& sc, double t, std::vector<double>& out);
 
