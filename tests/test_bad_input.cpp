@@ -119,6 +119,29 @@ TEST(BadInput, LengthsAndStepsAreCheckedAgainstWhatTheyCanMean) {
       has(scene_error("[mesh]\nfile = \"" + obj + "\"\nedge_length = 1e-5\n"), "mesh.edge_length: makes about"));
 }
 
+// Stiffness, density, acceleration and speed no body has: refused naming the key (they overflowed
+// or underflowed the forces and masses, and IDA stopped at t = 0 naming no key, or blamed nu).
+TEST(BadInput, MaterialAndMotionNumbersAreCheckedAgainstWhatTheyCanMean) {
+  EXPECT_TRUE(has(scene_error(kBox + "[material]\nE = 1e308\nnu = 0.3\n"),
+                  "material.E: expected a number in (0, 1e+13], got 1e+308"));
+  EXPECT_TRUE(has(scene_error(kBox + "[material]\nmu = 1e20\n"), "material.mu: expected a number in (0, 1e+13]"));
+  EXPECT_TRUE(
+      has(scene_error(kBox + "[material]\nlambda = 1e20\n"), "material.lambda: expected a number in [0, 1e+13]"));
+  EXPECT_TRUE(has(scene_error(kBox + "[material]\ndensity = 1e-308\n"),
+                  "material.density: expected a number in [0.001, 1e+06], got 1e-308"));
+  EXPECT_TRUE(has(scene_error(kBox + "[forces]\ngravity = [0.0, 0.0, -1e300]\n"),
+                  "forces.gravity: expected a list of numbers, each a number in [-1e+07, 1e+07], got -1e+300"));
+  EXPECT_TRUE(has(scene_error(kBox + "[initial]\nvelocity = [0.0, 0.0, 1e200]\n"),
+                  "initial.velocity: expected a list of numbers, each a number in [-100000, 100000], got 1e+200"));
+  // A frame interval longer than the run would write frame 0 alone.
+  EXPECT_TRUE(has(scene_error(kBox + "[frames]\nrate = 0.5\nduration = 1.0\n"),
+                  "frames.rate: 0.5 frames per second put the frame after t = 0 at 2 s, past the run's end"));
+  // The bounds leave every real scene alone: a stiff, dense, fast case still parses.
+  EXPECT_EQ(scene_error(kBox + "[material]\nE = 1.2e12\nnu = 0.2\ndensity = 22590.0\n[initial]\nvelocity = "
+                               "[0.0, 0.0, -3000.0]\n[forces]\ngravity = [0.0, 0.0, -1e5]\n"),
+            "");
+}
+
 TEST(BadInput, ARefusedResumeLeavesItsFileAsItWas) {
   const auto dir = test::temp_dir();
   const std::string path = (dir / "run.h5").string(), xdmf = (dir / "run.xdmf").string();

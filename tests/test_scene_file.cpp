@@ -266,8 +266,9 @@ std::string comparable(std::string cell) {
 std::string range_words(std::string cell) {
   if (cell.rfind("number", 0) != 0) return "";
   if (cell == "number") return "a finite number";
-  const std::pair<const char*, const char*> symbols[] = {
-      {"\u2212", "-"}, {"\u2265", ">="}, {"\u2264", "<="}, {"10\u2076", "1e6"}, {"10\u2078", "1e8"}};
+  const std::pair<const char*, const char*> symbols[] = {{"\u2212", "-"},     {"\u2265", ">="},
+                                                         {"\u2264", "<="},    {"10\u2076", "1e6"},
+                                                         {"10\u2078", "1e8"}, {"10\u00b9\u00b3", "1e13"}};
   for (const auto& [from, to] : symbols)
     for (std::size_t p; (p = cell.find(from)) != std::string::npos;) cell.replace(p, std::strlen(from), to);
   std::string out = "a ";

@@ -118,7 +118,7 @@ void parse_material_regions(const Section& material, Scene& sc) {
     region.tets = region_tets(r, sc);
     std::tie(region.mu, region.lambda) = parse_lame(r, sc.material.mu, sc.material.lambda);
     if (!std::isfinite(region.lambda)) r.fail("nu", "expected nu < 0.5 (nu = 0.5 is for XPBD's incompressible limit)");
-    region.density = r.number("density", sc.material.density, Range::positive());
+    region.density = r.number("density", sc.material.density, Range::density());
     sc.material.regions.push_back(std::move(region));
   }
 }

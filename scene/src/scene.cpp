@@ -147,8 +147,8 @@ const char* name_of(const std::vector<std::pair<std::string, E>>& table, E e) {
 std::pair<double, double> parse_lame(const Section& s, double mu, double lambda) {
   const bool lame = s.has("mu") || s.has("lambda"), young = s.has("E") || s.has("nu");
   if (lame && young) s.fail(s.has("E") ? "E" : "nu", "give either mu and lambda or E and nu, not both");
-  if (!young) return {s.number("mu", mu, Range::positive()), s.number("lambda", lambda, Range::non_negative())};
-  const double E = s.number("E", 1e5, Range::positive());
+  if (!young) return {s.number("mu", mu, Range::modulus()), s.number("lambda", lambda, Range::modulus_or_zero())};
+  const double E = s.number("E", 1e5, Range::modulus());
   const double nu = s.number("nu", 0.45, {-1.0, 0.5, true, false});
   if (nu == 0.5) return {lame_from_young(E, nu).first, std::numeric_limits<double>::infinity()};  // XPBD only
   return lame_from_young(E, nu);
@@ -159,7 +159,7 @@ namespace {
 MaterialSpec parse_material(const Section& s) {
   MaterialSpec m;
   m.model = parse_choice(s, "model", m.model, kModels);
-  m.density = s.number("density", m.density, Range::positive());
+  m.density = s.number("density", m.density, Range::density());
   std::tie(m.mu, m.lambda) = parse_lame(s, 1e4, 9e4);
   m.beta = s.number("beta", m.beta, Range::non_negative());
   m.epsilon = s.number("epsilon", m.epsilon, {0.0, 1.0, true, false});
@@ -837,7 +837,7 @@ Scene parse_scene(SceneFile file, const Mesh* character_mesh) {
   settle_zones(root.table("zones"), std::move(zone_choice), sc);
 
   const Section forces = root.table("forces");
-  sc.gravity = forces.vec3("gravity", sc.gravity);
+  sc.gravity = forces.vec3("gravity", sc.gravity, Range::acceleration());
   sc.gravity_ramp = forces.number("gravity_ramp", 0.0, Range::non_negative());
   parse_colliders(root, sc);
   for (const Section& l : root.tables("load")) parse_load(l, sc.mesh, sc);
@@ -845,7 +845,7 @@ Scene parse_scene(SceneFile file, const Mesh* character_mesh) {
   sc.damping.alpha = damping.number("alpha", 0.0, Range::non_negative());
   sc.damping.beta = damping.number("beta", 0.0, Range::non_negative());
   const Section initial = root.table("initial");
-  sc.initial_velocity = initial.vec3("velocity", Eigen::Vector3d::Zero());
+  sc.initial_velocity = initial.vec3("velocity", Eigen::Vector3d::Zero(), Range::speed());
   parse_flatten(initial, sc);
   parse_start_from(initial, sc);
   parse_start_displacement(initial, sc);

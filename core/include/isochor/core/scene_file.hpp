@@ -35,6 +35,18 @@ struct Range {
   static Range length() { return {0.0, 1e6, true, false}; }
   // A coordinate in metres, within 1000 km of the origin (for the same reason).
   static Range coordinate() { return {-1e6, 1e6, false, false}; }
+  // A stiffness in pascals that a solid can have: at most 1e13 Pa (diamond's Young's modulus is
+  // 1.2e12 Pa; 1e308 overflowed the Lamé parameters and was reported against nu).
+  static Range modulus() { return {0.0, 1e13, true, false}; }
+  static Range modulus_or_zero() { return {0.0, 1e13, false, false}; }
+  // A mass density in kg/m³: from 1e-3 (below any aerogel) to 1e6 (fifty times osmium); 1e-308
+  // underflowed the masses and IDA failed at t = 0 without a reason.
+  static Range density() { return {1e-3, 1e6, false, false}; }
+  // An acceleration in m/s² (each component): within 1e7 (a million g); 1e300 overflowed the
+  // forces and IDA stopped at t = 0 with "tstop is behind current t".
+  static Range acceleration() { return {-1e7, 1e7, false, false}; }
+  // A speed in m/s (each component): within 1e5 (ten times the fastest projectile).
+  static Range speed() { return {-1e5, 1e5, false, false}; }
   bool contains(double v) const;
   std::string describe() const;
 };
