@@ -133,6 +133,11 @@ TEST(BadInput, MaterialAndMotionNumbersAreCheckedAgainstWhatTheyCanMean) {
                   "forces.gravity: expected a list of numbers, each a number in [-1e+07, 1e+07], got -1e+300"));
   EXPECT_TRUE(has(scene_error(kBox + "[initial]\nvelocity = [0.0, 0.0, 1e200]\n"),
                   "initial.velocity: expected a list of numbers, each a number in [-100000, 100000], got 1e+200"));
+  // Tolerances that accept any step: a relative one above 1, an absolute one longer than a body.
+  EXPECT_TRUE(has(scene_error(kBox + "[integrator]\nkind = \"ida\"\nrtol = 2.0\n"),
+                  "integrator.rtol: expected a number in (0, 1], got 2"));
+  EXPECT_TRUE(has(scene_error(kBox + "[integrator]\nkind = \"ida\"\natol = 1e300\n"),
+                  "integrator.atol: expected a number in (0, 1e+06], got 1e+300"));
   // A frame interval longer than the run would write frame 0 alone.
   EXPECT_TRUE(has(scene_error(kBox + "[frames]\nrate = 0.5\nduration = 1.0\n"),
                   "frames.rate: 0.5 frames per second put the frame after t = 0 at 2 s, past the run's end"));

@@ -7,8 +7,9 @@ namespace isochor {
 
 void parse_ida(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
   IdaOptions& o = spec.ida;
-  o.rtol = in.number("rtol", 1e-6, Range::positive());
-  o.atol_q = in.number("atol", 1e-8, Range::positive());
+  // A relative tolerance above 1 and an absolute one longer than a body accept any step.
+  o.rtol = in.number("rtol", 1e-6, {0.0, 1.0, true, false});
+  o.atol_q = in.number("atol", 1e-8, Range::length());
   o.atol_v = in.number("atol_v", 0.0, Range::non_negative());
   o.atol_lambda = in.number("atol_lambda", 0.0, Range::non_negative());
   o.max_order = static_cast<int>(in.integer("max_order", 5, 1, 5));
