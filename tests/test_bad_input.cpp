@@ -133,6 +133,8 @@ TEST(BadInput, MaterialAndMotionNumbersAreCheckedAgainstWhatTheyCanMean) {
                   "forces.gravity: expected a list of numbers, each a number in [-1e+07, 1e+07], got -1e+300"));
   EXPECT_TRUE(has(scene_error(kBox + "[initial]\nvelocity = [0.0, 0.0, 1e200]\n"),
                   "initial.velocity: expected a list of numbers, each a number in [-100000, 100000], got 1e+200"));
+  EXPECT_TRUE(has(scene_error(kBox + "[damping]\nalpha = 1e300\n"), "damping.alpha: expected a number in [0, 1e+06]"));
+  EXPECT_TRUE(has(scene_error(kBox + "[damping]\nbeta = 1e300\n"), "damping.beta: expected a number in [0, 1000]"));
   // Tolerances that accept any step: a relative one above 1, an absolute one longer than a body.
   EXPECT_TRUE(has(scene_error(kBox + "[integrator]\nkind = \"ida\"\nrtol = 2.0\n"),
                   "integrator.rtol: expected a number in (0, 1], got 2"));

@@ -842,8 +842,10 @@ Scene parse_scene(SceneFile file, const Mesh* character_mesh) {
   parse_colliders(root, sc);
   for (const Section& l : root.tables("load")) parse_load(l, sc.mesh, sc);
   const Section damping = root.table("damping");
-  sc.damping.alpha = damping.number("alpha", 0.0, Range::non_negative());
-  sc.damping.beta = damping.number("beta", 0.0, Range::non_negative());
+  // Rayleigh damping a body can have: alpha = 1e6 1/s relaxes velocities in a microsecond, beta =
+  // 1e3 s overdamps every mode above 0.002 rad/s; 1e300 stopped IDA at t = 0 naming no key.
+  sc.damping.alpha = damping.number("alpha", 0.0, Range::closed(0.0, 1e6));
+  sc.damping.beta = damping.number("beta", 0.0, Range::closed(0.0, 1e3));
   const Section initial = root.table("initial");
   sc.initial_velocity = initial.vec3("velocity", Eigen::Vector3d::Zero(), Range::speed());
   parse_flatten(initial, sc);
