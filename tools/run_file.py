@@ -28,17 +28,20 @@ def note_input(path):
     _INPUTS.append(path)
 
 
+_KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
+          (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
 def check_output(path, what="the output"):
     """One line and exit 1 where `path` holds something other than a regular file (a directory, a
-    FIFO, a device: a rename would replace it) or is a file this process read."""
-    if not os.path.lexists(path):
+    FIFO, a device: a rename would replace it) or is a file this process read (the words of the
+    command line's check_output_file, core/input_file.hpp)."""
+    if not os.path.exists(path):
         return
-    st = os.stat(path)
-    kind = ("a directory" if stat.S_ISDIR(st.st_mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(st.st_mode)
-            else "a character device" if stat.S_ISCHR(st.st_mode) else "a block device" if stat.S_ISBLK(st.st_mode)
-            else "a socket" if stat.S_ISSOCK(st.st_mode) else None)
-    if kind:
-        sys.exit(f"{path}: is {kind}, not a regular file (expected a path for {what})")
+    mode = os.stat(path).st_mode
+    for is_kind, kind in _KINDS:
+        if is_kind(mode):
+            sys.exit(f"{path}: is {kind}, not a regular file (expected a path for {what})")
     for p in _INPUTS:
         if os.path.exists(p) and os.path.samefile(p, path):
             sys.exit(f"{path}: is the input {p} (writing {what} there would destroy it; expected another path)")

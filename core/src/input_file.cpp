@@ -50,7 +50,6 @@ void check_input_file(const std::string& path, const std::string& what, double m
 void check_output_file(const std::string& path, const std::vector<std::string>& inputs, const std::string& what) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) return;  // nothing there (or unreachable: the writer says why)
-  if (S_ISDIR(st.st_mode)) throw Error(path + ": is a directory (expected a path for " + what + ")");
   if (!S_ISREG(st.st_mode))
     throw Error(path + ": is " + kind_of(st.st_mode) + ", not a regular file (expected a path for " + what + ")");
   for (const std::string& input : inputs) {

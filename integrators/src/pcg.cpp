@@ -286,9 +286,6 @@ class BlockJacobiPcg : public SymmetricSolver {
   long iterations_ = 0;
 };
 
-}  // namespace
-
-namespace {
 // A solver that each rank runs on its own rows (hypre's BoomerAMG-preconditioned CG across the
 // ranks): after a solve every rank's rows of x go to every rank, and every rank takes the same
 // verdict, as with PCG on ranks.
@@ -309,6 +306,7 @@ class RowsOnRanks : public SymmetricSolver {
   std::unique_ptr<SymmetricSolver> rows_;
   DofPartition part_;
 };
+
 }  // namespace
 
 std::unique_ptr<SymmetricSolver> make_symmetric_solver(const SparsePattern& pattern, SymmetricSolverKind kind,

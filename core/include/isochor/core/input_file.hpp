@@ -25,7 +25,7 @@ void check_input_file(const std::string& path, const std::string& what, double m
 
 // Before an output is written at `path`: where something is there already, it must be a regular
 // file other than every file in `inputs` (the scene, its mesh, a run being exported...). Throws
-// Error "PATH: is a directory / a FIFO ..., not a regular file (expected a path for WHAT)" or
+// Error "PATH: is a directory / a FIFO / ..., not a regular file (expected a path for WHAT)" or
 // "PATH: is the input INPUT (writing WHAT there would destroy it; expected another path)".
 // Nothing there is fine (a new file); whether it may be replaced is the caller's rule.
 void check_output_file(const std::string& path, const std::vector<std::string>& inputs, const std::string& what);
