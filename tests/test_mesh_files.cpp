@@ -5,6 +5,7 @@
 
 #include "isochor/base/error.hpp"
 #include "isochor/core/meshing.hpp"
+#include "isochor/core/scene_file.hpp"
 #include "test_util.hpp"
 
 using namespace isochor;
@@ -224,4 +225,25 @@ TEST(MeshFiles, GeoScriptIsMeshedWithItsPhysicalGroups) {
       test::write_file(d / "flat.geo", "Point(1) = {0, 0, 0, 1};\nPoint(2) = {1, 0, 0, 1};\nLine(1) = {1, 2};\n");
   EXPECT_NE(test::error_of([&] { read_geo(flat, 0.0); }).find("defines no volume"), std::string::npos);
   EXPECT_EQ(read_geo(cook, 0.0).num_tets(), m.num_tets());  // the same mesh again, Gmsh not locked
+}
+
+// mesh.parameters define a .geo script's DefineConstant numbers: cook.geo at N = 16 is h = 3
+// thick, so its volume is 1440 x 3 and its back face at z = 3 (at the script's N = 8: 6); other
+// mesh files refuse the key, and a name that is no .geo identifier is named.
+TEST(MeshFiles, GeoParametersReplaceTheScriptsConstants) {
+  const std::string cook = std::string(ISOCHOR_SOURCE_DIR) + "/demos/meshes/cook.geo";
+  const Mesh m = read_geo(cook, 0.0, {{"N", 16.0}});
+  EXPECT_NEAR(m.rest_volume(), 1440.0 * 3.0, 1e-9 * 1440.0 * 3.0);
+  ASSERT_EQ(m.node_sets.count("back"), 1u);
+  for (int n : m.node_sets.at("back")) EXPECT_NEAR(m.rest_positions()(2, n), 3.0, 1e-9);
+  EXPECT_NEAR(m.rest_positions().row(2).maxCoeff(), 3.0, 1e-9);
+  auto mesh_of = [](const std::string& text) {
+    const SceneFile f = SceneFile::parse(text, "p.toml");
+    return mesh_from_scene(f.root().table("mesh"), f);
+  };
+  EXPECT_EQ(mesh_of("[mesh]\nfile = \"" + cook + "\"\nparameters = { N = 16 }\n").num_tets(), m.num_tets());
+  std::string msg = test::error_of([&] { mesh_of("[mesh]\nfile = \"x.msh\"\nparameters = { N = 16 }\n"); });
+  EXPECT_NE(msg.find("mesh.parameters: applies to a .geo script only"), std::string::npos) << msg;
+  msg = test::error_of([&] { mesh_of("[mesh]\nfile = \"" + cook + "\"\nparameters = { 2N = 16 }\n"); });
+  EXPECT_NE(msg.find("mesh.parameters.2N: is not a .geo variable name"), std::string::npos) << msg;
 }

@@ -417,6 +417,33 @@ Bordered chain_system(int nodes, int m, double shift_along_rows, double shift_ev
 }
 }  // namespace
 
+namespace {
+// The bordered system's dense KKT matrix [A G^T; G 0].
+Eigen::MatrixXd dense_kkt(const Bordered& s) {
+  const Index n = s.dense_A.rows(), M = static_cast<Index>(s.rows.size());
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n + M, n + M);
+  K.topLeftCorner(n, n) = s.dense_A;
+  for (Index j = 0; j < M; ++j)
+    for (std::size_t k = 0; k < s.rows[j].size(); ++k) K(n + j, s.rows[j][k]) = K(s.rows[j][k], n + j) = s.G[j][k];
+  return K;
+}
+
+// The solver's x and multipliers against Eigen's full-pivoting LU of the dense KKT matrix.
+void expect_solves_as_dense_lu(const Bordered& s, BorderedSolver& solver, const std::string& what) {
+  const Index n = s.dense_A.rows(), M = static_cast<Index>(s.rows.size());
+  const Eigen::MatrixXd K = dense_kkt(s);
+  const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(n + M, -1.0, 2.0).array().sin();
+  const Eigen::VectorXd reference = K.fullPivLu().solve(rhs);
+  ASSERT_LT((K * reference - rhs).norm(), 1e-10 * rhs.norm()) << what;
+  Eigen::VectorXd x(n), l(M);
+  ASSERT_TRUE(solver.factor(s.a.data())) << what;
+  ASSERT_TRUE(solver.set_borders(s.G)) << what;
+  ASSERT_TRUE(solver.solve(rhs.data(), rhs.data() + n, x.data(), l.data())) << what;
+  EXPECT_LT((x - reference.head(n)).norm(), 1e-9 * reference.head(n).norm()) << what;
+  EXPECT_LT((l - reference.tail(M)).norm(), 1e-9 * reference.tail(M).norm()) << what;
+}
+}  // namespace
+
 // Many constraints with CHOLMOD: the sparse border (a penalty rho g g^T per local row in A, CG on
 // the Schur complement) solves [A G^T; G 0] as the dense KKT matrix does: Eigen's full-pivoting LU
 // of the whole matrix is the reference, for A definite and for A indefinite along the rows (a
@@ -429,26 +456,36 @@ TEST(Statics, TheSparseBorderSolvesTheKktSystemOfManyConstraints) {
     long fallbacks;
   };
   for (const Case& c : {Case{0.0, 0.0, 0}, Case{2.0, 0.0, 0}, Case{0.0, 0.5, 1}}) {
-    const int nodes = 200, m = 120;
-    Bordered s = chain_system(nodes, m, c.along_rows, c.everywhere);
-    const Index n = 3 * nodes, M = m + 1;
+    const Bordered s = chain_system(200, 120, c.along_rows, c.everywhere);
     BorderedSolver solver(s.A, s.rows, SymmetricSolverKind::cholmod);
     ASSERT_TRUE(solver.sparse_border());
-    Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n + M, n + M);
-    K.topLeftCorner(n, n) = s.dense_A;
-    for (Index j = 0; j < M; ++j)
-      for (std::size_t k = 0; k < s.rows[j].size(); ++k) K(n + j, s.rows[j][k]) = K(s.rows[j][k], n + j) = s.G[j][k];
-    const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(n + M, -1.0, 2.0).array().sin();
-    const Eigen::VectorXd reference = K.fullPivLu().solve(rhs);
-    ASSERT_LT((K * reference - rhs).norm(), 1e-10 * rhs.norm());
-    Eigen::VectorXd x(n), l(M);
-    ASSERT_TRUE(solver.factor(s.a.data()));
-    ASSERT_TRUE(solver.set_borders(s.G));
-    ASSERT_TRUE(solver.solve(rhs.data(), rhs.data() + n, x.data(), l.data()));
-    EXPECT_LT((x - reference.head(n)).norm(), 1e-9 * reference.head(n).norm()) << c.along_rows << " " << c.everywhere;
-    EXPECT_LT((l - reference.tail(M)).norm(), 1e-9 * reference.tail(M).norm()) << c.along_rows << " " << c.everywhere;
+    EXPECT_EQ(solver.pinned_dofs(), 0);
+    expect_solves_as_dense_lu(s, solver, std::to_string(c.along_rows) + " " + std::to_string(c.everywhere));
     EXPECT_EQ(solver.kkt_fallbacks(), c.fallbacks);
     // Tens of CG iterations, not m: the penalty makes the Schur complement well conditioned.
     if (c.fallbacks == 0) EXPECT_LT(solver.border_iterations(), 40);
   }
+}
+
+// Rows on one dof (supports, rollers: c x_i = r) take their dof out of the factored matrix; the
+// elimination is exact, so the solution and every multiplier, the pinning rows' included, are the
+// dense LU's. With the other rows (some on pinned dofs too), with A indefinite along them, and
+// with pinning rows alone (no row left beside them).
+TEST(Statics, RowsOnOneDofLeaveTheSparseBordersMatrix) {
+  for (const double along_rows : {0.0, 2.0})
+    for (const bool alone : {false, true}) {
+      if (alone && along_rows > 0) continue;  // A indefinite with no row to make it a minimum
+      Bordered s = chain_system(200, 120, along_rows, 0.0);
+      if (alone) s.rows.clear(), s.G.clear();
+      Index pinned = 0;
+      for (int k = 0; k < 200; ++k) {
+        if (k % 4 == 0) s.rows.push_back({3 * k + 2}), s.G.push_back({1.0 + 0.5 * std::sin(double(k))}), ++pinned;
+        if (k % 7 == 0) s.rows.push_back({3 * k}), s.G.push_back({-2.0}), ++pinned;
+      }
+      BorderedSolver solver(s.A, s.rows, SymmetricSolverKind::cholmod);
+      ASSERT_TRUE(solver.sparse_border());
+      EXPECT_EQ(solver.pinned_dofs(), pinned);
+      expect_solves_as_dense_lu(s, solver, std::to_string(along_rows) + (alone ? " alone" : " with rows"));
+      EXPECT_EQ(solver.kkt_fallbacks(), 0);
+    }
 }

@@ -458,7 +458,35 @@ Mesh read_msh(const std::string& path) {
   return finish(std::move(raw.e), path, std::move(raw.zones), std::move(raw.sets));
 }
 
-Mesh read_geo(const std::string& path, double edge_length) {
+namespace {
+// Opens a .geo script with `parameters` defined before it: Gmsh 4.8's API cannot set a parser
+// variable, so they are written as a script of assignments that is opened first, and the script
+// merged after it (a DefineConstant leaves a variable that exists as it is).
+void open_geo(const std::string& path, const std::vector<std::pair<std::string, double>>& parameters) {
+  if (parameters.empty()) return gmsh::open(path);
+  std::string text;
+  char line[256];
+  for (const auto& [name, value] : parameters) {
+    std::snprintf(line, sizeof line, " = %.17g;\n", value);
+    text += name + line;
+  }
+  std::string temp = (std::filesystem::temp_directory_path() / "isochor-geo-XXXXXX.geo").string();
+  const int fd = mkstemps(temp.data(), 4);
+  if (fd < 0) throw Error(path + ": could not write the parameters' script in " + temp + ": " + std::strerror(errno));
+  const bool written = ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+  ::close(fd);
+  struct Remove {
+    std::string p;
+    ~Remove() { std::remove(p.c_str()); }
+  } remove{temp};
+  if (!written) throw Error(path + ": could not write the parameters' script " + temp);
+  gmsh::open(temp);
+  gmsh::merge(path);
+}
+}  // namespace
+
+Mesh read_geo(const std::string& path, double edge_length,
+              const std::vector<std::pair<std::string, double>>& parameters) {
   check_readable(path, "a Gmsh .geo script", input_limits::kScene);
   const std::string expected = "Gmsh could not read or mesh the .geo script";
   // In a child process: a syntax error leaves Gmsh locked for the rest of the process (read_msh).
@@ -470,7 +498,7 @@ Mesh read_geo(const std::string& path, double edge_length) {
         gmsh::option::setNumber("Mesh.MeshSizeMax", edge_length);
         gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
       }
-      gmsh::open(path);
+      open_geo(path, parameters);
       std::string err = GmshSession::first_error();
       if (!err.empty()) throw Error(path + ": is not a readable .geo script: " + err);
       // A script that meshes itself (Mesh 3;) leaves tets; otherwise its volumes are meshed here.

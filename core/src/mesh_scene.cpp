@@ -1,4 +1,6 @@
 // The [mesh] block of a scene.
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
 
 #include <cmath>
@@ -56,12 +58,28 @@ Mesh mesh_surface_file(const Section& s, const std::string& path) {
   return mesh_closed_surface(path, h);
 }
 
+// [mesh] parameters = { N = 64 }: numbers a .geo script reads, each name a Gmsh identifier.
+std::vector<std::pair<std::string, double>> geo_parameters(const Section& s) {
+  std::vector<std::pair<std::string, double>> out;
+  const Section p = s.table("parameters");
+  if (!p.exists()) return out;
+  for (const std::string& name : p.keys()) {
+    const bool identifier = !name.empty() && !std::isdigit(static_cast<unsigned char>(name[0])) &&
+                            std::all_of(name.begin(), name.end(),
+                                        [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+    if (!identifier) p.fail(name, "is not a .geo variable name (expected letters, digits and _, not first a digit)");
+    out.emplace_back(name, p.number(name, 0.0, Range::closed(-1e15, 1e15)));
+  }
+  return out;
+}
+
 // [mesh] file = "...": by its extension.
 Mesh mesh_from_file(const Section& s, const SceneFile& file, const Eigen::Vector3d& center) {
   const std::string name = s.string("file", "");
   const std::string path = file.resolve_path(name);
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(c));
+  if (ext != ".geo" && s.has("parameters")) s.fail("parameters", "applies to a .geo script only");
   Mesh m;
   if (ext == ".msh")
     m = read_msh(path);
@@ -70,7 +88,7 @@ Mesh mesh_from_file(const Section& s, const SceneFile& file, const Eigen::Vector
   else if (ext == ".obj" || ext == ".stl")
     m = mesh_surface_file(s, path);
   else if (ext == ".geo")
-    m = read_geo(path, s.number("edge_length", 0.0, Range::non_negative()));
+    m = read_geo(path, s.number("edge_length", 0.0, Range::non_negative()), geo_parameters(s));
   else
     s.fail("file", "\"" + name + "\" has an unknown extension, expected .msh, .geo, .node, .ele, .obj or .stl");
   if (center != Eigen::Vector3d::Zero()) s.fail("center", "applies to shapes only, not to a mesh file");

@@ -39,28 +39,91 @@ BorderedSolver::BorderedSolver(const SparsePattern& A, const std::vector<std::ve
     Z_.setZero(n_, m_);
     return;
   }
+  // A dof that exactly one row on one dof names is pinned (two such rows on a dof stay rows: the
+  // KKT matrix is singular there, and the solver says so as before).
+  std::vector<int> single(n_, 0);
+  for (const std::vector<Index>& r : rows)
+    if (r.size() == 1) single[r[0]]++;
+  std::vector<Index> dofs, pin_rows;
+  for (Index j = 0; j < m_; ++j)
+    if (rows[j].size() == 1 && single[rows[j][0]] == 1) {
+      dofs.push_back(rows[j][0]);
+      pin_rows.push_back(j);
+    }
+  if (dofs.empty()) {
+    init_sparse(A);
+    return;
+  }
+  pins_ = std::make_unique<Pins>(A, rows, std::move(dofs), std::move(pin_rows));
+  a_pattern_ = A;
+  a_values_.resize(A.nnz());
+}
+
+BorderedSolver::BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows, SparseBorder)
+    : rows_(rows), n_(A.n), m_(static_cast<Index>(rows.size())), sparse_(true) {
+  init_sparse(A);
+}
+
+BorderedSolver::Pins::Pins(const SparsePattern& A, const std::vector<std::vector<Index>>& all_rows,
+                           std::vector<Index> pinned_dof, std::vector<Index> pinned_row)
+    : dof(std::move(pinned_dof)), row(std::move(pinned_row)) {
+  std::vector<Index> inner_of(A.n, 0);
+  for (Index d : dof) inner_of[d] = -1;
+  for (Index i = 0; i < A.n; ++i)
+    if (inner_of[i] == 0) {
+      inner_of[i] = static_cast<Index>(free_dofs.size());
+      free_dofs.push_back(i);
+    }
+  std::vector<char> pins_it(all_rows.size(), 0);
+  for (Index j : row) pins_it[j] = 1;
+  for (std::size_t j = 0; j < all_rows.size(); ++j) {
+    if (pins_it[j]) continue;
+    other_rows.push_back(static_cast<Index>(j));
+    rows.emplace_back();
+    kept.emplace_back();
+    for (std::size_t k = 0; k < all_rows[j].size(); ++k)
+      if (inner_of[all_rows[j][k]] >= 0) {
+        rows.back().push_back(inner_of[all_rows[j][k]]);
+        kept.back().push_back(static_cast<Index>(k));
+      }
+    G.emplace_back(rows.back().size());
+  }
+  std::vector<std::pair<Index, Index>> entries;
+  for (Index c : free_dofs)
+    for (Index k = A.col_ptr[c]; k < A.col_ptr[c + 1]; ++k)
+      if (inner_of[A.row_ind[k]] >= 0) entries.emplace_back(inner_of[c], inner_of[A.row_ind[k]]);
+  pattern = SparsePattern::from_entries(static_cast<Index>(free_dofs.size()), std::move(entries));
+  a_free.resize(pattern.nnz());
+  a_values.resize(pattern.nnz());
+  for (Index c = 0; c < pattern.n; ++c)
+    for (Index k = pattern.col_ptr[c]; k < pattern.col_ptr[c + 1]; ++k)
+      a_free[k] = A.find(free_dofs[pattern.row_ind[k]], free_dofs[c]);
+  inner = std::make_unique<BorderedSolver>(pattern, rows, SparseBorder{});
+}
+
+void BorderedSolver::init_sparse(const SparsePattern& A) {
   std::vector<char> local(m_);
-  for (Index j = 0; j < m_; ++j) local[j] = static_cast<Index>(rows[j].size()) <= kLocalDofs;
-  const SparsePattern P = augmented_pattern(A, rows, local);
+  for (Index j = 0; j < m_; ++j) local[j] = static_cast<Index>(rows_[j].size()) <= kLocalDofs;
+  const SparsePattern P = augmented_pattern(A, rows_, local);
   if (P.nnz() > std::numeric_limits<std::int32_t>::max())  // the clique slots are 32-bit
     throw Error("the sparse border's matrix has " + std::to_string(P.nnz()) +
                 " entries, more than 2^31: use integrator.linear_solver = \"klu\"");
-  A_ = make_symmetric_solver(P, kind, tol);
+  A_ = make_symmetric_solver(P, SymmetricSolverKind::cholmod);
   A_->refuse_indefinite();  // set_sparse_borders raises rho instead
   a_slot_.resize(A.nnz());
   for (Index c = 0; c < n_; ++c)
     for (Index k = A.col_ptr[c]; k < A.col_ptr[c + 1]; ++k) a_slot_[k] = P.find(A.row_ind[k], c);
   clique_begin_.assign(m_ + 1, 0);
   for (Index j = 0; j < m_; ++j) {
-    const Index d = local[j] ? static_cast<Index>(rows[j].size()) : 0;
+    const Index d = local[j] ? static_cast<Index>(rows_[j].size()) : 0;
     clique_begin_[j + 1] = clique_begin_[j] + d * d;
   }
   clique_.resize(clique_begin_[m_]);
   for (Index j = 0; j < m_; ++j) {
     if (!local[j]) continue;
     std::int32_t* s = clique_.data() + clique_begin_[j];
-    for (Index a : rows[j])
-      for (Index b : rows[j]) *s++ = static_cast<std::int32_t>(P.find(b, a));
+    for (Index a : rows_[j])
+      for (Index b : rows_[j]) *s++ = static_cast<std::int32_t>(P.find(b, a));
   }
   diag_.resize(n_);
   for (Index i = 0; i < n_; ++i) diag_[i] = A.find(i, i);
@@ -75,11 +138,22 @@ BorderedSolver::~BorderedSolver() = default;
 bool BorderedSolver::factor(const double* A_values) {
   if (!sparse_) return A_->factor(A_values);
   std::copy(A_values, A_values + a_values_.size(), a_values_.begin());  // factored with the borders
-  return true;
+  if (!pins_) return true;
+  for (std::size_t k = 0; k < pins_->a_free.size(); ++k) pins_->a_values[k] = A_values[pins_->a_free[k]];
+  return pins_->inner->factor(pins_->a_values.data());
 }
 
 bool BorderedSolver::set_borders(const std::vector<std::vector<double>>& G) {
-  if (m_ == 0) return true;
+  if (m_ == 0 && !sparse_) return true;  // the sparse border factors A_rho here
+  if (pins_) {
+    G_ = G;
+    for (Index j : pins_->row)
+      if (!(G[j][0] != 0.0 && std::isfinite(G[j][0]))) return false;  // no dof pinned by it
+    for (std::size_t o = 0; o < pins_->other_rows.size(); ++o)
+      for (std::size_t k = 0; k < pins_->kept[o].size(); ++k)
+        pins_->G[o][k] = G[pins_->other_rows[o]][pins_->kept[o][k]];
+    return pins_->inner->set_borders(pins_->G);
+  }
   if (sparse_) return set_sparse_borders(G);
   Gt_.setZero();
   for (Index j = 0; j < m_; ++j)
@@ -178,6 +252,7 @@ void BorderedSolver::apply_Gt(const Eigen::VectorXd& y, Eigen::VectorXd& x) cons
 }
 
 bool BorderedSolver::solve(const double* r1, const double* r2, double* x, double* l) {
+  if (pins_) return solve_pinned(r1, r2, x, l);
   if (sparse_) return solve_sparse(r1, r2, x, l);
   Eigen::Map<Eigen::VectorXd> y(x, n_);
   const bool ok = A_->solve(r1, x);
@@ -268,6 +343,39 @@ bool BorderedSolver::solve_sparse(const double* r1, const double* r2, double* x,
   Eigen::Map<Eigen::VectorXd>(x, n_) = xs;
   Eigen::Map<Eigen::VectorXd>(l, m_) = ls;
   return true;
+}
+
+// x_P = r2_P / c from the pinning rows; the other dofs and rows from the inner system with x_P's
+// part moved to the right-hand side; then each pinning row's multiplier from its dof's row of the
+// first block, c l_j = r1_i - (A x)_i - sum over the other rows of G_oi l_o.
+bool BorderedSolver::solve_pinned(const double* r1, const double* r2, double* x, double* l) {
+  const Pins& p = *pins_;
+  Eigen::Map<Eigen::VectorXd> X(x, n_), L(l, m_);
+  X.setZero();
+  for (std::size_t k = 0; k < p.dof.size(); ++k) X[p.dof[k]] = r2[p.row[k]] / G_[p.row[k]][0];
+  Eigen::VectorXd e = Eigen::Map<const Eigen::VectorXd>(r1, n_);
+  a_pattern_.add_product(a_values_.data(), x, -1.0, e.data());  // r1 - A x_P
+  const Index nf = static_cast<Index>(p.free_dofs.size()), mo = static_cast<Index>(p.other_rows.size());
+  Eigen::VectorXd f1(nf), f2(mo), xf(nf), lo(mo);
+  for (Index i = 0; i < nf; ++i) f1[i] = e[p.free_dofs[i]];
+  for (Index o = 0; o < mo; ++o) {
+    const Index j = p.other_rows[o];
+    double s = r2[j];
+    for (std::size_t k = 0; k < rows_[j].size(); ++k) s -= G_[j][k] * X[rows_[j][k]];
+    f2[o] = s;
+  }
+  if (!p.inner->solve(f1.data(), f2.data(), xf.data(), lo.data())) return false;
+  for (Index i = 0; i < nf; ++i) X[p.free_dofs[i]] = xf[i];
+  L.setZero();
+  for (Index o = 0; o < mo; ++o) L[p.other_rows[o]] = lo[o];
+  e = Eigen::Map<const Eigen::VectorXd>(r1, n_);
+  a_pattern_.add_product(a_values_.data(), x, -1.0, e.data());
+  for (Index o = 0; o < mo; ++o) {
+    const Index j = p.other_rows[o];
+    for (std::size_t k = 0; k < rows_[j].size(); ++k) e[rows_[j][k]] -= G_[j][k] * lo[o];
+  }
+  for (std::size_t k = 0; k < p.dof.size(); ++k) L[p.row[k]] = e[p.dof[k]] / G_[p.row[k]][0];
+  return X.allFinite() && L.allFinite();
 }
 
 }  // namespace isochor

@@ -19,6 +19,11 @@
 // 510 and 254 iterations in all. Wide rows (the global zone) keep rho_j = 0 and cost CG a few
 // iterations more. The augmented-Lagrangian preconditioner of Fortin and Glowinski (1983) and
 // Benzi and Olshanskii (2006).
+// Rows on one dof (a support's component, a roller's normal: g_j = c e_i) fix that dof from r2
+// alone, x_i = r2_j / c: the sparse border takes such dofs out of A before any of the above (an
+// inner BorderedSolver on the other dofs and rows), and finds their multipliers from their own
+// row of the first block afterwards. The elimination is exact; it shrinks A (Cook's membrane in
+// plane strain by rollers: a third of the dofs) and every other row's clique.
 #pragma once
 #include <Eigen/Dense>
 #include <memory>
@@ -50,6 +55,9 @@ class BorderedSolver {
   // partition: A's rows over the ranks (ranks.hpp), for PCG.
   BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows, SymmetricSolverKind kind,
                  double tol = 1e-12, const DofPartition* partition = nullptr);
+  // The sparse border whatever m (the inner solver of the dofs that no row pins).
+  struct SparseBorder {};
+  BorderedSolver(const SparsePattern& A, const std::vector<std::vector<Index>>& rows, SparseBorder);
   ~BorderedSolver();
   bool factor(const double* A_values);  // false: singular, or indefinite for PCG
   // The borders' values (G[j][k] at rows[j][k]): Z and C for the current factor (the sparse
@@ -59,20 +67,25 @@ class BorderedSolver {
   // Solves the bordered system; l has m entries. False if a solve with A failed (the sparse
   // border: or CG on the Schur complement did not converge).
   bool solve(const double* r1, const double* r2, double* x, double* l);
-  const SymmetricSolver& symmetric() const { return *A_; }
-  SymmetricSolver& symmetric() { return *A_; }
-  void refuse_indefinite() {
-    A_->refuse_indefinite();
-  }  // SymmetricSolver::refuse_indefinite (the sparse border always)
+  const SymmetricSolver& symmetric() const;
+  SymmetricSolver& symmetric();
+  // SymmetricSolver::refuse_indefinite (the sparse border always)
+  void refuse_indefinite() { symmetric().refuse_indefinite(); }
   bool sparse_border() const { return sparse_; }
-  long border_iterations() const { return border_iterations_; }  // CG iterations on the Schur complement so far
+  // Dofs taken out of A by rows on one dof (the sparse border only).
+  Index pinned_dofs() const;
+  // CG iterations on the Schur complement so far
+  long border_iterations() const;
   // Setups the sparse border could not solve (A_rho indefinite at the largest scale, CG on the
   // Schur complement failed, or its answer left a KKT residual above kResidualMax: near-dependent
   // rows) and that KLU on the whole KKT matrix solved; from the first, the rest of the run stays on
   // KLU.
-  long kkt_fallbacks() const { return kkt_fallbacks_; }
+  long kkt_fallbacks() const;
 
  private:
+  struct Pins;
+  void init_sparse(const SparsePattern& A);
+  bool solve_pinned(const double* r1, const double* r2, double* x, double* l);
   bool set_sparse_borders(const std::vector<std::vector<double>>& G);
   bool solve_sparse(const double* r1, const double* r2, double* x, double* l);
   bool factor_kkt();        // KLU on [A G^T; G 0] with A's values and the borders G_
@@ -106,6 +119,32 @@ class BorderedSolver {
   long kkt_fallbacks_ = 0;
   bool factored_ = false;  // the last setup's factorisation (A_rho's, or the fallback's) succeeded
   long border_iterations_ = 0;
+  std::unique_ptr<Pins> pins_;  // rows on one dof, and the solver of the rest
 };
+
+// The dofs that rows on one dof pin, and the bordered system of the others: `inner` solves
+// [A_FF G_OF^T; G_OF 0] for the free dofs F and the other rows O.
+struct BorderedSolver::Pins {
+  std::vector<Index> dof, row;           // pinned dof k and the row that pins it
+  std::vector<Index> free_dofs;          // F, in order; inner dof -> dof
+  std::vector<Index> other_rows;         // O, in order; inner row -> row
+  std::vector<std::vector<Index>> rows;  // O's rows on F, in inner numbering (inner keeps a reference)
+  std::vector<std::vector<Index>> kept;  // rows[o][k] is entry kept[o][k] of row other_rows[o]
+  std::vector<Index> a_free;             // A_FF's entry k is A's entry a_free[k]
+  std::vector<double> a_values;          // A_FF's values
+  std::vector<std::vector<double>> G;    // O's values on F
+  SparsePattern pattern;                 // A_FF's
+  std::unique_ptr<BorderedSolver> inner;
+  Pins(const SparsePattern& A, const std::vector<std::vector<Index>>& all_rows, std::vector<Index> pinned_dof,
+       std::vector<Index> pinned_row);
+};
+
+inline const SymmetricSolver& BorderedSolver::symmetric() const { return pins_ ? pins_->inner->symmetric() : *A_; }
+inline SymmetricSolver& BorderedSolver::symmetric() { return pins_ ? pins_->inner->symmetric() : *A_; }
+inline Index BorderedSolver::pinned_dofs() const { return pins_ ? static_cast<Index>(pins_->dof.size()) : 0; }
+inline long BorderedSolver::border_iterations() const {
+  return pins_ ? pins_->inner->border_iterations() : border_iterations_;
+}
+inline long BorderedSolver::kkt_fallbacks() const { return pins_ ? pins_->inner->kkt_fallbacks() : kkt_fallbacks_; }
 
 }  // namespace isochor

@@ -40,8 +40,10 @@ Mesh make_capsule(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double rad
 Mesh read_msh(const std::string& path);
 // A Gmsh .geo script (points, curves, surfaces, volumes, extrusions, the OpenCASCADE kernel's
 // solids): its volumes meshed by Gmsh (edge_length > 0: that size everywhere; 0: the script's own
-// sizes), physical groups as for read_msh.
-Mesh read_geo(const std::string& path, double edge_length);
+// sizes), physical groups as for read_msh. `parameters` (name, value) are defined before the
+// script runs, so that they override its DefineConstant[...] values (cook.geo's N).
+Mesh read_geo(const std::string& path, double edge_length,
+              const std::vector<std::pair<std::string, double>>& parameters = {});
 // TetGen .node/.ele (`path` is either file or the common base name): 0- or 1-based; region
 // attributes become zones region_<value>; non-zero boundary markers become node sets marker_<m>.
 Mesh read_tetgen(const std::string& path);

@@ -39,8 +39,8 @@ class ComponentSupports : public ConstraintSet {
  private:
   const Mesh& mesh_;
   std::vector<Row> rows_;
-  std::vector<std::vector<Index>> dofs_;
-  std::vector<double> target_, rate_;  // d . (X_i + u(t)) and d . u'(t) at the time set
+  std::vector<std::vector<Index>> dofs_;  // the components of each row's direction that are not 0
+  std::vector<double> target_, rate_;     // d . (X_i + u(t)) and d . u'(t) at the time set
   double length_;
 };
 
