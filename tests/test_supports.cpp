@@ -4,6 +4,7 @@
 // lambda^-1/2), by displacement and by traction.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -258,6 +259,40 @@ ramp = 0.5
         ((f0 - f1).segment<3>(3 * sys->dofs().free_index[node]) - 0.6 * Eigen::Vector3d(3.0, -2.0, 1.0) / loaded.size())
             .norm(),
         1e-12);
+}
+
+// A row is on the components its direction has: held in x, one dof; a symmetry plane with normal
+// (1, 1, 0), two. Central differences over all three dofs of each row's node find the row's
+// entries and nothing on the components it leaves out.
+TEST(Supports, ARowIsOnTheComponentsOfItsDirection) {
+  for (const auto& [held, width] : {std::pair{std::string("components = [\"x\"]"), std::size_t{1}},
+                                    {std::string("normal = [1.0, 1.0, 0.0]"), std::size_t{2}}}) {
+    const Scene sc = scene(replaced(kFalling, "components = [\"x\"]", held));
+    auto sys = make_scene_system(sc);
+    VectorXd q, v, g, gp, gm;
+    sys->initial_state(0.0, q, v);
+    std::vector<std::vector<double>> G(sys->num_constraints());
+    sys->constraint_jacobian(0.0, q, G, nullptr);
+    const auto& rows = sys->constraint_rows();
+    const double h = 1e-6;
+    int checked = 0;
+    for (std::size_t j = 1; j < rows.size(); ++j) {  // row 0: the zone
+      ASSERT_EQ(rows[j].size(), width) << held;
+      const Index first = rows[j][0] - rows[j][0] % 3;
+      for (Index d = first; d < first + 3; ++d) {
+        VectorXd qp = q, qm = q;
+        qp[d] += h, qm[d] -= h;
+        sys->constraint(0.0, qp, gp);
+        sys->constraint(0.0, qm, gm);
+        const double fd = (gp[j] - gm[j]) / (2 * h);
+        const auto at = std::find(rows[j].begin(), rows[j].end(), d);
+        EXPECT_NEAR(at == rows[j].end() ? 0.0 : G[j][at - rows[j].begin()], fd, 1e-9) << held << " row " << j;
+        EXPECT_EQ(at == rows[j].end(), std::abs(fd) < 1e-9) << held << " row " << j << " dof " << d;
+      }
+      ++checked;
+    }
+    EXPECT_GT(checked, 0);
+  }
 }
 
 // The pressure load's Jacobian (a follower load, not symmetric on an open face) against finite
