@@ -86,6 +86,21 @@ TEST(Output, RoundTripThroughTheReader) {
   EXPECT_NE(info.find("drift 3.000e-01"), std::string::npos) << info;  // 1.3 / 1.0 - 1
 }
 
+// isochor info lists a run's zones by name, the first 12 of them and a count of the rest (per-node
+// zones are thousands: one line of every name was 120 KB at 6,752).
+TEST(Output, InfoListsTheFirstZonesAndCountsTheRest) {
+  fs::path d = test::temp_dir();
+  Mesh m = test_mesh();
+  std::vector<std::pair<std::string, std::vector<int>>> zones;
+  for (int e = 0; e < 20; ++e) zones.push_back({"z" + std::to_string(100 + e), {e}});
+  const std::string path = (d / "zones.h5").string();
+  { OutputWriter w(path, m, zones, {"", "", "test", {}, {}}, true); }
+  const std::string info = describe_run(path);
+  EXPECT_NE(info.find("zones       20: z100 (1 tets), "), std::string::npos) << info;
+  EXPECT_NE(info.find("z111 (1 tets), and 8 more\n"), std::string::npos) << info;
+  EXPECT_EQ(info.find("z112"), std::string::npos) << info;
+}
+
 TEST(Output, MeshioReadsTheXdmfTimeSeries) {
   fs::path d = test::temp_dir();
   Mesh m = test_mesh();

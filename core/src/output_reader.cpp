@@ -260,10 +260,14 @@ std::string describe_run(const std::string& path) {
   if (const auto render = r.render_size(); render[0] > 0)
     s << "  render      " << render[0] << " vertices, " << render[1] << " triangles (the character's own mesh, "
       << "carried by the tets: isochor export --format glb)\n";
+  // The zones by name, the first kListedZones of them: per-node 1-ring zones are thousands.
+  constexpr std::size_t kListedZones = 12;
   auto zones = r.zone_sizes();
   s << "  zones       " << zones.size();
+  std::size_t listed = 0;
   for (const auto& [name, n] : zones)
-    s << (name == zones.begin()->first ? ": " : ", ") << name << " (" << n << " tets)";
+    if (listed++ < kListedZones) s << (listed == 1 ? ": " : ", ") << name << " (" << n << " tets)";
+  if (zones.size() > kListedZones) s << ", and " << zones.size() - kListedZones << " more";
   s << "\n";
   auto t = r.times();
   s << "  frames      " << t.size();
