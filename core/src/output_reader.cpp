@@ -248,6 +248,23 @@ std::array<std::size_t, 2> RunFile::render_size() const {
           static_cast<std::size_t>(impl_->dims("/render/triangles")[0])};
 }
 
+namespace {
+// "  zones       N: name (k tets), ...": the first kListedZones by name (per-node 1-ring zones are
+// thousands), then how many more.
+std::string zones_line(const RunFile& r) {
+  constexpr std::size_t kListedZones = 12;
+  std::ostringstream s;
+  auto zones = r.zone_sizes();
+  s << "  zones       " << zones.size();
+  std::size_t listed = 0;
+  for (const auto& [name, n] : zones)
+    if (listed++ < kListedZones) s << (listed == 1 ? ": " : ", ") << name << " (" << n << " tets)";
+  if (zones.size() > kListedZones) s << ", and " << zones.size() - kListedZones << " more";
+  s << "\n";
+  return s.str();
+}
+}  // namespace
+
 std::string describe_run(const std::string& path) {
   RunFile r(path);
   std::ostringstream s;
@@ -260,15 +277,7 @@ std::string describe_run(const std::string& path) {
   if (const auto render = r.render_size(); render[0] > 0)
     s << "  render      " << render[0] << " vertices, " << render[1] << " triangles (the character's own mesh, "
       << "carried by the tets: isochor export --format glb)\n";
-  // The zones by name, the first kListedZones of them: per-node 1-ring zones are thousands.
-  constexpr std::size_t kListedZones = 12;
-  auto zones = r.zone_sizes();
-  s << "  zones       " << zones.size();
-  std::size_t listed = 0;
-  for (const auto& [name, n] : zones)
-    if (listed++ < kListedZones) s << (listed == 1 ? ": " : ", ") << name << " (" << n << " tets)";
-  if (zones.size() > kListedZones) s << ", and " << zones.size() - kListedZones << " more";
-  s << "\n";
+  s << zones_line(r);
   auto t = r.times();
   s << "  frames      " << t.size();
   if (!t.empty()) s << ", t = " << t.front() << " .. " << t.back() << " s";
