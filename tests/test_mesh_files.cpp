@@ -247,3 +247,26 @@ TEST(MeshFiles, GeoParametersReplaceTheScriptsConstants) {
   msg = test::error_of([&] { mesh_of("[mesh]\nfile = \"" + cook + "\"\nparameters = { 2N = 16 }\n"); });
   EXPECT_NE(msg.find("mesh.parameters.2N: is not a .geo variable name"), std::string::npos) << msg;
 }
+
+// Before Gmsh fills a .geo script's volume, the tets it will make are bounded from below from its
+// curves' mesh: the bound is below the count Gmsh then makes (and not vacuous), and a script far
+// too fine for any machine (cook.geo at N = 1e5: at least 3e9 tets, 12 TB) stops with one line
+// naming the parameter, within a second instead of meshing until memory runs out.
+TEST(MeshFiles, AGeoScriptTooFineForTheMachineStopsBeforeMeshing) {
+  const std::string cook = std::string(ISOCHOR_SOURCE_DIR) + "/demos/meshes/cook.geo";
+  for (const double n : {8.0, 32.0}) {
+    // Gmsh runs in a child process: the bound comes back as the error the check throws.
+    const std::string said = test::error_of([&] {
+      read_geo(cook, 0.0, {{"N", n}}, [](double tets) { throw Error("bound " + std::to_string(tets)); });
+    });
+    ASSERT_EQ(said.rfind("bound ", 0), 0u) << said;
+    const double bound = std::stod(said.substr(6));
+    const Mesh m = read_geo(cook, 0.0, {{"N", n}});
+    EXPECT_LE(bound, m.num_tets()) << "N = " << n;
+    EXPECT_GT(bound, m.num_tets() / 100.0) << "N = " << n;
+  }
+  const SceneFile f = SceneFile::parse("[mesh]\nfile = \"" + cook + "\"\nparameters = { N = 1e5 }\n", "p.toml");
+  const std::string msg = test::error_of([&] { mesh_from_scene(f.root().table("mesh"), f); });
+  EXPECT_NE(msg.find("mesh.parameters.N: makes about"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("GB of memory"), std::string::npos) << msg;
+}

@@ -1,4 +1,5 @@
 // Everything that goes through Gmsh's C++ API: curved shapes, .msh files, closed surfaces.
+#include <Eigen/Geometry>
 #include <fcntl.h>
 #include <gmsh.h>
 #include <omp.h>
@@ -485,8 +486,47 @@ void open_geo(const std::string& path, const std::vector<std::pair<std::string, 
 }
 }  // namespace
 
+namespace {
+// A lower bound on the tets Gmsh will make of the open model, from its 1-D mesh alone (cheap where
+// the 3-D mesh would not be): each surface's area is at least its boundary loops' vector area
+// (exact for a plane), its triangles at most equilateral of 1.5 times the longest 1-D element,
+// and a tet has at most 4 faces on surfaces.
+double geo_tets_at_least() {
+  gmsh::model::mesh::generate(1);
+  std::vector<std::size_t> ntags;
+  std::vector<double> xyz, param;
+  gmsh::model::mesh::getNodes(ntags, xyz, param, -1, -1, true, false);
+  std::unordered_map<std::size_t, Eigen::Vector3d> at;
+  for (std::size_t k = 0; k < ntags.size(); ++k)
+    at[ntags[k]] = Eigen::Vector3d(xyz[3 * k], xyz[3 * k + 1], xyz[3 * k + 2]);
+  double longest = 0, triangles = 0;
+  gmsh::vectorpair surfaces;
+  gmsh::model::getEntities(surfaces, 2);
+  for (const auto& surface : surfaces) {
+    gmsh::vectorpair curves;
+    gmsh::model::getBoundary({surface}, curves, false, true, false);
+    Eigen::Vector3d area = Eigen::Vector3d::Zero();
+    for (const auto& [dim, signed_tag] : curves) {
+      std::vector<std::size_t> etags, enodes;
+      gmsh::model::mesh::getElementsByType(1, etags, enodes, std::abs(signed_tag));
+      for (std::size_t e = 0; e + 1 < enodes.size(); e += 2) {
+        const Eigen::Vector3d& a = at[enodes[e]];
+        const Eigen::Vector3d& b = at[enodes[e + 1]];
+        longest = std::max(longest, (b - a).norm());
+        area += (signed_tag < 0 ? -0.5 : 0.5) * a.cross(b);
+      }
+    }
+    triangles += area.norm();
+  }
+  if (longest <= 0) return 0;
+  const double h = 1.5 * longest;
+  return triangles / (std::sqrt(3.0) / 4 * h * h) / 4;
+}
+}  // namespace
+
 Mesh read_geo(const std::string& path, double edge_length,
-              const std::vector<std::pair<std::string, double>>& parameters) {
+              const std::vector<std::pair<std::string, double>>& parameters,
+              const std::function<void(double)>& check_tets) {
   check_readable(path, "a Gmsh .geo script", input_limits::kScene);
   const std::string expected = "Gmsh could not read or mesh the .geo script";
   // In a child process: a syntax error leaves Gmsh locked for the rest of the process (read_msh).
@@ -508,6 +548,7 @@ Mesh read_geo(const std::string& path, double edge_length,
         gmsh::vectorpair volumes;
         gmsh::model::getEntities(volumes, 3);
         if (volumes.empty()) throw Error(path + ": the script defines no volume (expected a 3-D geometry)");
+        if (check_tets) check_tets(geo_tets_at_least());
         generate_3d(path);
       }
       return with_physical_groups(extract_tets(path));

@@ -73,6 +73,18 @@ std::vector<std::pair<std::string, double>> geo_parameters(const Section& s) {
   return out;
 }
 
+// A .geo script with its parameters and edge length; the tets it will make are bounded from below
+// before Gmsh meshes the volume, and a script too fine for the machine stops there, naming the key
+// that sets the size (the first parameter where there are any, as cook.geo's N; else edge_length).
+Mesh mesh_geo_file(const Section& s, const std::string& path) {
+  const double h = s.number("edge_length", 0.0, Range::non_negative());
+  if (h > 0) check_size(s, "edge_length", h);
+  const auto parameters = geo_parameters(s);
+  const Section named = parameters.empty() ? s : s.table("parameters");
+  const std::string key = !parameters.empty() ? parameters.front().first : h > 0 ? "edge_length" : "file";
+  return read_geo(path, h, parameters, [&](double tets) { check_tets(named, key, tets); });
+}
+
 // [mesh] file = "...": by its extension.
 Mesh mesh_from_file(const Section& s, const SceneFile& file, const Eigen::Vector3d& center) {
   const std::string name = s.string("file", "");
@@ -88,7 +100,7 @@ Mesh mesh_from_file(const Section& s, const SceneFile& file, const Eigen::Vector
   else if (ext == ".obj" || ext == ".stl")
     m = mesh_surface_file(s, path);
   else if (ext == ".geo")
-    m = read_geo(path, s.number("edge_length", 0.0, Range::non_negative()), geo_parameters(s));
+    m = mesh_geo_file(s, path);
   else
     s.fail("file", "\"" + name + "\" has an unknown extension, expected .msh, .geo, .node, .ele, .obj or .stl");
   if (center != Eigen::Vector3d::Zero()) s.fail("center", "applies to shapes only, not to a mesh file");

@@ -1,5 +1,6 @@
 // Meshes from procedural shapes and from files.
 #pragma once
+#include <functional>
 #include <string>
 
 #include "isochor/core/mesh.hpp"
@@ -41,9 +42,12 @@ Mesh read_msh(const std::string& path);
 // A Gmsh .geo script (points, curves, surfaces, volumes, extrusions, the OpenCASCADE kernel's
 // solids): its volumes meshed by Gmsh (edge_length > 0: that size everywhere; 0: the script's own
 // sizes), physical groups as for read_msh. `parameters` (name, value) are defined before the
-// script runs, so that they override its DefineConstant[...] values (cook.geo's N).
+// script runs, so that they override its DefineConstant[...] values (cook.geo's N). check_tets,
+// where given, sees a lower bound on the tets before the volume is meshed (from the curves' mesh:
+// a script too fine for the machine stops there) and throws to stop.
 Mesh read_geo(const std::string& path, double edge_length,
-              const std::vector<std::pair<std::string, double>>& parameters = {});
+              const std::vector<std::pair<std::string, double>>& parameters = {},
+              const std::function<void(double)>& check_tets = {});
 // TetGen .node/.ele (`path` is either file or the common base name): 0- or 1-based; region
 // attributes become zones region_<value>; non-zero boundary markers become node sets marker_<m>.
 Mesh read_tetgen(const std::string& path);
