@@ -246,6 +246,17 @@ TEST(MeshFiles, GeoParametersReplaceTheScriptsConstants) {
   EXPECT_NE(msg.find("mesh.parameters: applies to a .geo script only"), std::string::npos) << msg;
   msg = test::error_of([&] { mesh_of("[mesh]\nfile = \"" + cook + "\"\nparameters = { 2N = 16 }\n"); });
   EXPECT_NE(msg.find("mesh.parameters.2N: is not a .geo variable name"), std::string::npos) << msg;
+  msg = test::error_of([&] { mesh_of("[mesh]\nfile = \"" + cook + "\"\nparameters = { N = 1e300 }\n"); });
+  EXPECT_NE(msg.find("p.toml:3: mesh.parameters.N: expected a number in"), std::string::npos) << msg;
+  // The parameters travel as a temporary script: without a temporary directory, one line says so.
+  const char* tmpdir = std::getenv("TMPDIR");
+  const std::string saved = tmpdir ? tmpdir : "";
+  ::setenv("TMPDIR", "/nonexistent/isochor", 1);
+  msg = test::error_of([&] { read_geo(cook, 0.0, {{"N", 16.0}}); });
+  tmpdir ? ::setenv("TMPDIR", saved.c_str(), 1) : ::unsetenv("TMPDIR");
+  EXPECT_NE(msg.find("cook.geo: its parameters are written to a temporary script, and there is no temporary directory"),
+            std::string::npos)
+      << msg;
 }
 
 // Before Gmsh fills a .geo script's volume, the tets it will make are bounded from below from its

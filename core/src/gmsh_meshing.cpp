@@ -471,7 +471,12 @@ void open_geo(const std::string& path, const std::vector<std::pair<std::string, 
     std::snprintf(line, sizeof line, " = %.17g;\n", value);
     text += name + line;
   }
-  std::string temp = (std::filesystem::temp_directory_path() / "isochor-geo-XXXXXX.geo").string();
+  std::error_code ec;
+  const std::filesystem::path dir = std::filesystem::temp_directory_path(ec);
+  if (ec)
+    throw Error(path + ": its parameters are written to a temporary script, and there is no temporary directory (" +
+                ec.message() + "; expected TMPDIR to name a directory)");
+  std::string temp = (dir / "isochor-geo-XXXXXX.geo").string();
   const int fd = mkstemps(temp.data(), 4);
   if (fd < 0) throw Error(path + ": could not write the parameters' script in " + temp + ": " + std::strerror(errno));
   const bool written = ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
