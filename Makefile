@@ -3,7 +3,7 @@
 JOBS ?= $(shell nproc)
 BUILD ?= build
 
-.PHONY: demo test test-long test-mpi sanitize deps configure build bench clean format format-check
+.PHONY: demo test test-long test-mpi sanitize deps configure build bench clean format format-check docs
 
 demo: build
 	./demos/run-default.sh $(BUILD)
@@ -13,6 +13,13 @@ demo: build
 # cores: 236 s against 264 s at -j2, every test the same).
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j$$(( $(JOBS) + 1 )) -LE long
+
+# The key tables of docs/scenes.md and docs/studies.md, rewritten from the key rows
+# (core/src/scene_keys.cpp, apps/src/study_keys.cpp); SceneKeys.TheDocsKeyTablesAreGeneratedFromTheKeyTables
+# fails until they are.
+docs: build
+	$(BUILD)/isochor keys --docs docs/scenes.md
+	$(BUILD)/isochor keys --study --docs docs/studies.md
 
 test-long: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) -L long

@@ -4,11 +4,14 @@
 
 #include <csignal>
 #include <cstdio>
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
 
 #include "commands.hpp"
 #include "mpi_ranks.hpp"
 #include "isochor/base/error.hpp"
+#include "isochor/core/input_file.hpp"
 #include "isochor/core/output.hpp"
 #include "isochor/core/output_reader.hpp"
 #include "isochor/app/study.hpp"
@@ -31,11 +34,51 @@ struct Line {
   CLI::App* paraview = nullptr;
   CLI::App* obj = nullptr;
   CLI::App* view = nullptr;
+  CLI::App* keys = nullptr;
   RunCommand run_cmd;
   StudyCommand study_cmd;
   std::string h5_path, dir, prefix = "frame";
   bool with_blender = false;
+  bool study_keys = false;
+  std::string group;
+  std::vector<std::string> docs;
 };
+
+void add_keys(CLI::App& app, Line& l) {
+  l.keys = app.add_subcommand(
+      "keys",
+      "The keys a scene (or study) file may hold: type, unit, default and meaning, as docs/scenes.md lists them");
+  l.keys->add_option("group", l.group, "Only the keys of this table (mesh, material, zones, select, integrator, ...)");
+  l.keys->add_flag("--study", l.study_keys, "The keys of a study file");
+  l.keys->add_option("--docs", l.docs,
+                     "Rewrite the key tables of these markdown files (after each `<!-- keys: ... -->`)");
+}
+
+// `isochor keys`: the table, or the docs rewritten from it (only where they differ).
+int cmd_keys(const Line& l) {
+  const KeyTable& table = l.study_keys ? study_keys() : scene_keys();
+  if (l.docs.empty()) {
+    std::vector<std::string> groups;
+    for (const KeySpec& k : table.keys())
+      if (std::string first(k.name.substr(0, k.name.find('.'))); l.group.empty() || first == l.group)
+        if (std::find(groups.begin(), groups.end(), first) == groups.end()) groups.push_back(first);
+    if (groups.empty()) throw Error("keys: no table named " + l.group);
+    std::fputs(table.markdown(groups).c_str(), stdout);
+    return 0;
+  }
+  for (const std::string& path : l.docs) {
+    const std::string text = read_input_file(path, "a markdown file", input_limits::kScene);
+    const std::string updated = table.update_docs(text);
+    if (updated == text) continue;
+    const std::string tmp = path + ".tmp";
+    std::ofstream(tmp) << updated;
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) throw Error(path + ": cannot be written (" + ec.message() + ")");
+    std::printf("%s: key tables rewritten from %s\n", path.c_str(), table.source().c_str());
+  }
+  return 0;
+}
 
 void add_mesh_and_run(CLI::App& app, Line& l) {
   RunCommand& r = l.run_cmd;
@@ -145,6 +188,7 @@ int dispatch(Line& l, int argc, char** argv) {
   if (l.exporter->parsed()) return run_tool("export.py", l.h5_path, l.exporter->remaining());
   if (l.paraview->parsed()) return run_tool("paraview.py", l.h5_path, l.paraview->remaining());
   if (l.view->parsed()) return run_view(l.h5_path, l.view->remaining());
+  if (l.keys->parsed()) return cmd_keys(l);
   if (l.info->parsed()) {
     std::fputs(describe_run(l.h5_path).c_str(), stdout);
     return 0;
@@ -178,6 +222,7 @@ int main(int argc, char** argv) {
   add_mesh_and_run(app, line);
   add_study(app, line);
   add_viewers(app, line);
+  add_keys(app, line);
   CLI11_PARSE(app, argc, argv);
   try {
     return dispatch(line, argc, argv);

@@ -60,7 +60,7 @@ std::string toml_string(const std::string& v) {
 // the study's directory as observable.toml, so that `isochor report DIR` finds it too.
 std::string parse_observable(const Section& o) {
   if (!o.exists()) return "";
-  const std::string kind = o.string("kind", "", {"point", "set"});
+  const std::string kind = o.string("kind", "");
   if (kind.empty()) o.fail("kind", "missing, expected \"point\" or \"set\"");
   std::string name = o.string("name", "observable");
   if (name.empty() || std::any_of(name.begin(), name.end(), [](unsigned char c) { return c < 32; }))
@@ -76,15 +76,15 @@ std::string parse_observable(const Section& o) {
     if (set.empty()) o.fail("set", "missing, expected the name of a node set of the mesh");
     t << "set = " << toml_string(set) << "\n";
   }
-  t << "component = " << toml_string(o.string("component", "norm", {"x", "y", "z", "norm"})) << "\n";
-  t << "frame = " << o.integer("frame", -1, -1000000, 1000000) << "\n";
+  t << "component = " << toml_string(o.string("component", "norm")) << "\n";
+  t << "frame = " << o.integer("frame", -1) << "\n";
   if (const auto r = o.number_opt("reference")) t << "reference = " << number_text(*r) << "\n";
   return t.str();
 }
 }  // namespace
 
 Study load_study(const std::string& path, const std::vector<std::string>& overrides) {
-  SceneFile f = SceneFile::load(path, overrides);
+  SceneFile f = SceneFile::load(path, overrides, study_keys());
   const Section root = f.root();
   Study s;
   s.file = path;
@@ -95,8 +95,8 @@ Study load_study(const std::string& path, const std::vector<std::string>& overri
   if (!std::filesystem::exists(s.scene)) st.fail("scene", "no such file: " + s.scene.string());
   const std::string stem = std::filesystem::path(path).stem().string();
   s.output = st.string("output", "out/studies/" + stem);
-  s.jobs = static_cast<int>(st.integer("jobs", 2, 1, 64));
-  s.kind = st.string("kind", "work_precision", {"work_precision", "stability", "convergence"});
+  s.jobs = static_cast<int>(st.integer("jobs", 2));
+  s.kind = st.string("kind", "work_precision");
   s.observable = parse_observable(root.table("observable"));
   const std::vector<std::string> base = st.strings("set");
   const Section ref = root.table("reference");

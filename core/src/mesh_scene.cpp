@@ -47,7 +47,7 @@ namespace {
 // A closed surface file filled with tets: with an edge_length, the tets it makes are estimated
 // from the enclosed volume before Gmsh runs, as for the shapes.
 Mesh mesh_surface_file(const Section& s, const std::string& path) {
-  const double h = s.number("edge_length", 0.0, Range::non_negative());
+  const double h = s.number("edge_length", 0.0);
   if (h > 0) {
     check_size(s, "edge_length", h);
     Points x;
@@ -68,7 +68,7 @@ std::vector<std::pair<std::string, double>> geo_parameters(const Section& s) {
                             std::all_of(name.begin(), name.end(),
                                         [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
     if (!identifier) p.fail(name, "is not a .geo variable name (expected letters, digits and _, not first a digit)");
-    out.emplace_back(name, p.number(name, 0.0, Range::closed(-1e15, 1e15)));
+    out.emplace_back(name, p.number(name, 0.0));
   }
   return out;
 }
@@ -77,7 +77,7 @@ std::vector<std::pair<std::string, double>> geo_parameters(const Section& s) {
 // before Gmsh meshes the volume, and a script too fine for the machine stops there, naming the key
 // that sets the size (the first parameter where there are any, as cook.geo's N; else edge_length).
 Mesh mesh_geo_file(const Section& s, const std::string& path) {
-  const double h = s.number("edge_length", 0.0, Range::non_negative());
+  const double h = s.number("edge_length", 0.0);
   if (h > 0) check_size(s, "edge_length", h);
   const auto parameters = geo_parameters(s);
   const Section named = parameters.empty() ? s : s.table("parameters");
@@ -116,22 +116,22 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     s.fail(
         "shape",
         "missing, expected shape = \"box\" | \"capsule\" | \"cylinder\" | \"sphere\" | \"two_tets\" or file = \"...\"");
-  const Eigen::Vector3d center = s.vec3("center", Eigen::Vector3d::Zero(), Range::coordinate());
+  const Eigen::Vector3d center = s.vec3("center", Eigen::Vector3d::Zero());
   if (has_file) return mesh_from_file(s, file, center);
-  const std::string shape = s.string("shape", "", {"box", "capsule", "cylinder", "sphere", "two_tets"});
+  const std::string shape = s.string("shape", "");
   if (shape == "box") {
-    const auto cells = s.int3("cells", {4, 4, 4}, 1, 1000);
-    const int split = static_cast<int>(s.integer("split", 6, 5, 6));
+    const auto cells = s.int3("cells", {4, 4, 4});
+    const int split = static_cast<int>(s.integer("split", 6));
     check_tets(s, "cells",
                static_cast<double>(cells[0]) * static_cast<double>(cells[1]) * static_cast<double>(cells[2]) * split);
-    const double sliver = s.number("sliver_ratio", 1.0, {1.0, 1e6, false, false});
-    const Eigen::Vector3d size = s.vec3("size", Eigen::Vector3d::Ones(), Range::length());
+    const double sliver = s.number("sliver_ratio", 1.0);
+    const Eigen::Vector3d size = s.vec3("size", Eigen::Vector3d::Ones());
     check_size(s, "size", size.minCoeff());  // masses of a box far below a micrometre underflow
     return make_box(size, cells, center, split, sliver);
   }
   if (shape == "cylinder") {
-    const double r = s.number("radius", 0.5, Range::positive()), height = s.number("height", 1.0, Range::positive());
-    const int resolution = static_cast<int>(s.integer("resolution", 24, 6, 10000));
+    const double r = s.number("radius", 0.5), height = s.number("height", 1.0);
+    const int resolution = static_cast<int>(s.integer("resolution", 24));
     check_size(s, "radius", r);
     check_size(s, "height", height);
     check_tets(s, "resolution", gmsh_tets(M_PI * r * r * height, 2 * M_PI * r / resolution));
@@ -143,8 +143,9 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
              "missing, a capsule needs the ends of its axis, from = [x, y, z] and to = [x, y, z] (m)");
     const Eigen::Vector3d a = s.vec3("from", {}), b = s.vec3("to", {});
     if ((b - a).norm() == 0) s.fail("to", "expected a point other than `from`");
-    const double r = s.number("radius", 0.5, Range::positive());
-    const double h = s.number("edge_length", r / 3, Range::positive());
+    const double r = s.number("radius", 0.5);
+    const double h = s.number("edge_length", r / 3);
+    if (h <= 0) s.fail("edge_length", "expected a number > 0 for a capsule, got " + std::to_string(h));
     if (center != Eigen::Vector3d::Zero())
       s.fail("center", "does not apply to a capsule (it lies between from and to)");
     check_size(s, "radius", r);
@@ -153,11 +154,11 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     return make_capsule(a, b, r, h);
   }
   if (shape == "sphere") {
-    const double r = s.number("radius", 1.0, Range::positive());
-    const double h = s.number("edge_length", 0.0, Range::non_negative());
-    const long target = s.integer("target_tets", 5000, 10, 100000000);
+    const double r = s.number("radius", 1.0);
+    const double h = s.number("edge_length", 0.0);
+    const long target = s.integer("target_tets", 5000);
     if (h > 0 && s.has("target_tets")) s.fail("edge_length", "give either edge_length or target_tets, not both");
-    const double inner = s.number("inner_radius", 0.0, Range::non_negative());
+    const double inner = s.number("inner_radius", 0.0);
     if (inner >= r) s.fail("inner_radius", "expected less than radius (" + std::to_string(r) + " m)");
     check_size(s, "radius", r);
     if (inner > 0) check_size(s, "inner_radius", inner);
@@ -169,7 +170,7 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
       check_tets(s, "target_tets", static_cast<double>(target));
     return make_sphere(r, h, target, center, inner);
   }
-  Mesh m = make_two_tets(s.number("edge", 1.0, Range::positive()));
+  Mesh m = make_two_tets(s.number("edge", 1.0));
   if (center != Eigen::Vector3d::Zero()) s.fail("center", "does not apply to two_tets");
   return m;
 }

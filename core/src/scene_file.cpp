@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "isochor/base/error.hpp"
 
@@ -89,9 +90,8 @@ std::string Section::full(std::string_view key) const {
   return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
 }
 
-const toml::node* Section::get(std::string_view key, bool leaf) const {
+const toml::node* Section::get(std::string_view key, bool) const {
   file_->asked_[path_].insert(std::string(key));
-  if (leaf) file_->queried_.insert(strip_indices(full(key)));
   if (!table_) return nullptr;
   const toml::node* n = table_->get(key);
   if (n) file_->read_.insert(n);
@@ -114,8 +114,30 @@ std::string Section::where(std::string_view key) const {
 
 void Section::fail(std::string_view key, const std::string& message) const { throw Error(where(key) + ": " + message); }
 
-std::optional<double> Section::number_opt(std::string_view key, Range range) const {
-  note_range(key, range);
+const KeySpec& Section::spec(std::string_view key, KeyKind kind) const {
+  const std::string name = strip_indices(full(key));
+  const KeySpec* s = file_->keys_->find(name);
+  if (!s) throw std::logic_error(name + " is read but not declared in " + file_->keys_->source());
+  if (s->kind != kind)
+    throw std::logic_error(name + " is read as another type than " + file_->keys_->source() + " declares");
+  return *s;
+}
+
+const KeyDefault& Section::declared_default(std::string_view key, const KeySpec& spec) const {
+  const KeyDefault& d = file_->keys_->fallback(spec);
+  if (!d.present)
+    throw std::logic_error(strip_indices(full(key)) + " is read with the default of " + file_->keys_->source() +
+                           ", which gives none");
+  return d;
+}
+
+void Section::check_default(std::string_view key, const KeySpec& spec, bool same) const {
+  if (file_->keys_->fallback(spec).present && !same)
+    throw std::logic_error(strip_indices(full(key)) + ": the parser's default is not the one " +
+                           file_->keys_->source() + " declares (" + std::string(spec.fallback) + ")");
+}
+
+std::optional<double> Section::number_in(std::string_view key, const Range& range) const {
   const toml::node* n = get(key);
   if (!n) return std::nullopt;
   double v;
@@ -129,20 +151,23 @@ std::optional<double> Section::number_opt(std::string_view key, Range range) con
   return v;
 }
 
-void Section::note_default(std::string_view key, std::string text) const {
-  file_->defaults_[strip_indices(full(key))].insert(std::move(text));
+std::optional<double> Section::number_opt(std::string_view key) const {
+  return number_in(key, spec(key, KeyKind::number).range);
 }
 
-void Section::note_range(std::string_view key, const Range& range) const {
-  file_->ranges_[strip_indices(full(key))].insert(range.describe());
+double Section::number(std::string_view key) const {
+  const KeySpec& s = spec(key, KeyKind::number);
+  if (auto v = number_in(key, s.range)) return *v;
+  return declared_default(key, s).number;
 }
 
-double Section::number(std::string_view key, double fallback, Range range) const {
-  note_default(key, fmt(fallback));
-  return number_opt(key, range).value_or(fallback);
+double Section::number(std::string_view key, double fallback) const {
+  const KeySpec& s = spec(key, KeyKind::number);
+  check_default(key, s, file_->keys_->fallback(s).number == fallback);
+  return number_in(key, s.range).value_or(fallback);
 }
 
-std::optional<long> Section::integer_opt(std::string_view key, long min, long max) const {
+std::optional<long> Section::integer_in(std::string_view key, long min, long max) const {
   const toml::node* n = get(key);
   if (!n) return std::nullopt;
   std::string expect = "an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
@@ -153,13 +178,32 @@ std::optional<long> Section::integer_opt(std::string_view key, long min, long ma
   return v;
 }
 
-long Section::integer(std::string_view key, long fallback, long min, long max) const {
-  note_default(key, std::to_string(fallback));
-  return integer_opt(key, min, max).value_or(fallback);
+std::optional<long> Section::integer_opt(std::string_view key) const {
+  const KeySpec& s = spec(key, KeyKind::integer);
+  return integer_in(key, s.min, s.max);
+}
+
+long Section::integer(std::string_view key) const {
+  const KeySpec& s = spec(key, KeyKind::integer);
+  if (auto v = integer_in(key, s.min, s.max)) return *v;
+  return declared_default(key, s).integer;
+}
+
+long Section::integer(std::string_view key, long fallback) const {
+  const KeySpec& s = spec(key, KeyKind::integer);
+  check_default(key, s, file_->keys_->fallback(s).integer == fallback);
+  return integer_in(key, s.min, s.max).value_or(fallback);
+}
+
+bool Section::boolean(std::string_view key) const {
+  const KeySpec& s = spec(key, KeyKind::boolean);
+  if (!has(key)) return declared_default(key, s).boolean;
+  return boolean(key, file_->keys_->fallback(s).boolean);
 }
 
 bool Section::boolean(std::string_view key, bool fallback) const {
-  note_default(key, fallback ? "true" : "false");
+  const KeySpec& s = spec(key, KeyKind::boolean);
+  check_default(key, s, file_->keys_->fallback(s).boolean == fallback);
   const toml::node* n = get(key);
   if (!n) return fallback;
   auto b = n->as_boolean();
@@ -167,7 +211,11 @@ bool Section::boolean(std::string_view key, bool fallback) const {
   return b->get();
 }
 
-std::optional<std::string> Section::string_opt(std::string_view key, const std::vector<std::string>& choices) const {
+std::optional<std::string> Section::string_opt(std::string_view key) const {
+  const KeySpec& spec_ = spec(key, KeyKind::string);
+  std::vector<std::string> choices;
+  std::istringstream words{std::string(spec_.choices)};
+  for (std::string w; words >> w;) choices.push_back(w);
   const toml::node* n = get(key);
   if (!n) return std::nullopt;
   std::string expect = "a string";
@@ -183,13 +231,19 @@ std::optional<std::string> Section::string_opt(std::string_view key, const std::
   return v;
 }
 
-std::string Section::string(std::string_view key, const std::string& fallback,
-                            const std::vector<std::string>& choices) const {
-  note_default(key, "\"" + fallback + "\"");
-  return string_opt(key, choices).value_or(fallback);
+std::string Section::string(std::string_view key) const {
+  const KeySpec& s = spec(key, KeyKind::string);
+  if (auto v = string_opt(key)) return *v;
+  return declared_default(key, s).string;
 }
 
-std::vector<double> Section::numbers(std::string_view key, Range range) const {
+std::string Section::string(std::string_view key, const std::string& fallback) const {
+  const KeySpec& s = spec(key, KeyKind::string);
+  check_default(key, s, file_->keys_->fallback(s).string == fallback);
+  return string_opt(key).value_or(fallback);
+}
+
+std::vector<double> Section::numbers_in(std::string_view key, const Range& range) const {
   const toml::node* n = get(key);
   if (!n) return {};
   std::string expect = "a list of numbers, each " + range.describe();
@@ -210,7 +264,12 @@ std::vector<double> Section::numbers(std::string_view key, Range range) const {
   return out;
 }
 
+std::vector<double> Section::numbers(std::string_view key) const {
+  return numbers_in(key, spec(key, KeyKind::numbers).range);
+}
+
 std::vector<std::string> Section::strings(std::string_view key) const {
+  spec(key, KeyKind::strings);
   const toml::node* n = get(key);
   if (!n) return {};
   auto a = n->as_array();
@@ -234,7 +293,7 @@ std::vector<std::string> Section::keys() const {
   return out;
 }
 
-std::vector<long> Section::integers(std::string_view key, long min, long max) const {
+std::vector<long> Section::integers_in(std::string_view key, long min, long max) const {
   const toml::node* n = get(key);
   if (!n) return {};
   std::string expect = "a list of integers in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
@@ -251,42 +310,61 @@ std::vector<long> Section::integers(std::string_view key, long min, long max) co
   return out;
 }
 
-std::optional<Eigen::Vector3d> Section::vec3_opt(std::string_view key, Range range) const {
+std::vector<long> Section::integers(std::string_view key) const {
+  const KeySpec& s = spec(key, KeyKind::integers);
+  return integers_in(key, s.min, s.max);
+}
+
+std::optional<Eigen::Vector3d> Section::vec3_opt(std::string_view key) const {
+  const KeySpec& s = spec(key, KeyKind::vec3);
   if (!has(key)) {
     get(key);
     return std::nullopt;
   }
-  std::vector<double> v = numbers(key, range);
+  std::vector<double> v = numbers_in(key, s.range);
   if (v.size() != 3) fail(key, "expected a list of 3 numbers, got " + std::to_string(v.size()));
   return Eigen::Vector3d(v[0], v[1], v[2]);
 }
 
-Eigen::Vector3d Section::vec3(std::string_view key, const Eigen::Vector3d& fallback, Range range) const {
-  note_default(key, "[" + fmt(fallback[0]) + ", " + fmt(fallback[1]) + ", " + fmt(fallback[2]) + "]");
-  return vec3_opt(key, range).value_or(fallback);
+Eigen::Vector3d Section::vec3(std::string_view key) const {
+  const KeySpec& s = spec(key, KeyKind::vec3);
+  if (auto v = vec3_opt(key)) return *v;
+  return declared_default(key, s).vec3;
 }
 
-std::array<long, 3> Section::int3(std::string_view key, std::array<long, 3> fallback, long min, long max) const {
-  note_default(key, fallback[0] == fallback[1] && fallback[1] == fallback[2]
-                        ? std::to_string(fallback[0])
-                        : "[" + std::to_string(fallback[0]) + ", " + std::to_string(fallback[1]) + ", " +
-                              std::to_string(fallback[2]) + "]");
+Eigen::Vector3d Section::vec3(std::string_view key, const Eigen::Vector3d& fallback) const {
+  const KeySpec& s = spec(key, KeyKind::vec3);
+  check_default(key, s, file_->keys_->fallback(s).vec3 == fallback);
+  return vec3_opt(key).value_or(fallback);
+}
+
+std::array<long, 3> Section::int3(std::string_view key) const {
+  const KeySpec& s = spec(key, KeyKind::int3);
+  if (!has(key)) return declared_default(key, s).int3;
+  return int3(key, file_->keys_->fallback(s).int3);
+}
+
+std::array<long, 3> Section::int3(std::string_view key, std::array<long, 3> fallback) const {
+  const KeySpec& s = spec(key, KeyKind::int3);
+  check_default(key, s, file_->keys_->fallback(s).int3 == fallback);
+  const long min = s.min, max = s.max;
   const toml::node* n = get(key);
   if (!n) return fallback;
   if (n->is_integer()) {
-    const long v = *integer_opt(key, min, max);
+    const long v = *integer_in(key, min, max);
     return {v, v, v};
   }
   if (!n->is_array())
     fail(key, "expected an integer or a list of 3 integers in [" + std::to_string(min) + ", " + std::to_string(max) +
                   "], got " + type_name(*n));
-  std::vector<long> v = integers(key, min, max);
+  std::vector<long> v = integers_in(key, min, max);
   if (v.size() != 3)
     fail(key, "expected an integer or a list of 3 integers, got a list of " + std::to_string(v.size()));
   return {v[0], v[1], v[2]};
 }
 
 Section Section::table(std::string_view key) const {
+  spec(key, KeyKind::table);
   const toml::node* n = get(key, false);
   if (!n) return Section(file_, nullptr, full(key));
   auto t = n->as_table();
@@ -295,6 +373,7 @@ Section Section::table(std::string_view key) const {
 }
 
 std::vector<Section> Section::tables(std::string_view key) const {
+  spec(key, KeyKind::tables);
   const toml::node* n = get(key, false);
   std::vector<Section> out;
   if (!n) return out;
@@ -347,14 +426,15 @@ std::string SceneFile::input_digests() const {
   return out;
 }
 
-SceneFile SceneFile::load(const std::string& path, const std::vector<std::string>& overrides) {
+SceneFile SceneFile::load(const std::string& path, const std::vector<std::string>& overrides, const KeyTable& keys) {
   const std::string text = read_input_file(path, "a scene file in TOML", input_limits::kScene);
-  return parse(text, path, overrides, std::filesystem::path(path).parent_path().string());
+  return parse(text, path, overrides, std::filesystem::path(path).parent_path().string(), keys);
 }
 
 SceneFile SceneFile::parse(const std::string& text, const std::string& name, const std::vector<std::string>& overrides,
-                           const std::string& directory) {
+                           const std::string& directory, const KeyTable& keys) {
   SceneFile f;
+  f.keys_ = &keys;
   f.name_ = name;
   f.directory_ = directory;
   try {

@@ -11,8 +11,7 @@ namespace isochor {
 Selection Selection::parse(const Section& s) {
   Selection sel;
   sel.where = s.where("kind");
-  const std::string kind =
-      s.string("kind", "", {"all", "box", "half_space", "cylinder", "surface", "indices", "k_ring", "set"});
+  const std::string kind = s.string("kind", "");
   if (kind.empty())
     s.fail("kind",
            "missing, expected one of \"all\", \"box\", \"half_space\", \"cylinder\", \"surface\", \"indices\", "
@@ -30,7 +29,7 @@ Selection Selection::parse(const Section& s) {
   }
   if (kind == "half_space") {
     sel.kind = Kind::half_space;
-    sel.point = s.vec3("point", Eigen::Vector3d::Zero(), Range::coordinate());
+    sel.point = s.vec3("point", Eigen::Vector3d::Zero());
     if (!s.has("normal")) s.fail("normal", "missing, a half_space selection needs a normal");
     sel.normal = s.vec3("normal", {});
     if (sel.normal.norm() == 0) s.fail("normal", "expected a non-zero vector");
@@ -39,23 +38,23 @@ Selection Selection::parse(const Section& s) {
   if (kind == "cylinder") {
     sel.kind = Kind::cylinder;
     if (!s.has("radius")) s.fail("radius", "missing, a cylinder selection needs a radius (m)");
-    sel.point = s.vec3("center", Eigen::Vector3d::Zero(), Range::coordinate());
+    sel.point = s.vec3("center", Eigen::Vector3d::Zero());
     sel.normal = s.vec3("axis", Eigen::Vector3d::UnitZ());
     if (sel.normal.norm() == 0) s.fail("axis", "expected a non-zero vector");
     sel.normal.normalize();
-    sel.radius = s.number("radius", 0.0, Range::positive());
-    sel.length = s.has("length") ? s.number("length", 0.0, Range::non_negative()) : -1.0;
+    sel.radius = s.number("radius", 0.0);
+    sel.length = s.has("length") ? s.number("length", 0.0) : -1.0;
   }
   if (kind == "indices") {
     sel.kind = Kind::indices;
     if (!s.has("indices")) s.fail("indices", "missing, expected a list of indices");
-    for (long i : s.integers("indices", 0, std::numeric_limits<int>::max())) sel.indices.push_back(static_cast<int>(i));
+    for (long i : s.integers("indices")) sel.indices.push_back(static_cast<int>(i));
   }
   if (kind == "k_ring") {
     sel.kind = Kind::k_ring;
     if (!s.has("node")) s.fail("node", "missing, a k_ring selection needs the centre node index");
-    sel.node = static_cast<int>(s.integer("node", 0, 0, std::numeric_limits<int>::max()));
-    sel.k = static_cast<int>(s.integer("k", 1, 1, 1000));
+    sel.node = static_cast<int>(s.integer("node", 0));
+    sel.k = static_cast<int>(s.integer("k", 1));
   }
   if (kind == "set") {
     sel.kind = Kind::set;

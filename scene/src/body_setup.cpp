@@ -59,7 +59,7 @@ std::vector<Eigen::Vector3d> fibres_from_file(const Section& m, const Scene& sc,
 }
 
 std::vector<Eigen::Vector3d> parse_fibres(const Section& m, const Scene& sc, const std::vector<int>& tets) {
-  const std::string kind = m.string("fibres", "constant", {"constant", "laplace", "file"});
+  const std::string kind = m.string("fibres", "constant");
   if (kind == "file") return fibres_from_file(m, sc, tets);
   if (kind == "laplace") {
     for (const char* key : {"origin", "insertion"})
@@ -82,7 +82,7 @@ ActivationCurve parse_activation(const Section& m, const Scene& sc) {
   ActivationCurve a;
   const int given = m.has("activation_keys") + m.has("activation_joint");
   if (given > 1) m.fail("activation_joint", "expected one of activation_keys or activation_joint");
-  a.value = m.number("activation", 0.0, Range::closed(0.0, 1.0));
+  a.value = m.number("activation", 0.0);
   if (given && m.has("activation")) m.fail("activation", "not with activation_keys or activation_joint");
   const char* key = m.has("activation_keys") ? "activation_keys" : "activation_joint";
   if (!given) return a;
@@ -103,7 +103,10 @@ ActivationCurve parse_activation(const Section& m, const Scene& sc) {
   if (a.bone < 0) k.fail("bone", "no bone \"" + bone + "\" in [skeleton]");
   const int angles = bones[a.bone].angles;
   if (angles == 0) k.fail("bone", "bone \"" + bone + "\" has a weld joint: it has no angle");
-  a.axis = static_cast<int>(k.integer("axis", 0, 0, angles - 1));
+  a.axis = static_cast<int>(k.integer("axis"));
+  if (a.axis >= angles)
+    k.fail("axis", "expected an integer in [0, " + std::to_string(angles - 1) + "] (the joint's angles), got " +
+                       std::to_string(a.axis));
   return a;
 }
 
@@ -118,7 +121,7 @@ void parse_material_regions(const Section& material, Scene& sc) {
     region.tets = region_tets(r, sc);
     std::tie(region.mu, region.lambda) = parse_lame(r, sc.material.mu, sc.material.lambda);
     if (!std::isfinite(region.lambda)) r.fail("nu", "expected nu < 0.5 (nu = 0.5 is for XPBD's incompressible limit)");
-    region.density = r.number("density", sc.material.density, Range::density());
+    region.density = r.number("density", sc.material.density);
     sc.material.regions.push_back(std::move(region));
   }
 }
@@ -143,7 +146,7 @@ TetMaterials scene_tet_materials(const Scene& sc) {
 }
 
 void parse_muscles(const Section& root, Scene& sc) {
-  sc.activation_scale = root.table("muscles").number("activation_scale", 1.0, Range::closed(0.0, 1.0));
+  sc.activation_scale = root.table("muscles").number("activation_scale", 1.0);
   std::vector<int> owner(sc.mesh.num_tets(), -1);
   for (const Section& m : root.tables("muscle")) {
     Scene::MuscleSpec spec;
@@ -162,10 +165,10 @@ void parse_muscles(const Section& root, Scene& sc) {
       owner[e] = static_cast<int>(sc.muscles.size());
     }
     spec.fibres = parse_fibres(m, sc, spec.tets);
-    spec.law.sigma_max = m.number("sigma_max", spec.law.sigma_max, Range::non_negative());
-    spec.law.optimal_stretch = m.number("optimal_stretch", 1.0, Range::closed(0.1, 10.0));
-    spec.law.k1 = m.number("passive_k1", 0.0, Range::non_negative());
-    spec.law.k2 = m.number("passive_k2", 0.0, Range::closed(0.0, 100.0));
+    spec.law.sigma_max = m.number("sigma_max", spec.law.sigma_max);
+    spec.law.optimal_stretch = m.number("optimal_stretch", 1.0);
+    spec.law.k1 = m.number("passive_k1", 0.0);
+    spec.law.k2 = m.number("passive_k2", 0.0);
     spec.activation = parse_activation(m, sc);
     sc.muscles.push_back(std::move(spec));
   }

@@ -31,10 +31,10 @@ struct WrapSizes {
 };
 WrapSizes wrap_sizes(const Section& s, const GltfCharacter& c) {
   const Eigen::Vector3d extent = c.vertices.rowwise().maxCoeff() - c.vertices.rowwise().minCoeff();
-  const double h = s.number("edge_length", extent.maxCoeff() / 25, Range::positive());
+  const double h = s.number("edge_length", extent.maxCoeff() / 25);
   check_size(s, "edge_length", h);
-  const double alpha = s.number("wrap_alpha", h, Range::positive());
-  const double offset = s.number("wrap_offset", alpha / 20, Range::positive());
+  const double alpha = s.number("wrap_alpha", h);
+  const double offset = s.number("wrap_offset", alpha / 20);
   if (alpha < extent.norm() / 2000)
     s.fail(s.has("wrap_alpha") ? "wrap_alpha" : "edge_length",
            "the wrap's alpha: a " + std::to_string(alpha) + " m ball wraps a " + std::to_string(extent.norm()) +
@@ -121,7 +121,7 @@ void clear_joints(BoneSpec& b, double clear_from, const std::vector<std::pair<Ei
 
 // Every bone's capsule cleared (clear_joints) by its motion's turns.
 void clear_all_joints(const Section& s, std::vector<BoneSpec>& bones) {
-  const double gap = s.number("joint_gap", 1.0, Range::non_negative());
+  const double gap = s.number("joint_gap", 1.0);
   std::vector<double> clear(bones.size());
   for (std::size_t j = 0; j < bones.size(); ++j)
     clear[j] = gap * bones[j].radius * std::sin(largest_turn(bones[j]) / 2) / std::sin(M_PI / 4);
@@ -136,7 +136,7 @@ void clear_all_joints(const Section& s, std::vector<BoneSpec>& bones) {
 // its children's (a leaf's: to the centroid of the vertices it dominates), its radius `bone_radius`
 // times the skin's thickness about it.
 std::vector<BoneSpec> joint_bones(const Section& s, const GltfCharacter& c, const Mesh& mesh) {
-  const double fraction = s.number("bone_radius", 0.5, Range::closed(0.0, 1.0));
+  const double fraction = s.number("bone_radius", 0.5);
   const std::vector<Eigen::Matrix4d> G = c.node_globals(-1, 0.0);
   std::vector<BoneSpec> bones(c.joints.size());
   std::vector<int> children(c.joints.size(), 0);
@@ -226,7 +226,7 @@ Eigen::Matrix3d nearest_rotation(const Eigen::Matrix3d& A) {
 // the run's end when `loop`. A NaN motion time is the rest pose.
 std::vector<std::pair<double, double>> key_schedule(const Section& s, const std::vector<double>& taus, double first,
                                                     double length, double duration) {
-  const double blend = s.number("blend_in", 0.5, Range::non_negative());
+  const double blend = s.number("blend_in", 0.5);
   const bool loop = s.boolean("loop", true);
   std::vector<std::pair<double, double>> keys;  // scene time, motion time
   if (blend > 0) keys.emplace_back(0.0, std::numeric_limits<double>::quiet_NaN());
@@ -360,7 +360,7 @@ void bvh_motion(const Section& s, const SceneFile& file, const GltfCharacter& c,
                 std::vector<BoneSpec>& bones) {
   const std::string path = file.resolve_path(s.string("bvh", ""));
   const Bvh bvh = read_bvh(path);
-  const double scale = s.number("bvh_scale", 1.0, Range::positive());
+  const double scale = s.number("bvh_scale", 1.0);
   const std::vector<int> map = bvh_map(s, c, bvh, s.string("bvh", ""));
   auto direction = [](const std::vector<Eigen::Vector3d>& to) {
     Eigen::Vector3d d = Eigen::Vector3d::Zero();

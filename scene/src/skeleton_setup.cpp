@@ -60,7 +60,7 @@ Eigen::Vector3d unit(const Section& b, const std::string& key, const Eigen::Vect
 // The joint's kind and axes: weld (none), pin (axis), universal (axis, axis2 made orthogonal),
 // ball (three body-fixed axes in `order`).
 void parse_joint(const Section& b, BoneSpec& bone) {
-  const std::string joint = b.string("joint", "weld", {"weld", "pin", "universal", "ball"});
+  const std::string joint = b.string("joint", "weld");
   if (joint == "weld") {
     bone.joint = BoneSpec::Joint::weld;
   } else if (joint == "pin") {
@@ -87,7 +87,7 @@ void parse_joint(const Section& b, BoneSpec& bone) {
 
 // The joint's angles over time: none, keyframes (degrees), a sinusoid, or a BVH joint's channels.
 void parse_motion(const Section& s, const Section& b, const std::optional<Bvh>& bvh, BoneSpec& bone) {
-  const std::string motion = b.string("motion", "none", {"none", "keyframes", "sinusoid", "bvh"});
+  const std::string motion = b.string("motion", "none");
   if (motion != "none" && bone.joint == BoneSpec::Joint::weld)
     b.fail("motion", "a weld joint does not move (expected joint = \"pin\", \"universal\" or \"ball\")");
   const int n = bone.angles;
@@ -99,7 +99,7 @@ void parse_motion(const Section& s, const Section& b, const std::optional<Bvh>& 
     if (static_cast<int>(amp.size()) != n) b.fail("amplitude", "expected " + per + " (degrees)");
     bone.motion.kind = Driver::Kind::sinusoid;
     for (int k = 0; k < n; ++k) bone.motion.vector[k] = amp[k] * M_PI / 180.0;
-    bone.motion.frequency = b.number("frequency", 1.0, Range::positive());
+    bone.motion.frequency = b.number("frequency", 1.0);
     bone.motion.phase = b.number("phase", 0.0);
   } else if (motion == "bvh") {
     if (!bvh) s.fail("bvh", "missing, bone \"" + bone.name + "\" takes its motion from a BVH file");
@@ -127,10 +127,10 @@ BoneSpec parse_bone(const Section& s, const Section& b, const std::optional<Bvh>
   }
   bone.origin = b.vec3("origin", Eigen::Vector3d::Zero());
   const Eigen::Vector3d direction = unit(b, "direction", Eigen::Vector3d::UnitX());
-  double length = b.number("length", 0.0, Range::non_negative());
-  const double start = b.number("start", 0.0, Range::non_negative());
+  double length = b.number("length", 0.0);
+  const double start = b.number("start", 0.0);
   if (start > length && b.has("start")) b.fail("start", "expected start <= length");
-  bone.radius = b.number("radius", 0.0, Range::non_negative());
+  bone.radius = b.number("radius", 0.0);
   parse_joint(b, bone);
   parse_motion(s, b, bvh, bone);
   if (Section sel = b.table("select"); sel.exists()) bone.nodes = select_nodes(mesh, Selection::parse(sel));
@@ -159,7 +159,7 @@ void bind_nodes(const std::vector<Section>& sections, const Mesh& mesh, const st
   std::vector<double> attach(bones.size());
   std::vector<char> listed(bones.size());  // the bone's nodes are given by `select`
   for (std::size_t i = 0; i < bones.size(); ++i) {
-    attach[i] = sections[i].number("attach_distance", 0.0, Range::non_negative());
+    attach[i] = sections[i].number("attach_distance", 0.0);
     listed[i] = sections[i].table("select").exists();
   }
   const Points& X = mesh.rest_positions();

@@ -80,9 +80,9 @@ void parse_paint(const Section& p, const Mesh& mesh, const SceneFile& file,
     check_zone_name(t, name, name, zones);
     rule.zones.push_back(name);
     if (rule.by == PaintRule::By::labels) {
-      rule.labels.push_back(t.integer(name, 0, -2147483647L, 2147483647L));
+      rule.labels.push_back(t.integer(name, 0));
     } else if (rule.by == PaintRule::By::colors) {
-      const std::vector<double> c = t.numbers(name, Range::non_negative());
+      const std::vector<double> c = t.numbers(name);
       if (c.size() != 3) t.fail(name, "expected a colour [r, g, b] (0..1, or 0..255)");
       Eigen::Vector3d v(c[0], c[1], c[2]);
       if (v.maxCoeff() > 1) v /= 255.0;
@@ -92,11 +92,11 @@ void parse_paint(const Section& p, const Mesh& mesh, const SceneFile& file,
     }
   }
   rule.property = p.string("property", "label");
-  rule.color_tolerance = p.number("color_tolerance", 0.1, Range::positive());
+  rule.color_tolerance = p.number("color_tolerance", 0.1);
   const Points& X = mesh.rest_positions();
   const double diagonal = (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
-  const double tolerance = p.number("tolerance", 0.02 * diagonal, Range::positive());
-  const std::string disconnected = p.string("disconnected", "error", {"error", "keep", "split"});
+  const double tolerance = p.number("tolerance", 0.02 * diagonal);
+  const std::string disconnected = p.string("disconnected", "error");
   std::vector<std::vector<int>> tets;
   try {
     const PaintedPoints painted = read_paint(path, &X);
@@ -138,14 +138,14 @@ ZoneChoice parse_zones(const Section& s, const Mesh& mesh, const SceneFile& file
   for (const char* key : {"global", "rings", "patches", "from_mesh", "paint", "zone"}) named = named || s.has(key);
   // zones.default: the paper's choice by name, for scenes that switch models by --set (UNH and
   // SNH get no zones unless the table names them).
-  const bool paper = s.string("default", "patches", {"patches", "global"}) == "global";
+  const bool paper = s.string("default", "patches") == "global";
   c.automatic = cnh && !named && !paper;
   if (s.boolean("global", cnh && (paper || (named && !s.has("patches"))))) {
     std::vector<int> all(mesh.num_tets());
     for (int e = 0; e < mesh.num_tets(); ++e) all[e] = e;
     zones.emplace_back("global", std::move(all));
   }
-  if (const long k = s.integer("rings", 0, 0, 100); k > 0) {
+  if (const long k = s.integer("rings", 0); k > 0) {
     // One zone per node: the tets of its k-ring (Irving et al. 2007 for k = 1).
     const DofMap all = DofMap::make(mesh.num_nodes(), {});
     // Nodes whose rings hold the same tets (large k on a small mesh) give one zone, not
@@ -157,7 +157,7 @@ ZoneChoice parse_zones(const Section& s, const Mesh& mesh, const SceneFile& file
         zones.emplace_back("ring" + std::to_string(k) + "_" + std::to_string(v), rings[v]);
   }
   c.patches_begin = zones.size();
-  if (const long k = s.integer("patches", c.automatic ? kDefaultPatchRings : 0, 0, 100); k > 0) {
+  if (const long k = s.integer("patches", c.automatic ? kDefaultPatchRings : 0); k > 0) {
     c.patch_rings = static_cast<int>(k);
     const auto patches = patch_zones(mesh, static_cast<int>(k));
     for (std::size_t p = 0; p < patches.size(); ++p)

@@ -8,8 +8,8 @@ namespace isochor {
 void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
   BackwardEulerOptions& o = spec.backward_euler;
   o.dt = parse_dt(in);
-  o.newton_tol = in.number("newton_tol", 1e-6, Range::positive());
-  o.newton_atol = in.number("newton_atol", 1e-12, Range::positive());
+  o.newton_tol = in.number("newton_tol", 1e-6);
+  o.newton_atol = in.number("newton_atol", 1e-12);
   o.semi_implicit = kind == IntegratorKind::semi_implicit;
   o.max_steps = parse_max_steps(in);
   o.rescale_volume = in.boolean("rescale_volume", false);
@@ -17,8 +17,8 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
     refuse_option(in, "rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
   o.linear_solver = parse_linear_solver(in, LinearSolverKind::reduced);
   o.automatic_linear_solver = kind == IntegratorKind::backward_euler && linear_solver_is_auto(in);
-  o.linear_tol = in.number("linear_tol", 0.0, {0.0, 1e-2, false, true});
-  const std::string hessian = in.string("hessian", "exact", {"exact", "projected", "hybrid"});
+  o.linear_tol = in.number("linear_tol", 0.0);
+  const std::string hessian = in.string("hessian", "exact");
   o.project_hessian = hessian != "exact";
   o.exact_near_solution = hessian == "hybrid";
   if (o.exact_near_solution && kind == IntegratorKind::semi_implicit)
@@ -27,9 +27,9 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
   if (kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
     refuse_option(in, "hessian", "is an option of the backward_euler and semi_implicit integrators");
   // Options of backward Euler's Newton iteration alone (semi-implicit takes one update).
-  o.max_newton = static_cast<int>(in.integer("max_newton", 30, 1, 100000));
+  o.max_newton = static_cast<int>(in.integer("max_newton", 30));
   o.line_search = in.boolean("line_search", true);
-  o.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 0, 0, 30));
+  o.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 0));
   if (kind != IntegratorKind::backward_euler)
     refuse_option(in, "line_search", "is an option of the backward_euler integrator");
   if (kind != IntegratorKind::backward_euler && kind != IntegratorKind::statics)

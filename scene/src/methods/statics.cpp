@@ -9,7 +9,7 @@ void parse_statics(const Section& in, IntegratorKind, IntegratorSpec& spec) {
   spec.statics.linear_solver = parse_linear_solver(in, LinearSolverKind::klu);
   spec.statics_linear_solver_auto = linear_solver_is_auto(in);
   // Load increments are pseudo-time: halving a failed one changes no accuracy, so it is on.
-  spec.statics.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 5, 0, 30));
+  spec.statics.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 5));
 }
 
 std::unique_ptr<Integrator> make_statics(const Scene& scene, SceneSystem& system) {

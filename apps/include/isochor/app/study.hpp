@@ -10,7 +10,12 @@
 #include <string>
 #include <vector>
 
+#include "isochor/core/key_table.hpp"
+
 namespace isochor {
+
+// The keys a study file may hold (apps/src/study_keys.cpp).
+const KeyTable& study_keys();
 
 struct StudyCase {
   std::string method;                                 // the method's name ("reference" for the reference)
