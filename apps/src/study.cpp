@@ -76,8 +76,8 @@ std::string parse_observable(const Section& o) {
     if (set.empty()) o.fail("set", "missing, expected the name of a node set of the mesh");
     t << "set = " << toml_string(set) << "\n";
   }
-  t << "component = " << toml_string(o.string("component", "norm")) << "\n";
-  t << "frame = " << o.integer("frame", -1) << "\n";
+  t << "component = " << toml_string(o.string("component")) << "\n";
+  t << "frame = " << o.integer("frame") << "\n";
   if (const auto r = o.number_opt("reference")) t << "reference = " << number_text(*r) << "\n";
   return t.str();
 }
@@ -95,7 +95,7 @@ Study load_study(const std::string& path, const std::vector<std::string>& overri
   if (!std::filesystem::exists(s.scene)) st.fail("scene", "no such file: " + s.scene.string());
   const std::string stem = std::filesystem::path(path).stem().string();
   s.output = st.string("output", "out/studies/" + stem);
-  s.jobs = static_cast<int>(st.integer("jobs", 2));
+  s.jobs = static_cast<int>(st.integer("jobs"));
   s.kind = st.string("kind", "work_precision");
   s.observable = parse_observable(root.table("observable"));
   const std::vector<std::string> base = st.strings("set");

@@ -116,7 +116,7 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     s.fail(
         "shape",
         "missing, expected shape = \"box\" | \"capsule\" | \"cylinder\" | \"sphere\" | \"two_tets\" or file = \"...\"");
-  const Eigen::Vector3d center = s.vec3("center", Eigen::Vector3d::Zero());
+  const Eigen::Vector3d center = s.vec3("center");
   if (has_file) return mesh_from_file(s, file, center);
   const std::string shape = s.string("shape", "");
   if (shape == "box") {
@@ -124,14 +124,14 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
     const int split = static_cast<int>(s.integer("split", 6));
     check_tets(s, "cells",
                static_cast<double>(cells[0]) * static_cast<double>(cells[1]) * static_cast<double>(cells[2]) * split);
-    const double sliver = s.number("sliver_ratio", 1.0);
+    const double sliver = s.number("sliver_ratio");
     const Eigen::Vector3d size = s.vec3("size", Eigen::Vector3d::Ones());
     check_size(s, "size", size.minCoeff());  // masses of a box far below a micrometre underflow
     return make_box(size, cells, center, split, sliver);
   }
   if (shape == "cylinder") {
-    const double r = s.number("radius", 0.5), height = s.number("height", 1.0);
-    const int resolution = static_cast<int>(s.integer("resolution", 24));
+    const double r = s.number("radius", 0.5), height = s.number("height");
+    const int resolution = static_cast<int>(s.integer("resolution"));
     check_size(s, "radius", r);
     check_size(s, "height", height);
     check_tets(s, "resolution", gmsh_tets(M_PI * r * r * height, 2 * M_PI * r / resolution));
@@ -156,9 +156,9 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
   if (shape == "sphere") {
     const double r = s.number("radius", 1.0);
     const double h = s.number("edge_length", 0.0);
-    const long target = s.integer("target_tets", 5000);
+    const long target = s.integer("target_tets");
     if (h > 0 && s.has("target_tets")) s.fail("edge_length", "give either edge_length or target_tets, not both");
-    const double inner = s.number("inner_radius", 0.0);
+    const double inner = s.number("inner_radius");
     if (inner >= r) s.fail("inner_radius", "expected less than radius (" + std::to_string(r) + " m)");
     check_size(s, "radius", r);
     if (inner > 0) check_size(s, "inner_radius", inner);
@@ -170,7 +170,7 @@ Mesh mesh_from_scene(const Section& s, const SceneFile& file) {
       check_tets(s, "target_tets", static_cast<double>(target));
     return make_sphere(r, h, target, center, inner);
   }
-  Mesh m = make_two_tets(s.number("edge", 1.0));
+  Mesh m = make_two_tets(s.number("edge"));
   if (center != Eigen::Vector3d::Zero()) s.fail("center", "does not apply to two_tets");
   return m;
 }

@@ -38,7 +38,7 @@ Selection Selection::parse(const Section& s) {
   if (kind == "cylinder") {
     sel.kind = Kind::cylinder;
     if (!s.has("radius")) s.fail("radius", "missing, a cylinder selection needs a radius (m)");
-    sel.point = s.vec3("center", Eigen::Vector3d::Zero());
+    sel.point = s.vec3("center");
     sel.normal = s.vec3("axis", Eigen::Vector3d::UnitZ());
     if (sel.normal.norm() == 0) s.fail("axis", "expected a non-zero vector");
     sel.normal.normalize();
@@ -54,7 +54,7 @@ Selection Selection::parse(const Section& s) {
     sel.kind = Kind::k_ring;
     if (!s.has("node")) s.fail("node", "missing, a k_ring selection needs the centre node index");
     sel.node = static_cast<int>(s.integer("node", 0));
-    sel.k = static_cast<int>(s.integer("k", 1));
+    sel.k = static_cast<int>(s.integer("k"));
   }
   if (kind == "set") {
     sel.kind = Kind::set;

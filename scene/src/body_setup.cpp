@@ -59,7 +59,7 @@ std::vector<Eigen::Vector3d> fibres_from_file(const Section& m, const Scene& sc,
 }
 
 std::vector<Eigen::Vector3d> parse_fibres(const Section& m, const Scene& sc, const std::vector<int>& tets) {
-  const std::string kind = m.string("fibres", "constant");
+  const std::string kind = m.string("fibres");
   if (kind == "file") return fibres_from_file(m, sc, tets);
   if (kind == "laplace") {
     for (const char* key : {"origin", "insertion"})
@@ -82,7 +82,7 @@ ActivationCurve parse_activation(const Section& m, const Scene& sc) {
   ActivationCurve a;
   const int given = m.has("activation_keys") + m.has("activation_joint");
   if (given > 1) m.fail("activation_joint", "expected one of activation_keys or activation_joint");
-  a.value = m.number("activation", 0.0);
+  a.value = m.number("activation");
   if (given && m.has("activation")) m.fail("activation", "not with activation_keys or activation_joint");
   const char* key = m.has("activation_keys") ? "activation_keys" : "activation_joint";
   if (!given) return a;
@@ -146,7 +146,7 @@ TetMaterials scene_tet_materials(const Scene& sc) {
 }
 
 void parse_muscles(const Section& root, Scene& sc) {
-  sc.activation_scale = root.table("muscles").number("activation_scale", 1.0);
+  sc.activation_scale = root.table("muscles").number("activation_scale");
   std::vector<int> owner(sc.mesh.num_tets(), -1);
   for (const Section& m : root.tables("muscle")) {
     Scene::MuscleSpec spec;
@@ -166,9 +166,9 @@ void parse_muscles(const Section& root, Scene& sc) {
     }
     spec.fibres = parse_fibres(m, sc, spec.tets);
     spec.law.sigma_max = m.number("sigma_max", spec.law.sigma_max);
-    spec.law.optimal_stretch = m.number("optimal_stretch", 1.0);
-    spec.law.k1 = m.number("passive_k1", 0.0);
-    spec.law.k2 = m.number("passive_k2", 0.0);
+    spec.law.optimal_stretch = m.number("optimal_stretch");
+    spec.law.k1 = m.number("passive_k1");
+    spec.law.k2 = m.number("passive_k2");
     spec.activation = parse_activation(m, sc);
     sc.muscles.push_back(std::move(spec));
   }

@@ -121,7 +121,7 @@ void clear_joints(BoneSpec& b, double clear_from, const std::vector<std::pair<Ei
 
 // Every bone's capsule cleared (clear_joints) by its motion's turns.
 void clear_all_joints(const Section& s, std::vector<BoneSpec>& bones) {
-  const double gap = s.number("joint_gap", 1.0);
+  const double gap = s.number("joint_gap");
   std::vector<double> clear(bones.size());
   for (std::size_t j = 0; j < bones.size(); ++j)
     clear[j] = gap * bones[j].radius * std::sin(largest_turn(bones[j]) / 2) / std::sin(M_PI / 4);
@@ -136,7 +136,7 @@ void clear_all_joints(const Section& s, std::vector<BoneSpec>& bones) {
 // its children's (a leaf's: to the centroid of the vertices it dominates), its radius `bone_radius`
 // times the skin's thickness about it.
 std::vector<BoneSpec> joint_bones(const Section& s, const GltfCharacter& c, const Mesh& mesh) {
-  const double fraction = s.number("bone_radius", 0.5);
+  const double fraction = s.number("bone_radius");
   const std::vector<Eigen::Matrix4d> G = c.node_globals(-1, 0.0);
   std::vector<BoneSpec> bones(c.joints.size());
   std::vector<int> children(c.joints.size(), 0);
@@ -226,7 +226,7 @@ Eigen::Matrix3d nearest_rotation(const Eigen::Matrix3d& A) {
 // the run's end when `loop`. A NaN motion time is the rest pose.
 std::vector<std::pair<double, double>> key_schedule(const Section& s, const std::vector<double>& taus, double first,
                                                     double length, double duration) {
-  const double blend = s.number("blend_in", 0.5);
+  const double blend = s.number("blend_in");
   const bool loop = s.boolean("loop", true);
   std::vector<std::pair<double, double>> keys;  // scene time, motion time
   if (blend > 0) keys.emplace_back(0.0, std::numeric_limits<double>::quiet_NaN());
@@ -360,7 +360,7 @@ void bvh_motion(const Section& s, const SceneFile& file, const GltfCharacter& c,
                 std::vector<BoneSpec>& bones) {
   const std::string path = file.resolve_path(s.string("bvh", ""));
   const Bvh bvh = read_bvh(path);
-  const double scale = s.number("bvh_scale", 1.0);
+  const double scale = s.number("bvh_scale");
   const std::vector<int> map = bvh_map(s, c, bvh, s.string("bvh", ""));
   auto direction = [](const std::vector<Eigen::Vector3d>& to) {
     Eigen::Vector3d d = Eigen::Vector3d::Zero();
@@ -438,7 +438,7 @@ Character parse_character(const Section& s, const SceneFile& file, double durati
   const GltfCharacter c = read_gltf(file.resolve_path(s.string("file", "")));
   if (c.joints.empty())
     s.fail("file", "\"" + s.string("file", "") + "\" has no skin (expected a mesh skinned to a skeleton of joints)");
-  const std::string clip_name = s.string("clip", "");
+  const std::string clip_name = s.string("clip");
   if (!clip_name.empty() && s.has("bvh")) s.fail("bvh", "a clip is given too (expected one motion: clip or bvh)");
   int clip = -1;
   if (!clip_name.empty()) {

@@ -90,7 +90,7 @@ std::vector<double> Scene::breakpoints() const {
 Driver parse_keyframes(const Section& b, const std::string& key, int per_time, double scale, const std::string& what,
                        const std::string& knots, double knot_scale) {
   Driver d;
-  const std::string interp = b.string("interpolation", "linear");
+  const std::string interp = b.string("interpolation");
   d.kind = interp == "linear" ? Driver::Kind::keyframes_linear : Driver::Kind::keyframes_cubic;
   d.times = b.numbers(knots);
   const std::vector<double> flat = b.numbers(key);
@@ -163,8 +163,8 @@ MaterialSpec parse_material(const Section& s) {
   std::tie(m.mu, m.lambda) = parse_lame(s, 1e4, 9e4);
   m.beta = s.number("beta", m.beta);
   m.epsilon = s.number("epsilon", m.epsilon);
-  m.epidermis_lambda = s.number("epidermis_lambda", 0.0);
-  m.epidermis_gamma = s.number("epidermis_gamma", 1.0);
+  m.epidermis_lambda = s.number("epidermis_lambda");
+  m.epidermis_gamma = s.number("epidermis_gamma");
   // The mass-spring keys are read for every model, so one scene can switch models by --set.
   m.spring_stiffness = s.number("spring_stiffness", m.spring_stiffness);
   m.spring_damping = s.number("spring_damping", m.spring_damping);
@@ -180,19 +180,19 @@ Driver parse_motion(const Section& b) {
     d.kind = Driver::Kind::ramp;
     if (!b.has("displacement")) b.fail("displacement", "missing, a ramp needs its end displacement [x, y, z] (m)");
     d.vector = b.vec3("displacement", {});
-    d.t0 = b.number("t0", 0.0);
-    d.t1 = b.number("t1", 1.0);
+    d.t0 = b.number("t0");
+    d.t1 = b.number("t1");
     if (d.t1 <= d.t0) b.fail("t1", "expected t1 > t0");
   } else if (kind == "sinusoid") {
     d.kind = Driver::Kind::sinusoid;
     if (!b.has("amplitude")) b.fail("amplitude", "missing, a sinusoid needs its amplitude [x, y, z] (m)");
     d.vector = b.vec3("amplitude", {});
-    d.frequency = b.number("frequency", 1.0);
-    d.phase = b.number("phase", 0.0);
+    d.frequency = b.number("frequency");
+    d.phase = b.number("phase");
   } else if (kind == "rotation") {
     d = parse_keyframes(b, "angles", 1, M_PI / 180.0, "one angle (degrees)");
     d.rotation = true;
-    d.center = b.vec3("center", Eigen::Vector3d::Zero());
+    d.center = b.vec3("center");
     d.axis = b.vec3("axis", Eigen::Vector3d::UnitZ());
     if (d.axis.norm() == 0) b.fail("axis", "expected a non-zero vector");
     d.axis.normalize();
@@ -239,9 +239,9 @@ Driver parse_boundary(const Section& b, const Mesh& mesh) {
 // position projected into the plane (s = 0: the body squashed flat; the random points drawn are
 // the same for every s).
 void parse_flatten(const Section& in, Scene& sc) {
-  const std::string axis = in.string("flatten", "none");
-  const auto seed = in.integer("seed", 1);
-  const double spread = in.number("spread", 1.0);
+  const std::string axis = in.string("flatten");
+  const auto seed = in.integer("seed");
+  const double spread = in.number("spread");
   if (axis == "none") return;  // a seed and spread are kept for a --set initial.flatten variant
   const int a = axis[0] - 'x';
   const Points& X = sc.mesh.rest_positions();
@@ -263,7 +263,7 @@ void parse_flatten(const Section& in, Scene& sc) {
 // another method or scene. Driven nodes follow their drivers from t = 0 as always.
 void parse_start_from(const Section& in, Scene& sc) {
   const std::string from = in.string("from", "");
-  const long frame = in.integer("frame", -1);
+  const long frame = in.integer("frame");
   if (from.empty()) {
     if (in.has("frame")) in.fail("frame", "picks a frame of initial.from (expected initial.from = \"RUN.h5\")");
     return;
@@ -364,7 +364,7 @@ void parse_load(const Section& l, const Mesh& mesh, Scene& sc) {
   const std::vector<int> nodes = select_nodes(mesh, Selection::parse(sel));
   const std::string kind = l.string("kind", "point");
   LoadHistory history;
-  history.ramp = l.number("ramp", 0.0);
+  history.ramp = l.number("ramp");
   if (l.has("times") || l.has("factors")) {
     if (l.has("ramp")) l.fail("ramp", "give either ramp or times and factors, not both");
     history.times = l.numbers("times");
@@ -445,7 +445,7 @@ double required_positive(const Section& s, std::string_view key, const std::stri
 std::shared_ptr<const MeshSdf> parse_mesh_shape(const Section& c, const SceneFile& file, double thickness) {
   if (!c.has("file")) c.fail("file", "missing, a mesh collider needs a closed triangle surface (.obj or .stl)");
   const std::string path = file.resolve_path(c.string("file", ""));
-  const double scale = c.number("scale", 1.0);
+  const double scale = c.number("scale");
   Points x;
   std::vector<Tri> tris;
   try {
@@ -523,9 +523,9 @@ Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& def
                                   {"mesh", K::mesh}});
   ColliderShape& S = C.shape;
   C.law = parse_contact_law(c, defaults);
-  C.center = c.vec3("center", Eigen::Vector3d::Zero());
+  C.center = c.vec3("center");
   const Eigen::Vector3d axis = nonzero_vec3(c, "axis", Eigen::Vector3d::UnitZ());
-  const double angle = c.number("angle", 0.0) * M_PI / 180.0;
+  const double angle = c.number("angle") * M_PI / 180.0;
   // A mesh keeps its file's frame, turned by `angle` about `axis`; the other shapes' axis is `axis`.
   C.rotation = S.kind == K::mesh ? Mat3(Eigen::AngleAxisd(angle, axis)) : frame_with_axis(axis, angle);
   double smallest = 0;  // the smallest half dimension (bounds the rounding)
@@ -551,7 +551,7 @@ Collider parse_collider(const Section& c, const Scene& sc, const ContactLaw& def
     case K::cylinder:
       S.radius = required_positive(c, "radius", "a cylinder needs its radius (m; hollow: the hole's)");
       S.half_length = 0.5 * required_positive(c, "length", "a cylinder needs its height (m)");
-      S.wall = c.number("wall", 0.0);
+      S.wall = c.number("wall");
       smallest = std::min(S.half_length, S.wall > 0 ? 0.5 * S.wall : S.radius);
       break;
     case K::mesh:
@@ -586,7 +586,7 @@ void parse_colliders(const Section& root, Scene& sc) {
     Collider C = Collider::plane(p.vec3("point", {}), nonzero_vec3(p, "normal", {}), parse_contact_law(p, defaults));
     C.name = p.path();
     const Eigen::Vector3d u = p.vec3("displacement", Eigen::Vector3d::Zero());
-    const double t0 = p.number("t0", 0.0), t1 = p.number("t1", 1.0);
+    const double t0 = p.number("t0"), t1 = p.number("t1");
     if (t1 <= t0) p.fail("t1", "expected t1 > t0");
     if (u.squaredNorm() > 0) {
       C.motion.kind = Driver::Kind::ramp;
@@ -828,7 +828,7 @@ Scene parse_scene(SceneFile file, const Mesh* character_mesh) {
   sc.zones = zone_choice.zones;  // [[material.region]] may name them
   sc.keep_zones = root.table("zones").boolean("keep", true);
   parse_material_regions(root.table("material"), sc);
-  sc.zone_restore_time = root.table("zones").number("restore_time", 0.0);
+  sc.zone_restore_time = root.table("zones").number("restore_time");
   const std::vector<int> driven_by = parse_boundaries(root, sc);
   sc.skeleton = character ? character_skeleton(root.table("character"), *character, driven_by)
                           : parse_skeleton(root.table("skeleton"), sc.file, sc.mesh, driven_by);
@@ -836,16 +836,16 @@ Scene parse_scene(SceneFile file, const Mesh* character_mesh) {
 
   const Section forces = root.table("forces");
   sc.gravity = forces.vec3("gravity", sc.gravity);
-  sc.gravity_ramp = forces.number("gravity_ramp", 0.0);
+  sc.gravity_ramp = forces.number("gravity_ramp");
   parse_colliders(root, sc);
   for (const Section& l : root.tables("load")) parse_load(l, sc.mesh, sc);
   const Section damping = root.table("damping");
   // Rayleigh damping a body can have: alpha = 1e6 1/s relaxes velocities in a microsecond, beta =
   // 1e3 s overdamps every mode above 0.002 rad/s; 1e300 stopped IDA at t = 0 naming no key.
-  sc.damping.alpha = damping.number("alpha", 0.0);
+  sc.damping.alpha = damping.number("alpha");
   sc.damping.beta = damping.number("beta", 0.0);
   const Section initial = root.table("initial");
-  sc.initial_velocity = initial.vec3("velocity", Eigen::Vector3d::Zero());
+  sc.initial_velocity = initial.vec3("velocity");
   parse_flatten(initial, sc);
   parse_start_from(initial, sc);
   parse_start_displacement(initial, sc);

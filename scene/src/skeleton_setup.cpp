@@ -60,7 +60,7 @@ Eigen::Vector3d unit(const Section& b, const std::string& key, const Eigen::Vect
 // The joint's kind and axes: weld (none), pin (axis), universal (axis, axis2 made orthogonal),
 // ball (three body-fixed axes in `order`).
 void parse_joint(const Section& b, BoneSpec& bone) {
-  const std::string joint = b.string("joint", "weld");
+  const std::string joint = b.string("joint");
   if (joint == "weld") {
     bone.joint = BoneSpec::Joint::weld;
   } else if (joint == "pin") {
@@ -78,7 +78,7 @@ void parse_joint(const Section& b, BoneSpec& bone) {
   } else {
     bone.joint = BoneSpec::Joint::ball;
     bone.angles = 3;
-    const std::string order = b.string("order", "XYZ");
+    const std::string order = b.string("order");
     if (order.size() != 3 || order.find_first_not_of("XYZ") != std::string::npos)
       b.fail("order", "expected three axis letters such as \"XYZ\" or \"ZXY\"");
     for (int k = 0; k < 3; ++k) bone.axes.col(k) = Eigen::Vector3d::Unit(order[k] - 'X');
@@ -99,8 +99,8 @@ void parse_motion(const Section& s, const Section& b, const std::optional<Bvh>& 
     if (static_cast<int>(amp.size()) != n) b.fail("amplitude", "expected " + per + " (degrees)");
     bone.motion.kind = Driver::Kind::sinusoid;
     for (int k = 0; k < n; ++k) bone.motion.vector[k] = amp[k] * M_PI / 180.0;
-    bone.motion.frequency = b.number("frequency", 1.0);
-    bone.motion.phase = b.number("phase", 0.0);
+    bone.motion.frequency = b.number("frequency");
+    bone.motion.phase = b.number("phase");
   } else if (motion == "bvh") {
     if (!bvh) s.fail("bvh", "missing, bone \"" + bone.name + "\" takes its motion from a BVH file");
     if (bone.joint != BoneSpec::Joint::ball)
@@ -118,7 +118,7 @@ BoneSpec parse_bone(const Section& s, const Section& b, const std::optional<Bvh>
   bone.name = b.string("name", "");
   if (bone.name.empty() || bone.name == "ground") b.fail("name", "missing, expected a bone name (not \"ground\")");
   if (index.count(bone.name)) b.fail("name", "bone \"" + bone.name + "\" is defined twice");
-  const std::string parent = b.string("parent", "ground");
+  const std::string parent = b.string("parent");
   if (parent != "ground") {
     auto it = index.find(parent);
     if (it == index.end())
@@ -128,7 +128,7 @@ BoneSpec parse_bone(const Section& s, const Section& b, const std::optional<Bvh>
   bone.origin = b.vec3("origin", Eigen::Vector3d::Zero());
   const Eigen::Vector3d direction = unit(b, "direction", Eigen::Vector3d::UnitX());
   double length = b.number("length", 0.0);
-  const double start = b.number("start", 0.0);
+  const double start = b.number("start");
   if (start > length && b.has("start")) b.fail("start", "expected start <= length");
   bone.radius = b.number("radius", 0.0);
   parse_joint(b, bone);
@@ -159,7 +159,7 @@ void bind_nodes(const std::vector<Section>& sections, const Mesh& mesh, const st
   std::vector<double> attach(bones.size());
   std::vector<char> listed(bones.size());  // the bone's nodes are given by `select`
   for (std::size_t i = 0; i < bones.size(); ++i) {
-    attach[i] = sections[i].number("attach_distance", 0.0);
+    attach[i] = sections[i].number("attach_distance");
     listed[i] = sections[i].table("select").exists();
   }
   const Points& X = mesh.rest_positions();

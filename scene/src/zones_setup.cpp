@@ -91,12 +91,12 @@ void parse_paint(const Section& p, const Mesh& mesh, const SceneFile& file,
       rule.weights.push_back(t.string(name, ""));
     }
   }
-  rule.property = p.string("property", "label");
-  rule.color_tolerance = p.number("color_tolerance", 0.1);
+  rule.property = p.string("property");
+  rule.color_tolerance = p.number("color_tolerance");
   const Points& X = mesh.rest_positions();
   const double diagonal = (X.rowwise().maxCoeff() - X.rowwise().minCoeff()).norm();
   const double tolerance = p.number("tolerance", 0.02 * diagonal);
-  const std::string disconnected = p.string("disconnected", "error");
+  const std::string disconnected = p.string("disconnected");
   std::vector<std::vector<int>> tets;
   try {
     const PaintedPoints painted = read_paint(path, &X);
@@ -138,14 +138,14 @@ ZoneChoice parse_zones(const Section& s, const Mesh& mesh, const SceneFile& file
   for (const char* key : {"global", "rings", "patches", "from_mesh", "paint", "zone"}) named = named || s.has(key);
   // zones.default: the paper's choice by name, for scenes that switch models by --set (UNH and
   // SNH get no zones unless the table names them).
-  const bool paper = s.string("default", "patches") == "global";
+  const bool paper = s.string("default") == "global";
   c.automatic = cnh && !named && !paper;
   if (s.boolean("global", cnh && (paper || (named && !s.has("patches"))))) {
     std::vector<int> all(mesh.num_tets());
     for (int e = 0; e < mesh.num_tets(); ++e) all[e] = e;
     zones.emplace_back("global", std::move(all));
   }
-  if (const long k = s.integer("rings", 0); k > 0) {
+  if (const long k = s.integer("rings"); k > 0) {
     // One zone per node: the tets of its k-ring (Irving et al. 2007 for k = 1).
     const DofMap all = DofMap::make(mesh.num_nodes(), {});
     // Nodes whose rings hold the same tets (large k on a small mesh) give one zone, not

@@ -8,8 +8,8 @@ namespace isochor {
 void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
   BackwardEulerOptions& o = spec.backward_euler;
   o.dt = parse_dt(in);
-  o.newton_tol = in.number("newton_tol", 1e-6);
-  o.newton_atol = in.number("newton_atol", 1e-12);
+  o.newton_tol = in.number("newton_tol");
+  o.newton_atol = in.number("newton_atol");
   o.semi_implicit = kind == IntegratorKind::semi_implicit;
   o.max_steps = parse_max_steps(in);
   o.rescale_volume = in.boolean("rescale_volume", false);
@@ -17,8 +17,8 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
     refuse_option(in, "rescale_volume", "is an option of the backward_euler and semi_implicit integrators");
   o.linear_solver = parse_linear_solver(in, LinearSolverKind::reduced);
   o.automatic_linear_solver = kind == IntegratorKind::backward_euler && linear_solver_is_auto(in);
-  o.linear_tol = in.number("linear_tol", 0.0);
-  const std::string hessian = in.string("hessian", "exact");
+  o.linear_tol = in.number("linear_tol");
+  const std::string hessian = in.string("hessian");
   o.project_hessian = hessian != "exact";
   o.exact_near_solution = hessian == "hybrid";
   if (o.exact_near_solution && kind == IntegratorKind::semi_implicit)

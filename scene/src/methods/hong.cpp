@@ -9,8 +9,8 @@ namespace isochor {
 void parse_hong(const Section& in, IntegratorKind, IntegratorSpec& spec) {
   spec.hong.dt = parse_dt(in);
   spec.hong.max_steps = parse_max_steps(in);
-  spec.weights_center = in.vec3("weights_center", Eigen::Vector3d::Zero());
-  spec.weights_radius = in.number("weights_radius", 0.0);
+  spec.weights_center = in.vec3("weights_center");
+  spec.weights_radius = in.number("weights_radius");
 }
 
 std::unique_ptr<Integrator> make_hong(const Scene& scene, SceneSystem& system) {

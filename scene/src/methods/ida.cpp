@@ -8,12 +8,12 @@ namespace isochor {
 void parse_ida(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
   IdaOptions& o = spec.ida;
   // A relative tolerance above 1 and an absolute one longer than a body accept any step.
-  o.rtol = in.number("rtol", 1e-6);
-  o.atol_q = in.number("atol", 1e-8);
-  o.atol_v = in.number("atol_v", 0.0);
-  o.atol_lambda = in.number("atol_lambda", 0.0);
-  o.max_order = static_cast<int>(in.integer("max_order", 5));
-  o.max_step = in.number("max_step", 0.0);
+  o.rtol = in.number("rtol");
+  o.atol_q = in.number("atol");
+  o.atol_v = in.number("atol_v");
+  o.atol_lambda = in.number("atol_lambda");
+  o.max_order = static_cast<int>(in.integer("max_order"));
+  o.max_step = in.number("max_step");
   // Unset: 0, the integrator's default (IdaOptions::kDefaultNewtonCoef, every linear solver).
   o.newton_coef = in.has("newton_coef") ? in.number("newton_coef", IdaOptions::kDefaultNewtonCoef) : 0.0;
   // Read here for IDA only (backward Euler's parser reads the key with its own default and range).
@@ -23,12 +23,12 @@ void parse_ida(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
       in.fail("max_newton", "expected an integer in [1, 100], got " + std::to_string(o.max_newton));
   }
   o.max_steps = parse_max_steps(in);
-  const std::string ordering = in.string("ordering", "metis");
+  const std::string ordering = in.string("ordering");
   o.ordering = ordering == "colamd" ? KluOrdering::colamd : ordering == "amd" ? KluOrdering::amd : KluOrdering::metis;
   o.linear_solver = parse_linear_solver(in, LinearSolverKind::klu);
   spec.ida_linear_solver_auto = linear_solver_is_auto(in);
-  o.jacobian_age = in.integer("jacobian_age", 0);
-  o.linear_tol = in.number("linear_tol", 0.0);
+  o.jacobian_age = in.integer("jacobian_age");
+  o.linear_tol = in.number("linear_tol");
   o.stop_at_frames = in.boolean("stop_at_frames", false);
 }
 

@@ -53,7 +53,7 @@ long parse_max_steps(const Section& in) { return in.integer("max_steps", kDefaul
 
 double parse_dt(const Section& in) { return in.number("dt", kDefaultFixedStep); }
 
-static std::string linear_solver_name(const Section& in) { return in.string("linear_solver", "auto"); }
+static std::string linear_solver_name(const Section& in) { return in.string("linear_solver"); }
 
 bool linear_solver_is_auto(const Section& in) { return linear_solver_name(in) == "auto"; }
 

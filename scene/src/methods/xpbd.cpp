@@ -12,8 +12,8 @@ namespace isochor {
 void parse_xpbd(const Section& in, IntegratorKind, IntegratorSpec& spec) {
   XpbdOptions& o = spec.xpbd;
   o.dt = parse_dt(in);
-  o.substeps = static_cast<int>(in.integer("substeps", 10));
-  o.iterations = static_cast<int>(in.integer("iterations", 1));
+  o.substeps = static_cast<int>(in.integer("substeps"));
+  o.iterations = static_cast<int>(in.integer("iterations"));
   o.max_steps = parse_max_steps(in);
 }
 

@@ -45,17 +45,17 @@ struct Range {
 };
 
 enum class KeyKind {
-  number,     // a finite number in `range`
-  integer,    // an integer in [min, max]
-  boolean,    // true or false
-  string,     // a string, one of `choices` when they are given
-  vec3,       // [x, y, z], each in `range`
-  int3,       // an integer or [nx, ny, nz], each in [min, max]
-  numbers,    // a list of numbers, each in `range`
-  integers,   // a list of integers, each in [min, max]
-  strings,    // a list of strings
-  table,      // a table whose keys are declared below it
-  tables,     // an array of tables ([[name]])
+  number,    // a finite number in `range`
+  integer,   // an integer in [min, max]
+  boolean,   // true or false
+  string,    // a string, one of `choices` when they are given
+  vec3,      // [x, y, z], each in `range`
+  int3,      // an integer or [nx, ny, nz], each in [min, max]
+  numbers,   // a list of numbers, each in `range`
+  integers,  // a list of integers, each in [min, max]
+  strings,   // a list of strings
+  table,     // a table whose keys are declared below it
+  tables,    // an array of tables ([[name]])
 };
 
 // One key. `name` is dotted, array indices dropped; a segment in angle brackets (`<zone>`) stands
