@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# What many zones cost in dynamics: a clamped beam (1.5 x 0.3 x 0.3 m, mu = lambda = 1 MPa) falling
+# under gravity for 50 ms, at cells [15k, 3k, 3k] (810 k^3 tets), with the global zone (one row),
+# 2-ring patches and per-node 1-ring zones, under backward Euler (dt = 1 ms, 50 steps) and IDA
+# (rtol 1e-4), each with its automatic linear solver (backward Euler: the dense border up to 32
+# rows, else KLU on the KKT matrix; IDA: krylov up to 256 rows, else KLU on the GGL matrix).
+# 1-ring zones on this mesh are linearly dependent (the Gram matrix's pivot test), which IDA's KLU
+# refuses: IDA runs them with krylov, whose border is dense (n x m), at k = 1 only. Wall seconds of
+# the solver (median of the rounds, cases interleaved), steps, Newton iterations, fresh
+# factorisations and their seconds, and the tip's deflection. Writes docs/results/zones_dynamics.csv.
+#   bench/zones_dynamics.sh [build] [rounds] [ks] [csv]
+set -euo pipefail
+source "$(dirname "$0")/lib.sh"
+ks=${3:-"1 2 3"}
+csv=${4:-docs/results/zones_dynamics.csv}
+tmp=$(mktemp)
+scene=out/bench/beam_dynamic.toml
+trap 'rm -f "$tmp"' EXIT
+cat > "$scene" <<'TOML'
+[mesh]
+shape = "box"
+size = [1.5, 0.3, 0.3]
+center = [0.75, 0.0, 0.0]
+[material]
+model = "cnh"
+density = 1000.0
+mu = 1.0e6
+lambda = 1.0e6
+[[boundary]]
+select = { kind = "set", name = "xmin" }
+[forces]
+gravity = [0.0, 0.0, -9.81]
+[frames]
+rate = 100
+duration = 0.05
+TOML
+zones_of() {
+  case $1 in
+    global) echo "--set zones.default=global" ;;
+    patches2) echo "--set zones.patches=2" ;;
+    rings1) echo "--set zones.rings=1 --set zones.global=false" ;;
+  esac
+}
+method_of() {
+  case $1 in
+    be) echo "--set integrator.kind=backward_euler --set integrator.dt=1e-3" ;;
+    ida) echo "--set integrator.kind=ida --set integrator.rtol=1e-4 --set integrator.atol=1e-7" ;;
+  esac
+}
+for k in $ks; do
+  for ((r = 0; r < rounds; ++r)); do
+    for z in global patches2 rings1; do
+      for m in be ida; do
+        extra=""
+        if [ "$z" = rings1 ] && [ "$m" = ida ]; then
+          [ "$k" = 1 ] || continue
+          extra="--set integrator.linear_solver=krylov"
+        fi
+        # shellcheck disable=SC2046
+        bench_run zones_dynamics "$scene" --set "mesh.cells=[$((15 * k)), $((3 * k)), $((3 * k))]" $(zones_of $z) \
+          $(method_of $m) $extra
+        /usr/bin/python3 - out/bench/zones_dynamics.h5 "$k" "$z" "$m" >> "$tmp" <<'PY'
+import sys, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+X = f["/mesh/rest_positions"][()]
+x = f["/frames/positions"][-1]
+tip = np.argmin((X[:, 0] - 1.5) ** 2 + X[:, 1] ** 2 + X[:, 2] ** 2)
+s = f["/stats"].attrs
+zones = len(f["/zones"]) if "zones" in f else 0
+print(f"{sys.argv[2]},{sys.argv[3]},{sys.argv[4]},{f['/mesh/tets'].shape[0]},{zones},{s['wall_seconds']:.3f},"
+      f"{s['steps']},{s['newton_iterations']},{s['fresh_factorisations']:.0f},{s['factorisation_seconds']:.2f},{x[tip, 2] - X[tip, 2]:.6f}")
+PY
+      done
+    done
+  done
+done
+echo "k,zones,method,tets,zone_count,wall_s,steps,newton,factorisations,factor_s,tip_uz" > "$csv"
+median_rows "$tmp" 3 5 >> "$csv"
+column -s, -t "$csv"
