@@ -58,11 +58,17 @@ void add_keys(CLI::App& app, Line& l) {
 int cmd_keys(const Line& l) {
   const KeyTable& table = l.study_keys ? study_keys() : scene_keys();
   if (l.docs.empty()) {
-    std::vector<std::string> groups;
+    std::vector<std::string> all, groups;
     for (const KeySpec& k : table.keys())
-      if (std::string first(k.name.substr(0, k.name.find('.'))); l.group.empty() || first == l.group)
-        if (std::find(groups.begin(), groups.end(), first) == groups.end()) groups.push_back(first);
-    if (groups.empty()) throw Error("keys: no table named " + l.group);
+      if (std::string first(k.name.substr(0, k.name.find('.'))); std::find(all.begin(), all.end(), first) == all.end())
+        all.push_back(first);
+    for (const std::string& g : all)
+      if (l.group.empty() || g == l.group) groups.push_back(g);
+    if (groups.empty()) {
+      std::string names;
+      for (const std::string& g : all) names += (names.empty() ? "" : ", ") + g;
+      throw Error("keys: no table named " + l.group + " (expected one of " + names + ")");
+    }
     std::fputs(table.markdown(groups).c_str(), stdout);
     return 0;
   }
