@@ -63,11 +63,14 @@ std::string join(const std::vector<std::string>& s, std::size_t from, std::size_
 bool is_range_kind(KeyKind k) { return k == KeyKind::number || k == KeyKind::vec3 || k == KeyKind::numbers; }
 bool is_integer_kind(KeyKind k) { return k == KeyKind::integer || k == KeyKind::int3 || k == KeyKind::integers; }
 
+// An integer as the docs write it (a minus sign as −).
+std::string doc_integer(long v) { return v < 0 ? "−" + std::to_string(-v) : std::to_string(v); }
+
 std::string integer_words(long min, long max) {
   const long big = 1000000000L;
   if (min <= -big && max >= big) return "";
-  if (max >= big) return " ≥ " + std::to_string(min);
-  return " in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
+  if (max >= big) return " ≥ " + doc_integer(min);
+  return " in [" + doc_integer(min) + ", " + doc_integer(max) + "]";
 }
 
 std::string type_cell(const KeySpec& k) {
