@@ -280,4 +280,9 @@ TEST(MeshFiles, AGeoScriptTooFineForTheMachineStopsBeforeMeshing) {
   const std::string msg = test::error_of([&] { mesh_from_scene(f.root().table("mesh"), f); });
   EXPECT_NE(msg.find("mesh.parameters.N: makes about"), std::string::npos) << msg;
   EXPECT_NE(msg.find("GB of memory"), std::string::npos) << msg;
+  // So fine that its curves' mesh alone would not fit (26 s and 5.5 GB before Gmsh aborted): the
+  // estimate from a 1-D mesh at a hundred times the sizes refuses it first.
+  const SceneFile g = SceneFile::parse("[mesh]\nfile = \"" + cook + "\"\nparameters = { N = 1e7 }\n", "q.toml");
+  const std::string finer = test::error_of([&] { mesh_from_scene(g.root().table("mesh"), g); });
+  EXPECT_NE(finer.find("mesh.parameters.N: makes about"), std::string::npos) << finer;
 }

@@ -496,8 +496,13 @@ namespace {
 // the 3-D mesh would not be): each surface's area is at least its boundary loops' vector area
 // (exact for a plane), its triangles at most equilateral of 1.5 times the longest 1-D element,
 // and a tet has at most 4 faces on surfaces.
-double geo_tets_at_least() {
+double geo_tets_at_least(std::size_t* curve_elements = nullptr) {
   gmsh::model::mesh::generate(1);
+  if (curve_elements) {
+    std::vector<std::size_t> etags, enodes;
+    gmsh::model::mesh::getElementsByType(1, etags, enodes);
+    *curve_elements = etags.size();
+  }
   std::vector<std::size_t> ntags;
   std::vector<double> xyz, param;
   gmsh::model::mesh::getNodes(ntags, xyz, param, -1, -1, true, false);
@@ -527,6 +532,24 @@ double geo_tets_at_least() {
   const double h = 1.5 * longest;
   return triangles / (std::sqrt(3.0) / 4 * h * h) / 4;
 }
+
+// The same estimate from a 1-D mesh at kProbeFactor times the script's sizes, for scripts whose
+// 1-D mesh alone would not fit (cook.geo at N = 1e7: 26 s and 5.5 GB before Gmsh aborted): where
+// that mesh scaled back holds more than kProbeCurveElements elements, the bound scaled back by
+// kProbeFactor^2 (the triangles go as 1/h^2), a tenth of it to stay below the true one where
+// sizes are clamped; otherwise 0 (the script's own 1-D mesh is cheap: geo_tets_at_least decides).
+double geo_tets_probe() {
+  constexpr double kProbeFactor = 100, kProbeCurveElements = 1e6;
+  double factor = 1;
+  gmsh::option::getNumber("Mesh.MeshSizeFactor", factor);
+  gmsh::option::setNumber("Mesh.MeshSizeFactor", factor * kProbeFactor);
+  std::size_t curve_elements = 0;
+  const double coarse = geo_tets_at_least(&curve_elements);
+  gmsh::model::mesh::clear();
+  gmsh::option::setNumber("Mesh.MeshSizeFactor", factor);
+  if (static_cast<double>(curve_elements) * kProbeFactor <= kProbeCurveElements) return 0;
+  return coarse * kProbeFactor * kProbeFactor / 10;
+}
 }  // namespace
 
 Mesh read_geo(const std::string& path, double edge_length,
@@ -553,7 +576,10 @@ Mesh read_geo(const std::string& path, double edge_length,
         gmsh::vectorpair volumes;
         gmsh::model::getEntities(volumes, 3);
         if (volumes.empty()) throw Error(path + ": the script defines no volume (expected a 3-D geometry)");
-        if (check_tets) check_tets(geo_tets_at_least());
+        if (check_tets) {
+          if (const double probe = geo_tets_probe(); probe > 0) check_tets(probe);
+          check_tets(geo_tets_at_least());
+        }
         generate_3d(path);
       }
       return with_physical_groups(extract_tets(path));
