@@ -76,11 +76,17 @@ int cmd_keys(const Line& l) {
     const std::string text = read_input_file(path, "a markdown file", input_limits::kScene);
     const std::string updated = table.update_docs(text);
     if (updated == text) continue;
-    const std::string tmp = path + ".tmp";
-    std::ofstream(tmp) << updated;
+    // Whole or not at all: a part file beside it, renamed over it once written.
+    const std::string part = path + ".part";
+    std::ofstream out(part);
+    out << updated;
+    out.close();
     std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) throw Error(path + ": cannot be written (" + ec.message() + ")");
+    if (out) std::filesystem::rename(part, path, ec);
+    if (!out || ec) {
+      std::filesystem::remove(part, ec);
+      throw Error(path + ": cannot be written (the disk is full?); it is left as it was");
+    }
     std::printf("%s: key tables rewritten from %s\n", path.c_str(), table.source().c_str());
   }
   return 0;

@@ -188,6 +188,22 @@ KeyDefault parse_default(const std::string& source, const KeySpec& k) {
 
 }  // namespace
 
+bool Range::contains(double v) const {
+  if (std::isnan(v)) return false;
+  if (min_open ? !(v > min) : !(v >= min)) return false;
+  if (max_open ? !(v < max) : !(v <= max)) return false;
+  return true;
+}
+
+std::string Range::describe() const {
+  bool lo = std::isfinite(min), hi = std::isfinite(max);
+  if (lo && hi)
+    return std::string("a number in ") + (min_open ? "(" : "[") + fmt(min) + ", " + fmt(max) + (max_open ? ")" : "]");
+  if (lo) return std::string("a number ") + (min_open ? "> " : ">= ") + fmt(min);
+  if (hi) return std::string("a number ") + (max_open ? "< " : "<= ") + fmt(max);
+  return "a finite number";
+}
+
 std::string Range::symbols() const {
   const bool lo = std::isfinite(min), hi = std::isfinite(max);
   if (lo && hi)

@@ -66,23 +66,14 @@ std::string strip_indices(const std::string& path) {
   return out;
 }
 
+// A TOML integer or float as a double; nullopt for any other node.
+std::optional<double> number_of(const toml::node& n) {
+  if (auto i = n.as_integer()) return static_cast<double>(i->get());
+  if (auto f = n.as_floating_point()) return f->get();
+  return std::nullopt;
+}
+
 }  // namespace
-
-bool Range::contains(double v) const {
-  if (std::isnan(v)) return false;
-  if (min_open ? !(v > min) : !(v >= min)) return false;
-  if (max_open ? !(v < max) : !(v <= max)) return false;
-  return true;
-}
-
-std::string Range::describe() const {
-  bool lo = std::isfinite(min), hi = std::isfinite(max);
-  if (lo && hi)
-    return std::string("a number in ") + (min_open ? "(" : "[") + fmt(min) + ", " + fmt(max) + (max_open ? ")" : "]");
-  if (lo) return std::string("a number ") + (min_open ? "> " : ">= ") + fmt(min);
-  if (hi) return std::string("a number ") + (max_open ? "< " : "<= ") + fmt(max);
-  return "a finite number";
-}
 
 // ---------------------------------------------------------------- Section
 
@@ -90,7 +81,7 @@ std::string Section::full(std::string_view key) const {
   return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
 }
 
-const toml::node* Section::get(std::string_view key, bool) const {
+const toml::node* Section::get(std::string_view key) const {
   file_->asked_[path_].insert(std::string(key));
   if (!table_) return nullptr;
   const toml::node* n = table_->get(key);
@@ -140,13 +131,9 @@ void Section::check_default(std::string_view key, const KeySpec& spec, bool same
 std::optional<double> Section::number_in(std::string_view key, const Range& range) const {
   const toml::node* n = get(key);
   if (!n) return std::nullopt;
-  double v;
-  if (auto i = n->as_integer())
-    v = static_cast<double>(i->get());
-  else if (auto f = n->as_floating_point())
-    v = f->get();
-  else
-    fail(key, "expected " + range.describe() + ", got " + type_name(*n));
+  const std::optional<double> number = number_of(*n);
+  if (!number) fail(key, "expected " + range.describe() + ", got " + type_name(*n));
+  const double v = *number;
   if (!std::isfinite(v) || !range.contains(v)) fail(key, "expected " + range.describe() + ", got " + fmt(v));
   return v;
 }
@@ -251,13 +238,9 @@ std::vector<double> Section::numbers_in(std::string_view key, const Range& range
   if (!a) fail(key, "expected " + expect + ", got " + type_name(*n));
   std::vector<double> out;
   for (const toml::node& e : *a) {
-    double v;
-    if (auto i = e.as_integer())
-      v = static_cast<double>(i->get());
-    else if (auto f = e.as_floating_point())
-      v = f->get();
-    else
-      fail(key, "expected " + expect + ", got an element that is " + type_name(e));
+    const std::optional<double> number = number_of(e);
+    if (!number) fail(key, "expected " + expect + ", got an element that is " + type_name(e));
+    const double v = *number;
     if (!std::isfinite(v) || !range.contains(v)) fail(key, "expected " + expect + ", got " + fmt(v));
     out.push_back(v);
   }
@@ -365,7 +348,7 @@ std::array<long, 3> Section::int3(std::string_view key, std::array<long, 3> fall
 
 Section Section::table(std::string_view key) const {
   spec(key, KeyKind::table);
-  const toml::node* n = get(key, false);
+  const toml::node* n = get(key);
   if (!n) return Section(file_, nullptr, full(key));
   auto t = n->as_table();
   if (!t) fail(key, "expected a table, got " + type_name(*n));
@@ -374,7 +357,7 @@ Section Section::table(std::string_view key) const {
 
 std::vector<Section> Section::tables(std::string_view key) const {
   spec(key, KeyKind::tables);
-  const toml::node* n = get(key, false);
+  const toml::node* n = get(key);
   std::vector<Section> out;
   if (!n) return out;
   auto a = n->as_array();

@@ -76,7 +76,7 @@ class Section {
   Section(const SceneFile* file, const toml::table* table, std::string path)
       : file_(file), table_(table), path_(std::move(path)) {}
   // Marks the key as read (check_unknown_keys).
-  const toml::node* get(std::string_view key, bool leaf = true) const;
+  const toml::node* get(std::string_view key) const;
   std::string full(std::string_view key) const;
   // The key's row; throws std::logic_error when none declares it or declares another kind.
   const KeySpec& spec(std::string_view key, KeyKind kind) const;
