@@ -13,6 +13,7 @@
 #include "isochor/models/assembly.hpp"
 #include "isochor/models/muscle.hpp"
 #include "scene_runs.hpp"
+#include "test_util.hpp"
 
 using namespace isochor;
 
@@ -286,6 +287,154 @@ TEST(MuscleBundle, ActivationScaleZeroLeavesTheBarPassive) {
   const Scene half =
       bundle_scene("activation_keys = { times = [0.0, 1.0], values = [0.0, 0.8] }\n", {"muscles.activation_scale=0.5"});
   EXPECT_DOUBLE_EQ(half.activations(0.5)[0], 0.5 * 0.4);
+}
+
+// A knee whose Xrotation turns 24 degrees per frame to 240 degrees over 10 frames of 0.1 s, written
+// as a mocap file writes angles, wrapped into (-180, 180] (192 is -168): with the table
+// a(0) = 0, a(240) = 1 the activation is the angle over 240 at each frame and, the cubic through
+// linear keys being that line between interior keys, at any time from the second frame to the
+// second last; held after the clip. Without the unwrapping the last four frames would read 0.
+TEST(MuscleBundle, ActivationFollowsABvhChannelThroughItsTable) {
+  std::string bvh =
+      "HIERARCHY\nROOT Hip\n{\n  OFFSET 0 0 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n  JOINT Knee\n  {\n"
+      "    OFFSET 0 -0.4 0\n    CHANNELS 3 Zrotation Xrotation Yrotation\n    End Site\n    {\n      OFFSET 0 -0.4 0\n"
+      "    }\n  }\n}\nMOTION\nFrames: 11\nFrame Time: 0.1\n";
+  for (int f = 0; f <= 10; ++f) {
+    const double angle = 24.0 * f;
+    bvh += "0 0 0 5 " + std::to_string(angle > 180 ? angle - 360 : angle) + " 0\n";
+  }
+  const std::string path = test::write_file(test::temp_dir() / "knee.bvh", bvh);
+  const auto with = [&](const std::string& channel, const std::vector<std::string>& overrides = {}) {
+    return bundle_scene("activation_bvh = { file = \"" + path + "\", joint = \"Knee\", channel = \"" + channel +
+                            "\", channel_values = [0.0, 240.0], values = [0.0, 1.0] }\n",
+                        overrides);
+  };
+  const Scene sc = with("Xrotation");
+  for (int f = 0; f <= 10; ++f) EXPECT_NEAR(sc.activations(0.1 * f)[0], 0.1 * f, 1e-12) << "frame " << f;
+  for (double t : {0.15, 0.45, 0.83}) EXPECT_NEAR(sc.activations(t)[0], t, 1e-12) << "t = " << t;
+  EXPECT_NEAR(sc.activations(3.0)[0], 1.0, 1e-12);
+  const std::vector<double> breaks = sc.breakpoints();
+  EXPECT_NE(std::find(breaks.begin(), breaks.end(), 1.0), breaks.end());  // the clip's last key
+  EXPECT_NEAR(with("Xrotation", {"muscles.activation_scale=0.5"}).activations(0.5)[0], 0.25, 1e-12);
+  EXPECT_NEAR(with("Zrotation").activations(0.5)[0], 5.0 / 240, 1e-12);  // the Hip's 5 degrees, not the Knee's
+
+  const auto message = [&](const std::string& extra) { return test::error_of([&] { bundle_scene(extra); }); };
+  EXPECT_NE(
+      message("activation_bvh = { file = \"" + path +
+              "\", joint = \"Knee\", channel = \"Xposition\", channel_values = [0.0, 1.0], values = [0.0, 1.0] }\n")
+          .find("muscle[0].activation_bvh.channel: joint \"Knee\" of " + path +
+                " has no channel \"Xposition\" (its channels: Zrotation, Xrotation, Yrotation)"),
+      std::string::npos);
+  EXPECT_NE(
+      message("activation_bvh = { file = \"" + path +
+              "\", joint = \"Ankle\", channel = \"Xrotation\", channel_values = [0.0, 1.0], values = [0.0, 1.0] }\n")
+          .find("muscle[0].activation_bvh.joint: \"Ankle\" is not a joint of " + path),
+      std::string::npos);
+  EXPECT_NE(message("activation_bvh = { file = \"" + path + "\", channel_values = [0.0, 1.0], values = [0.0, 1.0] }\n")
+                .find("muscle[0].activation_bvh.joint: missing"),
+            std::string::npos);
+  EXPECT_NE(
+      message("activation_keys = { times = [0.0, 1.0], values = [0.0, 1.0] }\nactivation_bvh = { file = \"" + path +
+              "\", joint = \"Knee\", channel = \"Xrotation\", channel_values = [0.0, 1.0], values = [0.0, "
+              "1.0] }\n")
+          .find("expected one of activation_keys, activation_joint or activation_bvh"),
+      std::string::npos);
+}
+
+namespace {
+// A fibre that differs from tet to tet: a function of the tet's centroid.
+Vec3 fibre_at(const Vec3& c) { return Vec3(1 + c.y(), c.z() - 0.3, 0.5 + c.x()); }
+
+Vec3 centroid(const Mesh& m, int e) {
+  Vec3 c = Vec3::Zero();
+  for (int k = 0; k < 4; ++k) c += m.rest_positions().col(m.tets()[e][k]) / 4;
+  return c;
+}
+
+// `box` as a Gmsh 2.2 .msh file whose element tags run backwards (1000 + 3 (n - 1 - e)), with
+// element data "fibres" (fibre_at of each tet's centroid; `skip` gets none) and "weight" (one
+// number per tet).
+std::string msh_with_element_data(const Mesh& box, const std::string& name, int skip = -1) {
+  std::string t = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" + std::to_string(box.num_nodes()) + "\n";
+  char line[256];
+  for (int n = 0; n < box.num_nodes(); ++n) {
+    const Vec3 x = box.rest_positions().col(n);
+    std::snprintf(line, sizeof line, "%d %.17g %.17g %.17g\n", n + 1, x.x(), x.y(), x.z());
+    t += line;
+  }
+  const int m = box.num_tets();
+  const auto tag = [m](int e) { return 1000 + 3 * (m - 1 - e); };
+  t += "$EndNodes\n$Elements\n" + std::to_string(m) + "\n";
+  for (int e = 0; e < m; ++e) {
+    const Tet& k = box.tets()[e];
+    std::snprintf(line, sizeof line, "%d 4 2 1 1 %d %d %d %d\n", tag(e), k[0] + 1, k[1] + 1, k[2] + 1, k[3] + 1);
+    t += line;
+  }
+  t += "$EndElements\n$ElementData\n1\n\"fibres\"\n1\n0.0\n3\n0\n3\n" + std::to_string(m - (skip >= 0)) + "\n";
+  for (int e = 0; e < m; ++e) {
+    if (e == skip) continue;
+    const Vec3 a = fibre_at(centroid(box, e));
+    std::snprintf(line, sizeof line, "%d %.17g %.17g %.17g\n", tag(e), a.x(), a.y(), a.z());
+    t += line;
+  }
+  t += "$EndElementData\n$ElementData\n1\n\"weight\"\n1\n0.0\n3\n0\n1\n" + std::to_string(m) + "\n";
+  for (int e = 0; e < m; ++e) t += std::to_string(tag(e)) + " 0.5\n";
+  t += "$EndElementData\n";
+  return test::write_file(test::temp_dir() / name, t);
+}
+
+Scene scene_on_mesh(const std::string& mesh, const std::string& muscle) {
+  return parse_scene(SceneFile::parse("[mesh]\n" + mesh + R"(
+[material]
+model = "cnh"
+mu = 1000.0
+lambda = 5000.0
+[forces]
+gravity = [0.0, 0.0, 0.0]
+[integrator]
+kind = "static"
+[frames]
+count = 2
+[[muscle]]
+name = "bundle"
+select = { kind = "all" }
+)" + muscle,
+                                      "on_mesh.toml"));
+}
+}  // namespace
+
+// Fibres read per tet from the scene's .msh file (Gmsh element data): each tet gets the vector the
+// file gives its element tag, normalised, whatever order the tags run in; a field the file lacks,
+// one of another size, a tet without a value and a mesh that is not a .msh file stop with one line.
+TEST(MuscleBundle, FibresFromTheMeshFilesElementData) {
+  const Mesh box = make_box(Vec3(1.0, 0.5, 0.5), {3, 2, 2}, Vec3(0.5, 0.25, 0.25), 6);
+  const std::string path = msh_with_element_data(box, "bar.msh");
+  const Scene sc = scene_on_mesh("file = \"" + path + "\"\n", "fibres = \"mesh\"\n");
+  ASSERT_EQ(sc.mesh.num_tets(), box.num_tets());
+  const Scene::MuscleSpec& m = sc.muscles.at(0);
+  ASSERT_EQ(m.tets.size(), static_cast<std::size_t>(box.num_tets()));
+  double worst = 0;
+  for (std::size_t k = 0; k < m.tets.size(); ++k)
+    worst = std::max(worst, (m.fibres[k] - fibre_at(centroid(sc.mesh, m.tets[k])).normalized()).norm());
+  EXPECT_LT(worst, 1e-14);
+
+  const auto message = [&](const std::string& mesh, const std::string& muscle) {
+    return test::error_of([&] { scene_on_mesh(mesh, muscle); });
+  };
+  const std::string file = "file = \"" + path + "\"\n";
+  EXPECT_NE(message(file, "fibres = \"mesh\"\nfield = \"fibers\"\n")
+                .find("muscle[0].field: the mesh has no element data \"fibers\" (it has: fibres, weight)"),
+            std::string::npos)
+      << message(file, "fibres = \"mesh\"\nfield = \"fibers\"\n");
+  EXPECT_NE(message(file, "fibres = \"mesh\"\nfield = \"weight\"\n")
+                .find("element data \"weight\" has 1 components per tet, expected 3"),
+            std::string::npos);
+  const std::string holed = "file = \"" + msh_with_element_data(box, "holed.msh", 7) + "\"\n";
+  EXPECT_NE(message(holed, "fibres = \"mesh\"\n").find("element data \"fibres\" gives tet "), std::string::npos)
+      << message(holed, "fibres = \"mesh\"\n");
+  EXPECT_NE(message(holed, "fibres = \"mesh\"\n").find(" of the muscle no value"), std::string::npos);
+  EXPECT_NE(message("shape = \"box\"\n", "fibres = \"mesh\"\n").find("muscle[0].field: the mesh has no element data"),
+            std::string::npos);
 }
 
 // ---- The Laplace fibre field ----

@@ -145,13 +145,14 @@ Extracted extract_tets(const std::string& what) {
 }
 
 Mesh finish(Extracted e, const std::string& what, std::map<std::string, std::vector<int>> zones,
-            std::map<std::string, std::vector<int>> node_sets) {
+            std::map<std::string, std::vector<int>> node_sets, std::map<std::string, Mesh::TetField> fields = {}) {
   compact_unused_nodes(e.x, e.tets, &node_sets);
   Mesh m(std::move(e.x), std::move(e.tets), what);
   for (auto& [k, v] : zones) std::sort(v.begin(), v.end());
   for (auto& [k, v] : node_sets) std::sort(v.begin(), v.end());
   m.zones = std::move(zones);
   m.node_sets = std::move(node_sets);
+  m.tet_fields = std::move(fields);
   return m;
 }
 
@@ -159,7 +160,12 @@ Mesh finish(Extracted e, const std::string& what, std::map<std::string, std::vec
 struct RawMesh {
   Extracted e;
   std::map<std::string, std::vector<int>> zones, sets;
+  std::map<std::string, Mesh::TetField> fields;
 };
+
+Mesh finish(RawMesh raw, const std::string& what) {
+  return finish(std::move(raw.e), what, std::move(raw.zones), std::move(raw.sets), std::move(raw.fields));
+}
 
 template <class T>
 void put(std::string& out, const T& v) {
@@ -175,6 +181,14 @@ void put_groups(std::string& out, const std::map<std::string, std::vector<int>>&
   for (const auto& [name, v] : g) {
     put_vector(out, std::vector<char>(name.begin(), name.end()));
     put_vector(out, v);
+  }
+}
+void put_fields(std::string& out, const std::map<std::string, Mesh::TetField>& f) {
+  put(out, static_cast<std::uint64_t>(f.size()));
+  for (const auto& [name, field] : f) {
+    put_vector(out, std::vector<char>(name.begin(), name.end()));
+    put(out, field.components);
+    put_vector(out, field.values);
   }
 }
 struct Reader {
@@ -206,6 +220,17 @@ struct Reader {
     }
     return g;
   }
+  std::map<std::string, Mesh::TetField> get_fields() {
+    std::map<std::string, Mesh::TetField> f;
+    const auto n = get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < n; ++i) {
+      const std::vector<char> name = get_vector<char>();
+      Mesh::TetField& field = f[std::string(name.begin(), name.end())];
+      field.components = get<int>();
+      field.values = get_vector<double>();
+    }
+    return f;
+  }
 };
 
 // Runs `f` (a Gmsh read or mesh) in a child process and returns what it made. Gmsh 4.8 crashes
@@ -235,6 +260,7 @@ RawMesh in_child(const std::string& what, const std::string& expected, const std
       put_vector(out, r.e.tets);
       put_groups(out, r.zones);
       put_groups(out, r.sets);
+      put_fields(out, r.fields);
     } catch (const Error& e) {
       out = std::string("E") + e.what();
     } catch (const std::exception& e) {
@@ -272,6 +298,7 @@ RawMesh in_child(const std::string& what, const std::string& expected, const std
   m.e.tets = r.get_vector<Tet>();
   m.zones = r.get_groups();
   m.sets = r.get_groups();
+  m.fields = r.get_fields();
   return m;
 }
 
@@ -303,9 +330,39 @@ void check_readable(const std::string& path, const std::string& expected, double
   if (!in) throw Error(path + ": cannot be read (expected " + expected + ")");
 }
 
+// The model's element data views (a .msh file's $ElementData, first step) on its tets, by view name.
+std::map<std::string, Mesh::TetField> tet_fields(const Extracted& e, const std::string& what) {
+  std::map<std::string, Mesh::TetField> fields;
+  std::vector<int> views;
+  gmsh::view::getTags(views);
+  for (int v : views) {
+    std::string type, name;
+    std::vector<std::size_t> tags;
+    std::vector<std::vector<double>> data;
+    double time = 0;
+    int components = 0;
+    gmsh::view::getModelData(v, 0, type, tags, data, time, components);
+    if (type != "ElementData" || components <= 0) continue;
+    gmsh::option::getString("View[" + std::to_string(gmsh::view::getIndex(v)) + "].Name", name);
+    Mesh::TetField& f = fields[name];
+    if (f.components) throw Error(what + ": holds two element data views named \"" + name + "\"");
+    f.components = components;
+    f.values.assign(e.tets.size() * static_cast<std::size_t>(components), std::nan(""));
+    for (std::size_t i = 0; i < tags.size(); ++i) {
+      const auto it = e.tet_index.find(tags[i]);
+      if (it == e.tet_index.end()) continue;  // data on elements that are not tets
+      if (data[i].size() != static_cast<std::size_t>(components))
+        throw Error(what + ": element data \"" + name + "\" gives element " + std::to_string(tags[i]) + " " +
+                    std::to_string(data[i].size()) + " values, expected " + std::to_string(components));
+      std::copy(data[i].begin(), data[i].end(), f.values.begin() + static_cast<long>(it->second) * components);
+    }
+  }
+  return fields;
+}
+
 // The model's tets with its physical groups: 3-D groups become zones, groups of any dimension
-// node sets (an unnamed group is physical_<dim>d_<tag>).
-RawMesh with_physical_groups(Extracted e) {
+// node sets (an unnamed group is physical_<dim>d_<tag>); and its element data on the tets.
+RawMesh with_physical_groups(Extracted e, const std::string& what) {
   std::map<std::string, std::vector<int>> zones, sets;
   gmsh::vectorpair groups;
   gmsh::model::getPhysicalGroups(groups, -1);
@@ -329,7 +386,8 @@ RawMesh with_physical_groups(Extracted e) {
       }
     }
   }
-  return RawMesh{std::move(e), std::move(zones), std::move(sets)};
+  std::map<std::string, Mesh::TetField> fields = tet_fields(e, what);
+  return RawMesh{std::move(e), std::move(zones), std::move(sets), std::move(fields)};
 }
 
 }  // namespace
@@ -453,10 +511,10 @@ Mesh read_msh(const std::string& path) {
       gmsh::open(path);
       std::string err = GmshSession::first_error();
       if (!err.empty()) throw Error(path + ": is not a readable Gmsh mesh: " + err);
-      return with_physical_groups(extract_tets(path));
+      return with_physical_groups(extract_tets(path), path);
     });
   });
-  return finish(std::move(raw.e), path, std::move(raw.zones), std::move(raw.sets));
+  return finish(std::move(raw), path);
 }
 
 namespace {
@@ -582,10 +640,10 @@ Mesh read_geo(const std::string& path, double edge_length,
         }
         generate_3d(path);
       }
-      return with_physical_groups(extract_tets(path));
+      return with_physical_groups(extract_tets(path), path);
     });
   });
-  return finish(std::move(raw.e), path, std::move(raw.zones), std::move(raw.sets));
+  return finish(std::move(raw), path);
 }
 
 Mesh mesh_closed_surface(const std::string& path, double edge_length) {
@@ -640,7 +698,7 @@ Mesh mesh_closed_surface(const Points& x, std::vector<Tri> tris, double edge_len
         gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
       }
       generate_3d(path);
-      return RawMesh{extract_tets(path), {}, {}};
+      return RawMesh{extract_tets(path), {}, {}, {}};
     });
   });
   return finish(std::move(raw.e), path, {}, {});

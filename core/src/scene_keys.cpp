@@ -721,8 +721,9 @@ constexpr KeySpec kRows[] = {
     {.name = "muscle.fibres",
      .kind = K::string,
      .fallback = "\"constant\"",
-     .choices = "constant laplace file",
-     .doc = "`\"constant\"` (`direction`), `\"laplace\"` (from `origin` to `insertion`) or `\"file\"` (`file`)"},
+     .choices = "constant laplace file mesh",
+     .doc = "`\"constant\"` (`direction`), `\"laplace\"` (from `origin` to `insertion`), `\"file\"` (`file`) or "
+            "`\"mesh\"` (`field`)"},
     {.name = "muscle.direction",
      .kind = K::vec3,
      .doc = "constant: the fibre direction in the rest configuration (normalised)"},
@@ -742,6 +743,12 @@ constexpr KeySpec kRows[] = {
      .doc = "file: a CSV file relative to the scene, header `tet,ax,ay,az`, one row per tet (mesh tet indices, as in "
             "`/mesh/tets`); every tet of the muscle must have a row, rows of other tets are ignored (one file may "
             "serve several muscles)"},
+    {.name = "muscle.field",
+     .kind = K::string,
+     .fallback = "\"fibres\"",
+     .doc = "mesh: the name of an element data view of the scene's `.msh` file (`$ElementData` with 3 components, "
+            "as Gmsh writes a vector field on elements), one vector per tet, normalised; every tet of the muscle "
+            "must have one"},
     {.name = "muscle.sigma_max",
      .kind = K::number,
      .unit = "Pa",
@@ -769,7 +776,7 @@ constexpr KeySpec kRows[] = {
      .kind = K::number,
      .fallback = "0",
      .range = {0.0, 1.0, false, false},
-     .doc = "a constant activation; excludes `activation_keys` and `activation_joint`"},
+     .doc = "a constant activation; excludes `activation_keys`, `activation_joint` and `activation_bvh`"},
     {.name = "muscle.activation_keys",
      .kind = K::table,
      .doc = "activation keyframes in time: `{ times = [..], values = [..], interpolation = \"linear\" }`"},
@@ -806,6 +813,32 @@ constexpr KeySpec kRows[] = {
      .kind = K::numbers,
      .doc = "the activation at each angle, in [0, 1]; held outside"},
     {.name = "muscle.activation_joint.interpolation",
+     .kind = K::string,
+     .fallback = "\"linear\"",
+     .choices = "linear cubic",
+     .doc = "`\"linear\"` or `\"cubic\"`"},
+    {.name = "muscle.activation_bvh",
+     .kind = K::table,
+     .doc = "activation as a function of a BVH channel's value in time: `{ file = \"elbow_flex.bvh\", joint = "
+            "\"Elbow\", channel = \"Xrotation\", channel_values = [..], values = [..] }` (a mocap clip's joint, "
+            "whether or "
+            "not it drives `[skeleton]`)"},
+    {.name = "muscle.activation_bvh.file",
+     .kind = K::string,
+     .doc = "a BVH file, relative to the scene; its frames are at t = 0, frame time, 2 frame times, ..., the channel's "
+            "value between frames the C¹ cubic through them (as a bone's `motion = \"bvh\"`), held after the last"},
+    {.name = "muscle.activation_bvh.joint", .kind = K::string, .doc = "a joint of the file, by name"},
+    {.name = "muscle.activation_bvh.channel",
+     .kind = K::string,
+     .choices = "Xposition Yposition Zposition Xrotation Yrotation Zrotation",
+     .doc = "one of the joint's channels; a rotation is unwrapped across frames (no jump of 360°)"},
+    {.name = "muscle.activation_bvh.channel_values",
+     .kind = K::numbers,
+     .doc = "increasing values of the channel (at least 2), in the file's units: degrees for a rotation"},
+    {.name = "muscle.activation_bvh.values",
+     .kind = K::numbers,
+     .doc = "the activation at each channel value, in [0, 1]; held outside"},
+    {.name = "muscle.activation_bvh.interpolation",
      .kind = K::string,
      .fallback = "\"linear\"",
      .choices = "linear cubic",

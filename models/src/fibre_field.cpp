@@ -20,6 +20,7 @@ double ActivationCurve::at(double t, const Skeleton* skeleton, double scale) con
     if (!skeleton) throw Error("activation keyed by a joint angle without a skeleton");
     a = curve.displacement(joint_angle(t, *skeleton)).x();
   }
+  if (source == Source::channel) a = curve.displacement(channel.displacement(t).x()).x();
   return std::clamp(scale * a, 0.0, 1.0);
 }
 

@@ -8,6 +8,7 @@
 #include "isochor/core/csv.hpp"
 #include "isochor/core/selection.hpp"
 #include "isochor/scene/mesh_system.hpp"
+#include "isochor/scene/skeleton_setup.hpp"
 
 namespace isochor {
 
@@ -58,9 +59,37 @@ std::vector<Eigen::Vector3d> fibres_from_file(const Section& m, const Scene& sc,
   return out;
 }
 
+// Per tet of `tets`, from the mesh file's element data `field` (3 components).
+std::vector<Eigen::Vector3d> fibres_from_mesh(const Section& m, const Scene& sc, const std::vector<int>& tets) {
+  const std::string name = m.string("field");
+  const auto it = sc.mesh.tet_fields.find(name);
+  if (it == sc.mesh.tet_fields.end()) {
+    std::string known;
+    for (const auto& [other, f] : sc.mesh.tet_fields) known += (known.empty() ? "" : ", ") + other;
+    m.fail("field", "the mesh has no element data \"" + name + "\" (" +
+                        (known.empty() ? "it has none; fibres = \"mesh\" reads a .msh file's $ElementData"
+                                       : "it has: " + known) +
+                        ")");
+  }
+  const Mesh::TetField& f = it->second;
+  if (f.components != 3)
+    m.fail("field", "element data \"" + name + "\" has " + std::to_string(f.components) +
+                        " components per tet, expected 3 (a direction)");
+  std::vector<Eigen::Vector3d> out;
+  for (int e : tets) {
+    const Eigen::Vector3d a(f.values[3 * e], f.values[3 * e + 1], f.values[3 * e + 2]);
+    if (!a.allFinite() || a.norm() < 1e-12)
+      m.fail("field", "element data \"" + name + "\" gives tet " + std::to_string(e) + " of the muscle " +
+                          (a.hasNaN() ? "no value" : "no finite, non-zero direction"));
+    out.push_back(a.normalized());
+  }
+  return out;
+}
+
 std::vector<Eigen::Vector3d> parse_fibres(const Section& m, const Scene& sc, const std::vector<int>& tets) {
   const std::string kind = m.string("fibres");
   if (kind == "file") return fibres_from_file(m, sc, tets);
+  if (kind == "mesh") return fibres_from_mesh(m, sc, tets);
   if (kind == "laplace") {
     for (const char* key : {"origin", "insertion"})
       if (!m.has(key)) m.fail(key, "missing, expected a selection of nodes (fibres = \"laplace\")");
@@ -78,23 +107,33 @@ std::vector<Eigen::Vector3d> parse_fibres(const Section& m, const Scene& sc, con
   return std::vector<Eigen::Vector3d>(tets.size(), a->normalized());
 }
 
-ActivationCurve parse_activation(const Section& m, const Scene& sc) {
-  ActivationCurve a;
-  const int given = m.has("activation_keys") + m.has("activation_joint");
-  if (given > 1) m.fail("activation_joint", "expected one of activation_keys or activation_joint");
-  a.value = m.number("activation");
-  if (given && m.has("activation")) m.fail("activation", "not with activation_keys or activation_joint");
-  const char* key = m.has("activation_keys") ? "activation_keys" : "activation_joint";
-  if (!given) return a;
-  const Section k = m.table(key);
-  const double knot_scale = m.has("activation_keys") ? 1.0 : M_PI / 180.0;
-  a.curve =
-      parse_keyframes(k, "values", 1, 1.0, "one activation", m.has("activation_keys") ? "times" : "angles", knot_scale);
-  for (const Eigen::Vector3d& v : a.curve.values)
-    if (v.x() < 0 || v.x() > 1) k.fail("values", "expected activations in [0, 1]");
-  a.source = ActivationCurve::Source::time;
-  if (m.has("activation_keys")) return a;
-  a.source = ActivationCurve::Source::joint;
+// activation_bvh: the channel's keys against time (one per frame, the file's units) and the
+// table of its value.
+void parse_bvh_activation(const Section& k, const Scene& sc, ActivationCurve& a) {
+  for (const char* key : {"file", "joint", "channel"})
+    if (!k.has(key)) k.fail(key, "missing, activation_bvh needs file, joint and channel");
+  const std::string path = sc.file.resolve_path(k.string("file", ""));
+  const Bvh bvh = read_bvh(path);
+  const std::string joint = k.string("joint", "");
+  const int j = bvh.find(joint);
+  if (j < 0) k.fail("joint", "\"" + joint + "\" is not a joint of " + path);
+  const BvhJoint& J = bvh.joints[j];
+  static const char* names[] = {"Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation"};
+  const std::string channel = k.string("channel", "");
+  std::string has;
+  for (std::size_t c = 0; c < J.channels.size(); ++c) {
+    if (channel == names[J.channels[c]]) {
+      a.channel = bvh_keyframes(bvh, J, {static_cast<int>(c)}, 1.0);
+      return;
+    }
+    has += std::string(has.empty() ? "" : ", ") + names[J.channels[c]];
+  }
+  k.fail("channel", "joint \"" + joint + "\" of " + path + " has no channel \"" + channel +
+                        "\" (its channels: " + (has.empty() ? "none" : has) + ")");
+}
+
+// The bone and joint angle that key activation_joint.
+void parse_joint_activation(const Section& k, const Scene& sc, ActivationCurve& a) {
   const std::string bone = k.string("bone", "");
   if (!sc.skeleton) k.fail("bone", "the scene has no [skeleton]");
   const auto& bones = sc.skeleton->bones();
@@ -107,6 +146,32 @@ ActivationCurve parse_activation(const Section& m, const Scene& sc) {
   if (a.axis >= angles)
     k.fail("axis", "expected an integer in [0, " + std::to_string(angles - 1) + "] (the joint's angles), got " +
                        std::to_string(a.axis));
+}
+
+ActivationCurve parse_activation(const Section& m, const Scene& sc) {
+  ActivationCurve a;
+  static const char* sources[] = {"activation_keys", "activation_joint", "activation_bvh"};
+  static const char* knots[] = {"times", "angles", "channel_values"};
+  int given = 0, which = 0;
+  for (int s = 0; s < 3; ++s)
+    if (m.has(sources[s])) ++given, which = s;
+  if (given > 1) m.fail(sources[which], "expected one of activation_keys, activation_joint or activation_bvh");
+  a.value = m.number("activation");
+  if (given && m.has("activation"))
+    m.fail("activation", "not with activation_keys, activation_joint or activation_bvh");
+  if (!given) return a;
+  const Section k = m.table(sources[which]);
+  a.curve = parse_keyframes(k, "values", 1, 1.0, "one activation", knots[which], which == 1 ? M_PI / 180.0 : 1.0);
+  for (const Eigen::Vector3d& v : a.curve.values)
+    if (v.x() < 0 || v.x() > 1) k.fail("values", "expected activations in [0, 1]");
+  a.source = ActivationCurve::Source::time;
+  if (which == 1) {
+    a.source = ActivationCurve::Source::joint;
+    parse_joint_activation(k, sc, a);
+  } else if (which == 2) {
+    a.source = ActivationCurve::Source::channel;
+    parse_bvh_activation(k, sc, a);
+  }
   return a;
 }
 

@@ -78,6 +78,8 @@ std::vector<double> Scene::breakpoints() const {
   }
   for (const MuscleSpec& m : muscles)
     if (m.activation.source == ActivationCurve::Source::time) m.activation.curve.breakpoints(t);
+  for (const MuscleSpec& m : muscles)
+    if (m.activation.source == ActivationCurve::Source::channel) m.activation.channel.breakpoints(t);
   if (gravity_ramp > 0) t.push_back(gravity_ramp);
   if (zone_restore_time > 0 && keep_zones && !zones.empty()) t.push_back(frames.times().front() + zone_restore_time);
   for (const NodeLoad& l : loads) l.history.breakpoints(t);

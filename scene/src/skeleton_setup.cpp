@@ -21,34 +21,19 @@ void bvh_motion(const Section& b, const Bvh& bvh, const std::string& joint, Bone
   const int j = bvh.find(joint);
   if (j < 0) b.fail("bvh_joint", "\"" + joint + "\" is not a joint of the BVH file");
   const BvhJoint& J = bvh.joints[j];
-  std::vector<int> columns;
+  std::vector<int> channels;
   std::string order;
   for (std::size_t c = 0; c < J.channels.size(); ++c) {
     const int ch = J.channels[c];
     if (ch < BvhJoint::Xrotation) continue;
-    columns.push_back(J.first_channel + static_cast<int>(c));
+    channels.push_back(static_cast<int>(c));
     bone.axes.col(static_cast<Eigen::Index>(order.size())) = Eigen::Vector3d::Unit(ch - BvhJoint::Xrotation);
     order += static_cast<char>('X' + (ch - BvhJoint::Xrotation));
   }
-  if (columns.size() != 3)
-    b.fail("bvh_joint",
-           "\"" + joint + "\" has " + std::to_string(columns.size()) + " rotation channels, expected 3 (a ball joint)");
-  bone.motion.kind = Driver::Kind::keyframes_cubic;
-  Eigen::Vector3d previous = Eigen::Vector3d::Zero();
-  for (Eigen::Index f = 0; f < bvh.motion.rows(); ++f) {
-    Eigen::Vector3d a;
-    for (int k = 0; k < 3; ++k) {
-      a[k] = bvh.motion(f, columns[k]);
-      if (f > 0) a[k] -= 360.0 * std::round((a[k] - previous[k]) / 360.0);
-    }
-    previous = a;
-    bone.motion.times.push_back(static_cast<double>(f) * bvh.frame_time);
-    bone.motion.values.push_back(a * M_PI / 180.0);
-  }
-  if (bone.motion.times.size() == 1) {  // one frame: a constant pose
-    bone.motion.times.push_back(bvh.frame_time);
-    bone.motion.values.push_back(bone.motion.values.front());
-  }
+  if (channels.size() != 3)
+    b.fail("bvh_joint", "\"" + joint + "\" has " + std::to_string(channels.size()) +
+                            " rotation channels, expected 3 (a ball joint)");
+  bone.motion = bvh_keyframes(bvh, J, channels, M_PI / 180.0);
 }
 
 Eigen::Vector3d unit(const Section& b, const std::string& key, const Eigen::Vector3d& fallback) {
@@ -191,6 +176,30 @@ void bind_nodes(const std::vector<Section>& sections, const Mesh& mesh, const st
 }
 
 }  // namespace
+
+Driver bvh_keyframes(const Bvh& bvh, const BvhJoint& joint, const std::vector<int>& channels, double rotation_scale) {
+  Driver d;
+  d.kind = Driver::Kind::keyframes_cubic;
+  Eigen::Vector3d previous = Eigen::Vector3d::Zero();
+  for (Eigen::Index f = 0; f < bvh.motion.rows(); ++f) {
+    Eigen::Vector3d a = Eigen::Vector3d::Zero();
+    for (std::size_t k = 0; k < channels.size(); ++k) {
+      a[k] = bvh.motion(f, joint.first_channel + channels[k]);
+      if (joint.channels[channels[k]] < BvhJoint::Xrotation) continue;
+      if (f > 0) a[k] -= 360.0 * std::round((a[k] - previous[k]) / 360.0);
+    }
+    previous = a;
+    for (std::size_t k = 0; k < channels.size(); ++k)
+      if (joint.channels[channels[k]] >= BvhJoint::Xrotation) a[k] *= rotation_scale;
+    d.times.push_back(static_cast<double>(f) * bvh.frame_time);
+    d.values.push_back(a);
+  }
+  if (d.times.size() == 1) {  // one frame: a constant
+    d.times.push_back(bvh.frame_time);
+    d.values.push_back(d.values.front());
+  }
+  return d;
+}
 
 std::shared_ptr<Skeleton> parse_skeleton(const Section& s, const SceneFile& file, const Mesh& mesh,
                                          const std::vector<int>& driven_by) {

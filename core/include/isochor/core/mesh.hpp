@@ -63,6 +63,13 @@ class Mesh {
   // Named zones (tet indices, sorted) and node sets (node indices, sorted), e.g. from a mesh file.
   std::map<std::string, std::vector<int>> zones;
   std::map<std::string, std::vector<int>> node_sets;
+  // Per-tet data from the mesh file (a .msh file's $ElementData views, by name): `components`
+  // numbers per tet, tet after tet; NaN for a tet the file gives no value.
+  struct TetField {
+    int components = 0;
+    std::vector<double> values;
+  };
+  std::map<std::string, TetField> tet_fields;
 
  private:
   Points X_;

@@ -61,15 +61,18 @@ struct FibreField {
 
 class Skeleton;
 
-// A muscle's activation in time: a constant, keyframes in time, or a table of a skeleton joint's
-// angle (the curve's times then hold the angles, rad), each times `scale`, clamped to [0, 1].
+// A muscle's activation in time: a constant, keyframes in time, a table of a skeleton joint's
+// angle (the curve's times then hold the angles, rad) or a table of a BVH channel's value (the
+// curve's times hold the channel's values, as the file writes them), each times `scale`,
+// clamped to [0, 1].
 struct ActivationCurve {
-  enum class Source { constant, time, joint };
+  enum class Source { constant, time, joint, channel };
   Source source = Source::constant;
   double value = 0.0;  // constant
   Driver curve;        // keyframes: the activation in x of its values
   int bone = -1;       // joint: the bone whose joint angle keys the curve
   int axis = 0;        // joint: which of its angles (0 for a pin)
+  Driver channel;      // channel: the BVH channel's value in x against time (one key per frame)
   double at(double t, const Skeleton* skeleton, double scale) const;
   // The joint angle that keys the curve at t (rad).
   double joint_angle(double t, const Skeleton& skeleton) const;
