@@ -134,6 +134,58 @@ TEST(Resume, AnInterruptedBackwardEulerRunRepeatsTheSameSteps) {
   EXPECT_LT(dv, 1e-6);
 }
 
+namespace {
+// /frames/activation of a run file: frames x muscles.
+std::vector<std::vector<double>> activations_of(const std::string& path) {
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t d = H5Dopen2(f, "/frames/activation", H5P_DEFAULT);
+  const hid_t space = H5Dget_space(d);
+  hsize_t dims[2] = {0, 0};
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  std::vector<double> flat(dims[0] * dims[1]);
+  H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, flat.data());
+  H5Sclose(space);
+  H5Dclose(d);
+  H5Fclose(f);
+  std::vector<std::vector<double>> out(dims[0]);
+  for (hsize_t k = 0; k < dims[0]; ++k) out[k].assign(flat.begin() + k * dims[1], flat.begin() + (k + 1) * dims[1]);
+  return out;
+}
+}  // namespace
+
+// A muscle's activation is a function of time, so a resumed run goes on with it: the resumed file
+// records at every frame what the keys give (linear, 0 -> 0.8 over the run's 0.2 s: 4 t), and,
+// on backward Euler, takes the uninterrupted run's steps (as above).
+TEST(Resume, AMusclesActivationGoesOnWhereTheRunStopped) {
+  const std::string muscle = R"(
+[[muscle]]
+name = "flexor"
+select = { kind = "all" }
+direction = [1.0, 0.0, 0.0]
+sigma_max = 2e4
+activation_keys = { times = [0.0, 0.2], values = [0.0, 0.8] }
+)";
+  const Scene sc = scene(kSwing + muscle, kBackwardEuler);
+  const auto dir = test::temp_dir();
+  const std::string straight = (dir / "straight.h5").string(), resumed = (dir / "resumed.h5").string();
+  run_scene(sc, options(straight));
+  run_until(sc, resumed, 11);
+  EXPECT_EQ(activations_of(resumed).size(), 12u);
+  run_scene(sc, options(resumed, OutputWriter::Mode::resume));
+  const std::vector<double> times = RunFile(resumed).times();
+  const auto a = activations_of(resumed);
+  ASSERT_EQ(a.size(), 21u);
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    ASSERT_EQ(a[k].size(), 1u);
+    EXPECT_NEAR(a[k][0], 4 * times[k], 1e-12) << "frame " << k;
+  }
+  const Frames ref = frames_of(straight), res = frames_of(resumed);
+  EXPECT_LT(max_difference(res.x, ref.x), 1e-9);
+  // The activation moves the tissue: the same run without the muscle ends elsewhere.
+  run_scene(scene(kSwing, kBackwardEuler), options((dir / "passive.h5").string()));
+  EXPECT_GT((frames_of((dir / "passive.h5").string()).x.back() - ref.x.back()).cwiseAbs().maxCoeff(), 1e-4);
+}
+
 // linear_solver = "auto" moving from PCG to CHOLMOD (the stiff cube of
 // BackwardEulerRun.AutomaticSolverSwitchesToCholmodWhereCgIsSlow, which switches after 4-8
 // steps): a run resumed after its 6th frame starts on PCG again and switches again, and its frames
