@@ -2,6 +2,7 @@
 #include <Eigen/Geometry>
 #include <fcntl.h>
 #include <gmsh.h>
+#include <spawn.h>
 #include <omp.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -491,7 +492,8 @@ Mesh make_capsule(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double rad
   return finish(extract_tets("capsule"), "capsule", {}, {});
 }
 
-Mesh read_msh(const std::string& path) {
+namespace {
+RawMesh read_msh_raw(const std::string& path) {
   check_readable(path, "a Gmsh .msh file", input_limits::kMesh);
   // Gmsh 4.8 falls back to its .geo parser on a file that is not a mesh, and a syntax error there
   // leaves Gmsh locked ("I'm busy!"): every later mesh of the process comes out empty. So the
@@ -505,7 +507,7 @@ Mesh read_msh(const std::string& path) {
                   ": is not a readable Gmsh mesh (expected a .msh file, version 2 or 4, starting with $MeshFormat)");
   }
   const std::string expected = "is not a readable Gmsh mesh (expected a .msh file, version 2 or 4)";
-  RawMesh raw = in_child(path, expected, [&] {
+  return in_child(path, expected, [&] {
     GmshSession session("file");
     return guarded(path, expected, [&] {
       gmsh::open(path);
@@ -514,8 +516,10 @@ Mesh read_msh(const std::string& path) {
       return with_physical_groups(extract_tets(path), path);
     });
   });
-  return finish(std::move(raw), path);
 }
+}  // namespace
+
+Mesh read_msh(const std::string& path) { return finish(read_msh_raw(path), path); }
 
 namespace {
 // Opens a .geo script with `parameters` defined before it: Gmsh 4.8's API cannot set a parser
@@ -646,6 +650,118 @@ Mesh read_geo(const std::string& path, double edge_length,
   return finish(std::move(raw), path);
 }
 
+namespace {
+
+// A private directory under the system's temporary one, removed with what it holds.
+class TempDir {
+ public:
+  explicit TempDir(const std::string& what) {
+    std::error_code ec;
+    std::string t = (std::filesystem::temp_directory_path(ec) / "isochor-fill-XXXXXX").string();
+    if (ec || !::mkdtemp(t.data()))
+      throw Error(what + ": cannot make a temporary directory for Gmsh (" +
+                  (ec ? ec.message() : std::string(std::strerror(errno))) + "; TMPDIR names where)");
+    path_ = t;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string file(const char* name) const { return (std::filesystem::path(path_) / name).string(); }
+
+ private:
+  std::string path_;
+};
+
+// The surface as a Gmsh 2.2 .msh file (every coordinate to the last bit), and the script that
+// fills it: Gmsh's Delaunay on the surface nodes alone, or HXT refining inside to `edge_length`.
+void write_fill_input(const TempDir& dir, const Points& x, const std::vector<Tri>& tris, double edge_length,
+                      const std::string& what) {
+  const std::string surface = dir.file("surface.msh"), script = dir.file("fill.geo");
+  std::FILE* f = std::fopen(surface.c_str(), "w");
+  bool ok = f && std::fprintf(f, "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n%ld\n", long(x.cols())) > 0;
+  for (Eigen::Index i = 0; ok && i < x.cols(); ++i)
+    ok = std::fprintf(f, "%ld %.17g %.17g %.17g\n", long(i + 1), x(0, i), x(1, i), x(2, i)) > 0;
+  ok = ok && std::fprintf(f, "$EndNodes\n$Elements\n%zu\n", tris.size()) > 0;
+  for (std::size_t t = 0; ok && t < tris.size(); ++t)
+    ok = std::fprintf(f, "%zu 2 2 0 1 %d %d %d\n", t + 1, tris[t][0] + 1, tris[t][1] + 1, tris[t][2] + 1) > 0;
+  ok = ok && std::fprintf(f, "$EndElements\n") > 0;
+  if (f) ok = std::fclose(f) == 0 && ok;
+  std::string text = "General.NumThreads = 1;\nMesh.RandomSeed = 1;\n";
+  char line[160];
+  if (edge_length > 0) {
+    // Gmsh 4.8's Delaunay does not refine inside a discrete surface; HXT does, by the size
+    // bound. The surface triangles stay as they are.
+    std::snprintf(line, sizeof line, "Mesh.Algorithm3D = 10;\nMesh.MeshSizeMax = %.17g;\n", edge_length);
+    text += std::string(line) + "Mesh.MeshSizeExtendFromBoundary = 0;\nMesh.MeshSizeFromPoints = 0;\n";
+  } else {
+    text += "Mesh.Algorithm3D = 1;\n";
+  }
+  text += "Merge \"" + surface + "\";\nSurface Loop(1) = {1};\nVolume(1) = {1};\nMesh 3;\nSave \"" +
+          dir.file("volume.msh") + "\";\n";
+  std::ofstream g(script);
+  g << text;
+  g.close();
+  if (!ok || !g)
+    throw Error(what + ": cannot write Gmsh's input into " + surface + " (" + std::strerror(errno) +
+                "; the temporary directory must have room)");
+}
+
+// Runs Gmsh's program on the script, its messages into the log; its wait status.
+int run_gmsh(const TempDir& dir, const std::string& what) {
+  const std::string script = dir.file("fill.geo"), log = dir.file("gmsh.log");
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  std::vector<std::string> args = {"gmsh", "-nopopup", "-v", "1", script, "-"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = ::posix_spawnp(&pid, "gmsh", &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0)
+    throw Error(what + ": cannot run Gmsh's program gmsh to fill the surface with tets (" + std::strerror(rc) +
+                "; it comes with Debian's package gmsh)");
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return status;
+}
+
+// Fills a closed, outward surface with tets by Gmsh's own program in a new process. Gmsh's HXT
+// fill inside this process (a forked child) came out different with the process's heap history:
+// the same character scene gave meshes of 8,027 to 8,048 nodes as --set keys were added, and
+// differed between builds and thread counts. A new process starts from the same state each time.
+Mesh fill_in_gmsh_process(const Points& x, const std::vector<Tri>& tris, double edge_length, const std::string& what) {
+  const TempDir dir(what);
+  write_fill_input(dir, x, tris, edge_length, what);
+  const int status = run_gmsh(dir, what);
+  std::ifstream log(dir.file("gmsh.log"));
+  std::string error;
+  for (std::string l; error.empty() && std::getline(log, l);)
+    if (l.rfind("Error", 0) == 0) error = l.substr(std::min(l.size(), l.find(':') + 2));
+  const std::string expected = "Gmsh could not tetrahedralise the surface";
+  if (WIFSIGNALED(status))
+    throw Error(what + ": " + expected + " (Gmsh crashed on it: signal " + std::to_string(WTERMSIG(status)) + ")");
+  if (!error.empty() || !WIFEXITED(status) || WEXITSTATUS(status) != 0 ||
+      !std::filesystem::exists(dir.file("volume.msh")))
+    throw Error(
+        what + ": " + expected +
+        (error.empty() ? " (gmsh exit status " + std::to_string(WEXITSTATUS(status)) + ")" : " (Gmsh: " + error + ")"));
+  try {
+    return finish(read_msh_raw(dir.file("volume.msh")), what);
+  } catch (const Error& e) {
+    throw Error(what + ": " + expected + " (its output: " + e.what() + ")");
+  }
+}
+
+}  // namespace
+
 Mesh mesh_closed_surface(const std::string& path, double edge_length) {
   check_readable(path, "a closed triangle surface (.obj or .stl)", input_limits::kSurface);
   Points x;
@@ -669,39 +785,7 @@ Mesh mesh_closed_surface(const Points& x, std::vector<Tri> tris, double edge_len
   if (vol < 0) {  // inward: flip
     for (Tri& t : tris) std::swap(t[1], t[2]);
   }
-  RawMesh raw = in_child(path, "Gmsh could not tetrahedralise the surface", [&] {
-    GmshSession session("surface");
-    const int s = gmsh::model::addDiscreteEntity(2);
-    std::vector<std::size_t> ntags(x.cols());
-    std::vector<double> coords(3 * x.cols());
-    for (int i = 0; i < x.cols(); ++i) {
-      ntags[i] = static_cast<std::size_t>(i + 1);
-      for (int k = 0; k < 3; ++k) coords[3 * i + k] = x(k, i);
-    }
-    gmsh::model::mesh::addNodes(2, s, ntags, coords);
-    std::vector<std::size_t> etags(tris.size()), enodes(3 * tris.size());
-    for (std::size_t f = 0; f < tris.size(); ++f) {
-      etags[f] = f + 1;
-      for (int k = 0; k < 3; ++k) enodes[3 * f + k] = static_cast<std::size_t>(tris[f][k] + 1);
-    }
-    gmsh::model::mesh::addElementsByType(s, 2, etags, enodes);
-    const int loop = gmsh::model::geo::addSurfaceLoop({s});
-    gmsh::model::geo::addVolume({loop});
-    gmsh::model::geo::synchronize();
-    return guarded(path, "Gmsh could not tetrahedralise the surface", [&] {
-      if (edge_length > 0) {
-        // Gmsh 4.8's Delaunay does not refine inside a discrete surface; HXT does, by the size
-        // bound. The surface triangles stay as they are.
-        gmsh::option::setNumber("Mesh.Algorithm3D", 10);
-        gmsh::option::setNumber("Mesh.MeshSizeMax", edge_length);
-        gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
-        gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
-      }
-      generate_3d(path);
-      return RawMesh{extract_tets(path), {}, {}, {}};
-    });
-  });
-  return finish(std::move(raw.e), path, {}, {});
+  return fill_in_gmsh_process(x, tris, edge_length, path);
 }
 
 }  // namespace isochor
