@@ -166,8 +166,8 @@ void add_viewers(CLI::App& app, Line& l) {
   l.exporter = tool_subcommand(
       app, l, "export",
       "Write a run's surface motion as a point cache (PC2 or MDD) for Blender, Maya, Houdini, or an "
-      "animated glTF (.glb)",
-      "Options after the file go to tools/export.py: --format pc2|mdd|glb, --out FILE, --all-nodes, --surface");
+      "animated glTF (.glb) or a USD stage (.usda)",
+      "Options after the file go to tools/export.py: --format pc2|mdd|glb|usd, --out FILE, --all-nodes, --surface");
   l.paraview = tool_subcommand(
       app, l, "paraview", "Write a ParaView script that opens a run ready to play (pressure and zones, time, ground)",
       "Options after the file go to tools/paraview.py: --out SCRIPT.py, --up z|y|a,b,c. Then: "

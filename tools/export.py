@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Write a run's surface motion as a point cache or an animated glTF (`isochor export`).
 
-    /usr/bin/python3 tools/export.py RUN.h5 [--format pc2|mdd|glb] [--out FILE] [--all-nodes]
+    /usr/bin/python3 tools/export.py RUN.h5 [--format pc2|mdd|glb|usd] [--out FILE] [--all-nodes]
 
 pc2 (the default): Blender's, 3ds Max's and Houdini's point cache (little-endian: the header
 "POINTCACHE2\\0", version 1, the number of points, the start frame 0, the sample rate 1, the number
@@ -21,6 +21,11 @@ morph targets: morph targets would need a weight per target per key, F^2 numbers
 and viewers cap the targets blended at once; baked frames grow linearly (a 3K-vertex mesh: 72 KB
 per frame) and play everywhere, without interpolation between frames. Every node is visible at
 rest (scale 1), so a viewer that does not play animations shows every frame at once.
+
+usd: USD's text form (.usda, tools/usd.py): one Mesh prim, the render mesh (a run without one: the
+tet mesh's surface) with its points sampled at every frame (`points.timeSamples`), for usdview,
+Houdini, Maya, Omniverse and Blender builds with USD. Written directly: Debian's Blender 3.4 is
+built without USD and Alembic (docs/animation.md).
 """
 import argparse
 import os
@@ -58,6 +63,30 @@ def vertex_normals(x, tris):
     return n / np.where(length > 0, length, 1.0)
 
 
+def surface_of(run, render):
+    """(triangles, block -> vertices) of what a glb or usd export draws: a character's render
+    mesh where `render`, else the tet mesh's surface over its surface nodes."""
+    if run.render_rest is not None and render:
+        return run.render_triangles, run.render_positions
+    nodes, inverse = np.unique(run.surface, return_inverse=True)
+    return inverse.reshape(-1, 3), lambda block: block[..., nodes, :]
+
+
+def write_usd(h5_path, out, render=True):
+    """The .usda stage; returns (vertices, frames)."""
+    from usd import write_usda
+
+    note_input(h5_path)
+    with Run(h5_path) as run:
+        tris, carry = surface_of(run, render)
+        frames = run.num_frames
+        blocks = (carry(run.frame_range("positions", k0, min(k0 + CHUNK, frames))) for k0 in range(0, frames, CHUNK))
+        rest = run.render_rest if run.render_rest is not None and render else carry(run.rest_positions)
+        name = os.path.splitext(os.path.basename(h5_path))[0]
+        write_whole(out, lambda f: write_usda(f, name, tris, rest, blocks, run.times[:frames], run.up))
+        return len(rest), frames
+
+
 def write_glb(h5_path, out, frames=0, render=True):
     """The baked animated glTF; returns (vertices, frames)."""
     from glb import Glb
@@ -65,12 +94,7 @@ def write_glb(h5_path, out, frames=0, render=True):
     note_input(h5_path)
     with Run(h5_path) as run:
         frames = min(run.num_frames, frames or run.num_frames)
-        if run.render_rest is not None and render:
-            tris, carry = run.render_triangles, run.render_positions
-        else:
-            nodes, inverse = np.unique(run.surface, return_inverse=True)
-            tris = inverse.reshape(-1, 3)
-            carry = lambda block: block[..., nodes, :]  # noqa: E731
+        tris, carry = surface_of(run, render)
         g = Glb()
         index = g.triangles(tris)
         times = (run.times[:frames] - run.times[0]).astype(np.float32)
@@ -122,7 +146,7 @@ def write_cache(h5_path, out, fmt="pc2", all_nodes=False, frames=0, render=False
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("run")
-    ap.add_argument("--format", default="pc2", choices=["pc2", "mdd", "glb"])
+    ap.add_argument("--format", default="pc2", choices=["pc2", "mdd", "glb", "usd"])
     ap.add_argument("--out", default="")
     ap.add_argument("--all-nodes", action="store_true")
     ap.add_argument("--surface", action="store_true",
@@ -130,10 +154,10 @@ def main():
     a = ap.parse_args()
     if not os.path.exists(a.run):
         sys.exit(f"{a.run}: no such file")
-    out = a.out or os.path.splitext(a.run)[0] + "." + a.format
+    out = a.out or os.path.splitext(a.run)[0] + "." + ("usda" if a.format == "usd" else a.format)
     try:
-        if a.format == "glb":
-            n, frames = write_glb(a.run, out, render=not a.surface)
+        if a.format in ("glb", "usd"):
+            n, frames = (write_glb if a.format == "glb" else write_usd)(a.run, out, render=not a.surface)
             what = "vertices"
         else:
             what, n, frames = write_cache(a.run, out, a.format, a.all_nodes, render=not a.surface)

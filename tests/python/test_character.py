@@ -106,6 +106,47 @@ def test_export_writes_the_render_mesh(bar_run, tmp_path):
         np.testing.assert_allclose(cache, run.render_positions(run.positions), atol=1e-6)
 
 
+def test_export_writes_a_usd_stage(bar_run, tmp_path):
+    """The .usda layer: USD's text header and stage metadata, one Mesh prim with the render mesh's
+    triangles, its rest points and a points sample per frame at time code = frame time x rate,
+    each the render mesh's vertices at that frame (7 digits, point3f), its extent their box."""
+    import re
+
+    out = tmp_path / "bar.usda"
+    p = subprocess.run([EXE, "export", str(bar_run), "--format", "usd", "--out", str(out)], capture_output=True,
+                       text=True, check=True)
+    assert p.stdout.startswith(f"wrote {out}")
+    text = out.read_text()
+    assert text.startswith("#usda 1.0\n(\n")
+    assert text.count("{") == text.count("}") and text.count("[") == text.count("]")
+    meta = dict(re.findall(r"^    (\w+) = (.+)$", text.split("\n)\n", 1)[0], re.M))
+
+    def numbers(s):
+        return np.array([float(v) for v in re.findall(r"-?[\d.]+(?:e[-+]?\d+)?", s)])
+
+    with isochor.open(bar_run) as run:
+        rate = float(meta["timeCodesPerSecond"])
+        assert abs(rate - 1 / np.median(np.diff(run.times))) < 1e-6 * rate
+        up = '"Y"' if abs(run.up[1]) > abs(run.up[2]) and abs(run.up[1]) >= abs(run.up[0]) else '"Z"'
+        assert meta["upAxis"] == up and float(meta["endTimeCode"]) == pytest.approx((run.times[-1] - run.times[0]) * rate)
+        counts = numbers(re.search(r"int\[\] faceVertexCounts = (\[.*\])", text).group(1))
+        indices = numbers(re.search(r"int\[\] faceVertexIndices = (\[.*\])", text).group(1))
+        assert len(counts) == len(run.render_triangles) and set(counts) == {3}
+        np.testing.assert_array_equal(indices, np.ravel(run.render_triangles))
+        rest = numbers(re.search(r"point3f\[\] points = (\[.*\])", text).group(1)).reshape(-1, 3)
+        np.testing.assert_allclose(rest, run.render_rest, rtol=1e-6, atol=1e-7)
+        block = text.split("points.timeSamples = {", 1)[1].split("}", 1)[0]
+        samples = re.findall(r"^\s+([\d.e+-]+): (\[.*\]),$", block, re.M)
+        assert len(samples) == run.num_frames
+        frames = run.render_positions(run.positions)
+        for k, (code, points) in enumerate(samples):
+            assert float(code) == pytest.approx((run.times[k] - run.times[0]) * rate, abs=1e-6)
+            np.testing.assert_allclose(numbers(points).reshape(-1, 3), frames[k], rtol=1e-6, atol=1e-7)
+        extent = text.split("extent.timeSamples = {", 1)[1].split("}", 1)[0]
+        last = numbers(re.findall(r"^\s+[\d.e+-]+: (\[.*\]),$", extent, re.M)[-1]).reshape(2, 3)
+        np.testing.assert_allclose(last, [frames[-1].min(axis=0), frames[-1].max(axis=0)], rtol=1e-6, atol=1e-7)
+
+
 def test_render_draws_skinned_beside_simulated(bar_run, tmp_path):
     """`isochor render --skinning`: one picture twice as wide as tall, the render mesh drawn (its
     skin colour: red over green over blue) in both halves; a run without a character: one line."""
