@@ -3,7 +3,9 @@
 # the first size again without contact between body parts: the tets, wall seconds per frame
 # (median and mean over the frames), IDA's steps, the zones' worst volume error, how far the
 # surface goes below the ground (the contact's penetration), and how far the simulated render mesh
-# is from plain linear blend skinning by the same bones (mean and largest over frames and vertices).
+# is from plain linear blend skinning by the same bones (mean and largest over frames and vertices);
+# and at the first size with CG to IDA's default linear tolerance (_cg_default: linear_tol = 0,
+# min(1e-12, 1e-6 rtol)) instead of the demo's 1e-4.
 #   bench/character_walk.sh [build] [rounds] [duration] [edge lengths...]
 set -euo pipefail
 build=${1:-build}
@@ -23,15 +25,17 @@ walk() {  # NAME EDGE [OVERRIDES...]
 for r in $(seq 1 "$rounds"); do
   for h in "${sizes[@]}"; do walk "walk_${h}_r$r" "$h"; done
   walk "walk_${sizes[0]}_apart_r$r" "${sizes[0]}" --set contact.self.enabled=false
+  walk "walk_${sizes[0]}_cg_default_r$r" "${sizes[0]}" --set integrator.linear_tol=0
 done
-/usr/bin/python3 - "$rounds" "${sizes[@]}" "${sizes[0]}_apart" <<'PY'
+/usr/bin/python3 - "$rounds" "${sizes[@]}" "${sizes[0]}_apart" "${sizes[0]}_cg_default" <<'PY'
 import sys
 import numpy as np
 sys.path.insert(0, "python")
 import isochor
 
 rounds, cases = int(sys.argv[1]), sys.argv[2:]
-print(f"character_walk, {rounds} round(s), one thread; _apart: without contact between body parts")
+print(f"character_walk, {rounds} round(s), one thread; _apart: without contact between body parts; "
+      "_cg_default: IDA's default CG tolerance")
 print(f"{'edge m':>12s} {'tets':>7s} {'s/frame med':>11s} {'mean':>7s} {'steps':>7s} {'zone dV/V':>10s} "
       f"{'below ground mm':>15s} {'off skinning mm mean, max':>26s}")
 for case in cases:

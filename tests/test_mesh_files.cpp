@@ -178,6 +178,27 @@ TEST(MeshFiles, AClosedSurfaceFillsToTheSameMeshWhateverTheProcessDidBefore) {
   EXPECT_TRUE(second.tets() == first.tets());
 }
 
+// The fill needs Gmsh's program and a temporary directory: without either, one line naming the
+// surface and what is missing; the environment is put back after each.
+TEST(MeshFiles, AFillWithoutGmshsProgramOrATemporaryDirectoryIsOneLine) {
+  fs::path d = test::temp_dir();
+  const std::string cube = test::write_file(d / "cube.obj", kCubeObj);
+  const auto with_env = [&](const char* name, const char* value) {
+    const char* old = std::getenv(name);
+    const std::string saved = old ? old : "";
+    ::setenv(name, value, 1);
+    const std::string msg = test::error_of([&] { mesh_closed_surface(cube, 0.0); });
+    old ? ::setenv(name, saved.c_str(), 1) : ::unsetenv(name);
+    return msg;
+  };
+  const std::string no_gmsh = with_env("PATH", (d / "empty").c_str());
+  EXPECT_EQ(no_gmsh.rfind(cube + ": cannot run Gmsh's program gmsh", 0), 0u) << no_gmsh;
+  EXPECT_NE(no_gmsh.find("Debian's package gmsh"), std::string::npos);
+  const std::string no_tmp = with_env("TMPDIR", (d / "cube.obj" / "x").c_str());
+  EXPECT_EQ(no_tmp.rfind(cube + ": cannot make a temporary directory for Gmsh", 0), 0u) << no_tmp;
+  EXPECT_NEAR(mesh_closed_surface(cube, 0.0).rest_volume(), 1.0, 1e-12);  // and with both, as before
+}
+
 TEST(MeshFiles, InwardObjIsFlippedAndStlReadsTheSame) {
   fs::path d = test::temp_dir();
   std::string inward;
