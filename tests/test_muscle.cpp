@@ -330,6 +330,13 @@ TEST(MuscleBundle, ActivationFollowsABvhChannelThroughItsTable) {
               "\", joint = \"Ankle\", channel = \"Xrotation\", channel_values = [0.0, 1.0], values = [0.0, 1.0] }\n")
           .find("muscle[0].activation_bvh.joint: \"Ankle\" is not a joint of " + path),
       std::string::npos);
+  EXPECT_NE(message("activation_bvh = { file = \"no_such.bvh\", joint = \"Knee\", channel = \"Xrotation\", "
+                    "channel_values = [0.0, 1.0], values = [0.0, 1.0] }\n")
+                .find("muscle[0].activation_bvh.file: no_such.bvh: "),
+            std::string::npos)
+      << message(
+             "activation_bvh = { file = \"no_such.bvh\", joint = \"Knee\", channel = \"Xrotation\", "
+             "channel_values = [0.0, 1.0], values = [0.0, 1.0] }\n");
   EXPECT_NE(message("activation_bvh = { file = \"" + path + "\", channel_values = [0.0, 1.0], values = [0.0, 1.0] }\n")
                 .find("muscle[0].activation_bvh.joint: missing"),
             std::string::npos);

@@ -113,7 +113,12 @@ void parse_bvh_activation(const Section& k, const Scene& sc, ActivationCurve& a)
   for (const char* key : {"file", "joint", "channel"})
     if (!k.has(key)) k.fail(key, "missing, activation_bvh needs file, joint and channel");
   const std::string path = sc.file.resolve_path(k.string("file", ""));
-  const Bvh bvh = read_bvh(path);
+  Bvh bvh;
+  try {
+    bvh = read_bvh(path);
+  } catch (const Error& e) {
+    k.fail("file", e.what());
+  }
   const std::string joint = k.string("joint", "");
   const int j = bvh.find(joint);
   if (j < 0) k.fail("joint", "\"" + joint + "\" is not a joint of " + path);
