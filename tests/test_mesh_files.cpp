@@ -199,6 +199,24 @@ TEST(MeshFiles, AFillWithoutGmshsProgramOrATemporaryDirectoryIsOneLine) {
   EXPECT_NEAR(mesh_closed_surface(cube, 0.0).rest_volume(), 1.0, 1e-12);  // and with both, as before
 }
 
+// Gmsh's program reads the user's option files from HOME; a size factor there must not reach the
+// fill: the same tets with such files as without.
+TEST(MeshFiles, TheUsersGmshOptionFilesDoNotChangeTheFill) {
+  fs::path d = test::temp_dir();
+  const std::string cube = test::write_file(d / "cube.obj", kCubeObj);
+  const Mesh plain = mesh_closed_surface(cube, 0.2);
+  fs::create_directories(d / "home");
+  test::write_file(d / "home" / ".gmshrc", "Mesh.MeshSizeFactor = 0.3;\n");
+  test::write_file(d / "home" / ".gmsh-options", "Mesh.MeshSizeFactor = 0.3;\n");
+  const char* old = std::getenv("HOME");
+  const std::string saved = old ? old : "";
+  ::setenv("HOME", (d / "home").c_str(), 1);
+  const Mesh with_files = mesh_closed_surface(cube, 0.2);
+  old ? ::setenv("HOME", saved.c_str(), 1) : ::unsetenv("HOME");
+  EXPECT_EQ(with_files.num_nodes(), plain.num_nodes());
+  EXPECT_TRUE(with_files.tets() == plain.tets());
+}
+
 TEST(MeshFiles, InwardObjIsFlippedAndStlReadsTheSame) {
   fs::path d = test::temp_dir();
   std::string inward;
