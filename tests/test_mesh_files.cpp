@@ -178,18 +178,32 @@ TEST(MeshFiles, AClosedSurfaceFillsToTheSameMeshWhateverTheProcessDidBefore) {
   EXPECT_TRUE(second.tets() == first.tets());
 }
 
+namespace {
+// An environment variable set for the life of the object, then put back as it was.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const char* value) : name_(name), had_(std::getenv(name) != nullptr) {
+    if (had_) saved_ = std::getenv(name);
+    ::setenv(name, value, 1);
+  }
+  ~ScopedEnv() { had_ ? ::setenv(name_.c_str(), saved_.c_str(), 1) : ::unsetenv(name_.c_str()); }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+ private:
+  std::string name_, saved_;
+  bool had_;
+};
+}  // namespace
+
 // The fill needs Gmsh's program and a temporary directory: without either, one line naming the
 // surface and what is missing; the environment is put back after each.
 TEST(MeshFiles, AFillWithoutGmshsProgramOrATemporaryDirectoryIsOneLine) {
   fs::path d = test::temp_dir();
   const std::string cube = test::write_file(d / "cube.obj", kCubeObj);
   const auto with_env = [&](const char* name, const char* value) {
-    const char* old = std::getenv(name);
-    const std::string saved = old ? old : "";
-    ::setenv(name, value, 1);
-    const std::string msg = test::error_of([&] { mesh_closed_surface(cube, 0.0); });
-    old ? ::setenv(name, saved.c_str(), 1) : ::unsetenv(name);
-    return msg;
+    const ScopedEnv env(name, value);
+    return test::error_of([&] { mesh_closed_surface(cube, 0.0); });
   };
   const std::string no_gmsh = with_env("PATH", (d / "empty").c_str());
   EXPECT_EQ(no_gmsh.rfind(cube + ": cannot run Gmsh's program gmsh", 0), 0u) << no_gmsh;
@@ -208,11 +222,10 @@ TEST(MeshFiles, TheUsersGmshOptionFilesDoNotChangeTheFill) {
   fs::create_directories(d / "home");
   test::write_file(d / "home" / ".gmshrc", "Mesh.MeshSizeFactor = 0.3;\n");
   test::write_file(d / "home" / ".gmsh-options", "Mesh.MeshSizeFactor = 0.3;\n");
-  const char* old = std::getenv("HOME");
-  const std::string saved = old ? old : "";
-  ::setenv("HOME", (d / "home").c_str(), 1);
-  const Mesh with_files = mesh_closed_surface(cube, 0.2);
-  old ? ::setenv("HOME", saved.c_str(), 1) : ::unsetenv("HOME");
+  const Mesh with_files = [&] {
+    const ScopedEnv home("HOME", (d / "home").c_str());
+    return mesh_closed_surface(cube, 0.2);
+  }();
   EXPECT_EQ(with_files.num_nodes(), plain.num_nodes());
   EXPECT_TRUE(with_files.tets() == plain.tets());
 }

@@ -1,6 +1,5 @@
 #include "isochor/app/study.hpp"
 
-#include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <fcntl.h>
@@ -19,6 +18,7 @@
 #include "isochor/base/error.hpp"
 #include "isochor/core/mesh.hpp"
 #include "isochor/core/output_reader.hpp"
+#include "isochor/core/process.hpp"
 #include "isochor/core/scene_file.hpp"
 
 extern char** environ;
@@ -173,36 +173,20 @@ Outcome run_case(const Study& s, const StudyCase& c, const std::string& exe) {
     args.push_back("--set");
     args.push_back(o);
   }
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  std::vector<std::string> env_s;
   // A case is its own program, not part of an MPI job that `isochor study --mpi` runs in: it
   // gets none of mpirun's variables (one that initialises MPI itself, for linear_solver = "amg",
   // would otherwise try to join the job).
-  for (char** e = environ; *e; ++e) {
-    const std::string v = *e;
-    const bool mpi = v.rfind("OMPI_", 0) == 0 || v.rfind("PMIX_", 0) == 0 || v.rfind("PMI_", 0) == 0;
-    if (!mpi && v.rfind("OMP_NUM_THREADS=", 0) && v.rfind("OPENBLAS_NUM_THREADS=", 0)) env_s.push_back(v);
-  }
-  env_s.push_back("OMP_NUM_THREADS=1");
-  env_s.push_back("OPENBLAS_NUM_THREADS=1");
-  std::vector<char*> envp;
-  for (auto& e : env_s) envp.push_back(e.data());
-  envp.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  const std::string log = (dir / (c.label + ".log")).string();
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  const auto drop = [](const std::string& v) {
+    return v.rfind("OMPI_", 0) == 0 || v.rfind("PMIX_", 0) == 0 || v.rfind("PMI_", 0) == 0 ||
+           v.rfind("OMP_NUM_THREADS=", 0) == 0 || v.rfind("OPENBLAS_NUM_THREADS=", 0) == 0;
+  };
   pid_t pid;
   Outcome out;
-  if (posix_spawn(&pid, exe.c_str(), &fa, nullptr, argv.data(), envp.data()) != 0) {
-    posix_spawn_file_actions_destroy(&fa);
+  if (spawn_logged(args, (dir / (c.label + ".log")).string(), drop, {"OMP_NUM_THREADS=1", "OPENBLAS_NUM_THREADS=1"},
+                   pid) != 0) {
     out.status = 127;
     return out;
   }
-  posix_spawn_file_actions_destroy(&fa);
   int status = 0;
   rusage ru{};
   wait4(pid, &status, 0, &ru);

@@ -68,10 +68,9 @@ class Tokens {
 };
 
 BvhJoint::Channel channel(Tokens& tk) {
-  static const char* names[] = {"Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation"};
   const std::string w = tk.next("a channel name");
   for (int c = 0; c < 6; ++c)
-    if (w == names[c]) return static_cast<BvhJoint::Channel>(c);
+    if (w == bvh_channel_name(static_cast<BvhJoint::Channel>(c))) return static_cast<BvhJoint::Channel>(c);
   tk.fail_at_previous("expected a channel (Xposition ... Zrotation), found \"" + w + "\"");
 }
 
@@ -120,6 +119,11 @@ void joint_body(Tokens& tk, Bvh& b, int self, int& columns, int depth) {
 }
 
 }  // namespace
+
+const char* bvh_channel_name(BvhJoint::Channel c) {
+  static const char* names[] = {"Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation"};
+  return names[c];
+}
 
 int Bvh::find(const std::string& name) const {
   for (std::size_t j = 0; j < joints.size(); ++j)

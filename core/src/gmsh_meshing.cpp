@@ -2,7 +2,6 @@
 #include <Eigen/Geometry>
 #include <fcntl.h>
 #include <gmsh.h>
-#include <spawn.h>
 #include <omp.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -21,6 +20,7 @@
 #include <unordered_map>
 
 #include "isochor/core/input_file.hpp"
+#include "isochor/core/process.hpp"
 #include "isochor/base/error.hpp"
 #include "isochor/core/meshing.hpp"
 
@@ -711,29 +711,13 @@ void write_fill_input(const TempDir& dir, const Points& x, const std::vector<Tri
 
 // Runs Gmsh's program on the script, its messages into the log; its wait status.
 int run_gmsh(const TempDir& dir, const std::string& what) {
-  const std::string script = dir.file("fill.geo"), log = dir.file("gmsh.log");
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  std::vector<std::string> args = {"gmsh", "-nopopup", "-v", "1", script, "-"};
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
   // Gmsh's program reads the user's ~/.gmshrc and ~/.gmsh-options, which may set mesh options
   // (a Mesh.MeshSizeFactor there took the torso from 3,702 to 16,886 nodes): its HOME is the
   // empty temporary directory.
-  std::vector<std::string> env;
-  for (char** e = environ; *e; ++e)
-    if (std::strncmp(*e, "HOME=", 5) != 0) env.emplace_back(*e);
-  env.push_back("HOME=" + dir.file(""));
-  std::vector<char*> envp;
-  for (std::string& e : env) envp.push_back(e.data());
-  envp.push_back(nullptr);
   pid_t pid = 0;
-  const int rc = ::posix_spawnp(&pid, "gmsh", &fa, nullptr, argv.data(), envp.data());
-  posix_spawn_file_actions_destroy(&fa);
+  const int rc = spawn_logged(
+      {"gmsh", "-nopopup", "-v", "1", dir.file("fill.geo"), "-"}, dir.file("gmsh.log"),
+      [](const std::string& v) { return v.rfind("HOME=", 0) == 0; }, {"HOME=" + dir.file("")}, pid);
   if (rc != 0)
     throw Error(what + ": cannot run Gmsh's program gmsh to fill the surface with tets (" + std::strerror(rc) +
                 "; it comes with Debian's package gmsh)");

@@ -123,15 +123,14 @@ void parse_bvh_activation(const Section& k, const Scene& sc, ActivationCurve& a)
   const int j = bvh.find(joint);
   if (j < 0) k.fail("joint", "\"" + joint + "\" is not a joint of " + path);
   const BvhJoint& J = bvh.joints[j];
-  static const char* names[] = {"Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation"};
   const std::string channel = k.string("channel", "");
   std::string has;
   for (std::size_t c = 0; c < J.channels.size(); ++c) {
-    if (channel == names[J.channels[c]]) {
+    if (channel == bvh_channel_name(J.channels[c])) {
       a.channel = bvh_keyframes(bvh, J, {static_cast<int>(c)}, 1.0);
       return;
     }
-    has += std::string(has.empty() ? "" : ", ") + names[J.channels[c]];
+    has += std::string(has.empty() ? "" : ", ") + bvh_channel_name(J.channels[c]);
   }
   k.fail("channel", "joint \"" + joint + "\" of " + path + " has no channel \"" + channel +
                         "\" (its channels: " + (has.empty() ? "none" : has) + ")");

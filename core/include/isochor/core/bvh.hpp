@@ -16,6 +16,9 @@ struct BvhJoint {
   int first_channel = 0;          // column of its first channel in Bvh::motion
 };
 
+// "Xposition" ... "Zrotation", as BVH files write them.
+const char* bvh_channel_name(BvhJoint::Channel c);
+
 struct Bvh {
   std::vector<BvhJoint> joints;  // in file order (parents before children); End Sites are not joints
   double frame_time = 0;         // s
