@@ -145,6 +145,12 @@ def test_export_writes_a_usd_stage(bar_run, tmp_path):
         extent = text.split("extent.timeSamples = {", 1)[1].split("}", 1)[0]
         last = numbers(re.findall(r"^\s+[\d.e+-]+: (\[.*\]),$", extent, re.M)[-1]).reshape(2, 3)
         np.testing.assert_allclose(last, [frames[-1].min(axis=0), frames[-1].max(axis=0)], rtol=1e-6, atol=1e-7)
+    # Onto a full disk (a 4 KB file size limit): one line, exit 1, neither the stage nor a part file.
+    full = tmp_path / "full.usda"
+    p = subprocess.run(["sh", "-c", f"ulimit -f 4; exec '{EXE}' export '{bar_run}' --format usd --out '{full}'"],
+                       capture_output=True, text=True)
+    assert p.returncode == 1 and len(p.stderr.strip().splitlines()) == 1 and "cannot be written" in p.stderr
+    assert not full.exists() and not (tmp_path / "full.usda.part").exists()
 
 
 def test_render_draws_skinned_beside_simulated(bar_run, tmp_path):
