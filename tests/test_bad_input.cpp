@@ -114,9 +114,87 @@ TEST(BadInput, LengthsAndStepsAreCheckedAgainstWhatTheyCanMean) {
   EXPECT_TRUE(has(scene_error(kBox + "[material]\nmodel = \"cnh\"\n[initial]\nflatten = \"z\"\n"),
                   "initial.flatten: starts every zone at volume 0, which IDA cannot hold to its rest volume at t = 0 "
                   "(expected zones.restore_time > 0"));
+  // A mesh file of 1e-300 m (its masses underflow to 0: "mass() must hold 12 positive entries",
+  // naming nothing) or of 1e300 m: refused by the mesh, naming its file.
+  for (double size : {1e-300, 1e-7, 1e7, 1e300}) {
+    char across[32];
+    std::snprintf(across, sizeof across, "%.3g", size);
+    Points x = Points::Zero(3, 4);
+    x(0, 1) = x(1, 2) = x(2, 3) = size;
+    EXPECT_TRUE(has(test::error_of([&] {
+                      Mesh(x, {Tet{0, 1, 2, 3}}, "tiny.ele");
+                    }),
+                    "tiny.ele: the mesh is " + std::string(across) + " m across"))
+        << size;
+  }
+  for (double size : {1e-6, 1e6}) {
+    Points x = Points::Zero(3, 4);
+    x(0, 1) = x(1, 2) = x(2, 3) = size;
+    EXPECT_NEAR(Mesh(x, {Tet{0, 1, 2, 3}}, "tiny.ele").rest_volume(), size * size * size / 6,
+                1e-12 * size * size * size);
+  }
   // A surface file meshed at an edge length it cannot fit gets the shapes' estimate before Gmsh runs.
   EXPECT_TRUE(
       has(scene_error("[mesh]\nfile = \"" + obj + "\"\nedge_length = 1e-5\n"), "mesh.edge_length: makes about"));
+}
+
+// A scene string is a path, a name or a choice: one longer than a path may be is refused naming
+// the key (a 60 MB output.path was taken to the file system, and its error quoted all of it), and
+// no message quotes megabytes of what it was given.
+TEST(BadInput, ScenesStringsAndMessagesHaveALength) {
+  const std::string at_limit(4096, 'a'), over(4097, 'a'), huge(8u << 20, 'b');
+  EXPECT_EQ(scene_error(kBox + "[output]\npath = \"" + at_limit + "\"\n").find("at most 4096 bytes"),
+            std::string::npos);
+  const std::string long_path = scene_error(kBox + "[output]\npath = \"" + over + "\"\n");
+  EXPECT_TRUE(has(long_path, "bad.toml:5: output.path: expected a string of at most 4096 bytes"));
+  EXPECT_TRUE(has(long_path, "got 4097 bytes"));
+  EXPECT_TRUE(has(scene_error(kBox + "[zones]\nglobal = false\n[[zones.paint]]\ngroups = [\"" + over + "\"]\n"),
+                  "zones.paint[0].groups: expected a string of at most 4096 bytes"));
+  // An unknown key of 8 MB: the message keeps its start (file and line) and its end (what was
+  // expected), and says how much of the middle it left out.
+  const std::string message = scene_error(kBox + huge + " = 1\n");
+  EXPECT_LE(message.size(), kMaxMessageBytes + 64);
+  EXPECT_TRUE(has(message, "bad.toml:4")) << message.substr(0, 200);
+  EXPECT_TRUE(has(message, "bytes left out ...]"));
+  EXPECT_EQ(message.find('\n'), std::string::npos);
+  // Cut between UTF-8 characters, never inside one: a message of 3-byte characters stays valid.
+  std::string wide;
+  for (int i = 0; i < 2000; ++i) wide += "\u2212";
+  const std::string cut = Error(wide).what();
+  const auto tail = cut.substr(cut.find("...] ") + 5);
+  EXPECT_EQ(tail.size() % 3, 0u);
+  EXPECT_EQ(cut.substr(0, cut.find(" [...")).size() % 3, 0u);
+}
+
+// A key of 50,000 dotted parts (a table header, a dotted key, a --set) overflowed the stack inside
+// toml++; more than 256 parts on a line are refused before parsing, while dots in numbers,
+// strings and comments are not counted.
+TEST(BadInput, DottedKeysCannotNestBeyondWhatAScenesTablesHave) {
+  auto parts = [](const std::string& part, int n) {
+    std::string k = part;
+    for (int i = 1; i < n; ++i) k += "." + part;
+    return k;
+  };
+  const std::string refused = "keys of more than 256 dotted parts";
+  EXPECT_TRUE(has(scene_error(kBox + "[" + parts("a", 50000) + "]\n"), "bad.toml:4: " + refused));
+  EXPECT_TRUE(has(scene_error(kBox + parts("b", 50000) + " = 1\n"), "bad.toml:4: " + refused));
+  EXPECT_TRUE(has(scene_error(kBox + "c = { " + parts("d", 300) + " = 1 }\n"), refused));
+  EXPECT_TRUE(has(scene_error(kBox + parts("1", 300) + " = 1\n"), refused));
+  EXPECT_TRUE(has(scene_error(kBox + parts(" \"c\" ", 300) + " = 1\n"), refused));
+  EXPECT_TRUE(
+      has(test::error_of([&] { SceneFile::parse(kBox, "bad.toml", {parts("e", 50000) + "=1"}); }), "--set e.e.e"));
+  // 256 parts are parsed (and then named as the unknown key they are).
+  EXPECT_TRUE(has(scene_error(kBox + "[" + parts("a", 256) + "]\n"), "bad.toml:4: a: unknown key"));
+  // Numbers, strings, comments and multi-line strings with their dots are a scene's values.
+  std::string floats = "[";
+  for (int i = 0; i < 3000; ++i) floats += (i ? ", " : "") + std::to_string(i) + ".5e-3";
+  floats += "]";
+  const std::string dots(3000, '.');
+  const std::string fine = kBox + "# " + dots + "\n[output]\npath = \"" + dots + "\"\nnote = '''\n" + dots + "\n" +
+                           dots + "'''\n[frames]\ntimes = " + floats + "\n";
+  const std::string error = scene_error(fine);
+  EXPECT_EQ(error.find(refused), std::string::npos) << error.substr(0, 300);
+  EXPECT_TRUE(has(error, "unknown key")) << error.substr(0, 300);  // parsed: `note` and `times` are not scene keys
 }
 
 // Stiffness, density, acceleration and speed no body has: refused naming the key (they overflowed

@@ -193,7 +193,16 @@ scene = ")" + demos + R"(stretch.toml"
 name = "x"
 scene = "nowhere.toml"
 )");
-  EXPECT_NE(test::error_of([&] { load_study(bad); }).find("method[0].scene: no such file"), std::string::npos);
+  const std::string missing = test::error_of([&] { load_study(bad); });
+  EXPECT_NE(missing.find("bad.toml:6: method[0].scene: "), std::string::npos) << missing;
+  EXPECT_NE(missing.find("nowhere.toml: no such file (expected a scene file in TOML)"), std::string::npos) << missing;
+  // A scene that is not a regular file is refused before any case runs (each case failed on it).
+  const std::string device =
+      test::write_file(dir / "device.toml", "[study]\nscene = \"/dev/zero\"\n[[method]]\nname = \"x\"\n");
+  EXPECT_NE(test::error_of([&] {
+              load_study(device);
+            }).find("device.toml:2: study.scene: /dev/zero: is a character device, not a regular file"),
+            std::string::npos);
 }
 
 // A convergence study in one command: Cook's membrane refined (mesh.edge_length 6, 4, 3: 409 to

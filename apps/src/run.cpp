@@ -388,9 +388,13 @@ RunSummary run_parsed_scene(const Scene& sc, const RunOptions& opt) {
                opt.progress ? stderr : nullptr, last_step_time);
   // A new output that failed before its first frame is removed (nothing in it to keep or
   // resume); otherwise the file says why it stopped. Returns what the message says of the frames.
+  const auto saved = [&] {
+    return std::to_string(summary.frames) + (summary.frames == 1 ? " frame" : " frames") + " saved in " +
+           summary.output;
+  };
   auto finish_failed = [&](const std::string& status, const std::vector<std::pair<std::string, double>>& numbers,
                            const std::string& failure) -> std::string {
-    if (!w) return std::to_string(summary.frames) + " frames saved in " + summary.output;
+    if (!w) return saved();
     if (!resume && w->frames_written() == 0 && status == "failed") {
       w->discard();
       return "no frame was written, so " + summary.output + " was removed";
@@ -403,7 +407,7 @@ RunSummary run_parsed_scene(const Scene& sc, const RunOptions& opt) {
       w->close();
     } catch (...) {
     }
-    return std::to_string(summary.frames) + " frames saved in " + summary.output;
+    return saved();
   };
   try {
     summary.stats = integrator->run(times, frame_writer(sc, *sys, w, ranks, bar, summary, opt.progress,

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "isochor/base/error.hpp"
+#include "isochor/core/input_file.hpp"
 #include "isochor/core/mesh.hpp"
 #include "isochor/core/output_reader.hpp"
 #include "isochor/core/process.hpp"
@@ -83,6 +84,20 @@ std::string parse_observable(const Section& o) {
 }
 }  // namespace
 
+namespace {
+
+// A study's scene is refused as the scene of a run would be (missing, a directory, a device, too
+// large), naming the study's key, before any case starts.
+void check_scene_file(const Section& section, const std::filesystem::path& scene) {
+  try {
+    check_input_file(scene.string(), "a scene file in TOML", input_limits::kScene);
+  } catch (const Error& e) {
+    section.fail("scene", e.what());
+  }
+}
+
+}  // namespace
+
 Study load_study(const std::string& path, const std::vector<std::string>& overrides) {
   SceneFile f = SceneFile::load(path, overrides, study_keys());
   const Section root = f.root();
@@ -92,7 +107,7 @@ Study load_study(const std::string& path, const std::vector<std::string>& overri
   const std::string scene = st.string("scene", "");
   if (scene.empty()) st.fail("scene", "missing, expected the base scene file (relative to the study)");
   s.scene = std::filesystem::path(path).parent_path() / scene;
-  if (!std::filesystem::exists(s.scene)) st.fail("scene", "no such file: " + s.scene.string());
+  check_scene_file(st, s.scene);
   const std::string stem = std::filesystem::path(path).stem().string();
   s.output = st.string("output", "out/studies/" + stem);
   s.jobs = static_cast<int>(st.integer("jobs"));
@@ -118,7 +133,7 @@ Study load_study(const std::string& path, const std::vector<std::string>& overri
     std::filesystem::path own_scene;
     if (m.has("scene")) {
       own_scene = std::filesystem::path(path).parent_path() / m.string("scene", "");
-      if (!std::filesystem::exists(own_scene)) m.fail("scene", "no such file: " + own_scene.string());
+      check_scene_file(m, own_scene);
     }
     // Sweeps: { key = [values] }, the cartesian product of all keys.
     const Section sw = m.table("sweep");

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "isochor/base/error.hpp"
+#include "hdf5_util.hpp"
 #include "isochor/core/output.hpp"
 
 namespace isochor {
@@ -73,7 +74,8 @@ RunFile::RunFile(const std::string& path) : impl_(std::make_unique<Impl>()) {
   H5Pset_file_locking(fapl, false, true);
   impl_->file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl);
   H5Pclose(fapl);
-  if (impl_->file < 0) throw Error(path + ": cannot be opened");
+  if (impl_->file < 0)
+    throw Error(path + ": cannot be opened" + h5::hdf5_reason() + " (expected an isochor .h5 output)");
   impl_->dims("/mesh/tets");
 }
 

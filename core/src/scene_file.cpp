@@ -4,11 +4,13 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstdio>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 
@@ -19,6 +21,17 @@ namespace isochor {
 namespace {
 
 constexpr const char* kOverride = "--set";
+
+// A scene's strings are paths, names and choices: none is longer than a path may be (PATH_MAX),
+// and a longer one is refused before it is used.
+constexpr std::size_t kMaxStringBytes = 4096;
+
+std::string bounded_string(const std::string& v, const std::function<void(const std::string&)>& fail) {
+  if (v.size() > kMaxStringBytes)
+    fail("expected a string of at most " + std::to_string(kMaxStringBytes) +
+         " bytes (a path, a name or a choice), got " + std::to_string(v.size()) + " bytes");
+  return v;
+}
 
 std::string fmt(double v) {
   std::ostringstream s;
@@ -212,7 +225,7 @@ std::optional<std::string> Section::string_opt(std::string_view key) const {
   }
   auto s = n->as_string();
   if (!s) fail(key, "expected " + expect + ", got " + type_name(*n));
-  std::string v = s->get();
+  std::string v = bounded_string(s->get(), [&](const std::string& m) { fail(key, m); });
   if (!choices.empty() && std::find(choices.begin(), choices.end(), v) == choices.end())
     fail(key, "expected " + expect + ", got \"" + v + "\"");
   return v;
@@ -261,7 +274,7 @@ std::vector<std::string> Section::strings(std::string_view key) const {
   for (const toml::node& e : *a) {
     auto s = e.as_string();
     if (!s) fail(key, "expected a list of strings, got an element that is " + type_name(e));
-    out.push_back(s->get());
+    out.push_back(bounded_string(s->get(), [&](const std::string& m) { fail(key, m); }));
   }
   return out;
 }
@@ -409,6 +422,82 @@ std::string SceneFile::input_digests() const {
   return out;
 }
 
+namespace {
+
+// toml++ makes a table for each part of a dotted key and recurses through them: a key of 50,000
+// parts overflowed the stack. A scene's keys have a few parts, so a line whose keys have more
+// than this many in all is refused before it is parsed.
+constexpr int kMaxDottedParts = 256;
+
+bool digit_at(const std::string& text, std::size_t i) {
+  return i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]));
+}
+
+bool run_char(char c) {
+  return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '+' || c == '.';
+}
+
+bool starts(const std::string& text, std::size_t i, const char* what) { return text.compare(i, 3, what) == 0; }
+
+// Counts, line by line and outside strings and comments, the dots that join key parts: every dot
+// but a number's (the one dot between digits in a run of key or number characters).
+void check_dotted_keys(const std::string& text, const std::string& name) {
+  enum class In { plain, basic, literal, ml_basic, ml_literal, comment } in = In::plain;
+  std::size_t line = 1;
+  int dots = 0, run_dots = 0;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      dots = run_dots = 0;
+      if (in == In::comment || in == In::basic || in == In::literal) in = In::plain;
+      continue;
+    }
+    const bool escape = c == '\\' && i + 1 < text.size() && text[i + 1] != '\n';
+    switch (in) {
+      case In::comment:
+        break;
+      case In::basic:
+        if (escape)
+          ++i;
+        else if (c == '"')
+          in = In::plain;
+        break;
+      case In::literal:
+        if (c == '\'') in = In::plain;
+        break;
+      case In::ml_basic:
+        if (escape)
+          ++i;
+        else if (starts(text, i, "\"\"\""))
+          in = In::plain, i += 2;
+        break;
+      case In::ml_literal:
+        if (starts(text, i, "'''")) in = In::plain, i += 2;
+        break;
+      case In::plain:
+        if (!run_char(c)) run_dots = 0;
+        if (c == '#')
+          in = In::comment;
+        else if (starts(text, i, "\"\"\""))
+          in = In::ml_basic, i += 2;
+        else if (starts(text, i, "'''"))
+          in = In::ml_literal, i += 2;
+        else if (c == '"')
+          in = In::basic;
+        else if (c == '\'')
+          in = In::literal;
+        else if (c == '.' && (++run_dots > 1 || i == 0 || !digit_at(text, i - 1) || !digit_at(text, i + 1)) &&
+                 ++dots >= kMaxDottedParts)
+          throw Error(name + ":" + std::to_string(line) + ": keys of more than " + std::to_string(kMaxDottedParts) +
+                      " dotted parts (expected a scene's tables and keys, a few levels deep)");
+        break;
+    }
+  }
+}
+
+}  // namespace
+
 SceneFile SceneFile::load(const std::string& path, const std::vector<std::string>& overrides, const KeyTable& keys) {
   const std::string text = read_input_file(path, "a scene file in TOML", input_limits::kScene);
   return parse(text, path, overrides, std::filesystem::path(path).parent_path().string(), keys);
@@ -420,6 +509,7 @@ SceneFile SceneFile::parse(const std::string& text, const std::string& name, con
   f.keys_ = &keys;
   f.name_ = name;
   f.directory_ = directory;
+  check_dotted_keys(text, name);
   try {
     *f.root_ = toml::parse(text, name);
   } catch (const toml::parse_error& e) {
@@ -431,6 +521,7 @@ SceneFile SceneFile::parse(const std::string& text, const std::string& name, con
     if (eq == std::string::npos || eq == 0)
       throw Error(std::string(kOverride) + " " + o + ": expected key=value, e.g. integrator.rtol=1e-6");
     std::string key = o.substr(0, eq), value = o.substr(eq + 1);
+    check_dotted_keys(o, std::string(kOverride) + " " + key.substr(0, 64));
     toml::table parsed;
     try {
       parsed = toml::parse(key + " = " + value, std::string_view(kOverride));
