@@ -34,7 +34,7 @@ import sys
 
 import numpy as np
 
-from run_file import Error, Run, note_input, write_whole
+from run_file import Error, Run, check_output, note_input, write_whole
 
 CHUNK = 500  # frames per read
 
@@ -143,10 +143,30 @@ def write_cache(h5_path, out, fmt="pc2", all_nodes=False, frames=0, render=False
     return what, count, frames
 
 
+EXTENSIONS = {".pc2": "pc2", ".mdd": "mdd", ".glb": "glb", ".usda": "usd", ".usd": "usd"}
+
+
+def format_and_path(fmt, out, run):
+    """The format and the file: --format, else --out's extension; a file whose extension names
+    another format than the one written (a point cache in FILE.glb), or no known format, is refused."""
+    if not out:
+        fmt = fmt or "pc2"
+        return fmt, os.path.splitext(run)[0] + "." + ("usda" if fmt == "usd" else fmt)
+    note_input(run)
+    check_output(out)  # a directory, a device or the run itself: refused first, whatever the name says
+    named = EXTENSIONS.get(os.path.splitext(out)[1].lower())
+    if fmt and named and named != fmt:
+        sys.exit(f"--out {out}: the extension says {named}, --format says {fmt} (expected one format)")
+    if not fmt and not named:
+        sys.exit(f"--out {out}: no format from its extension (expected .pc2, .mdd, .glb or .usda, or --format)")
+    return fmt or named, out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("run")
-    ap.add_argument("--format", default="pc2", choices=["pc2", "mdd", "glb", "usd"])
+    ap.add_argument("--format", default="", choices=["pc2", "mdd", "glb", "usd"],
+                    help="default: from --out's extension, else pc2")
     ap.add_argument("--out", default="")
     ap.add_argument("--all-nodes", action="store_true")
     ap.add_argument("--surface", action="store_true",
@@ -154,7 +174,7 @@ def main():
     a = ap.parse_args()
     if not os.path.exists(a.run):
         sys.exit(f"{a.run}: no such file")
-    out = a.out or os.path.splitext(a.run)[0] + "." + ("usda" if a.format == "usd" else a.format)
+    a.format, out = format_and_path(a.format, a.out, a.run)
     try:
         if a.format in ("glb", "usd"):
             n, frames = (write_glb if a.format == "glb" else write_usd)(a.run, out, render=not a.surface)

@@ -261,7 +261,11 @@ def arguments():
     ap.add_argument("--no-shadow", action="store_true")
     ap.add_argument("--skinning", action="store_true",
                     help="a character's run: its render mesh skinned by the bones alone beside it simulated")
-    return ap.parse_args()
+    a = ap.parse_args()
+    # A picture's side in pixels: a larger one takes memory no screen shows (1e9 px: 4e18 bytes).
+    if not 16 <= a.size <= 8192:
+        sys.exit(f"--size {a.size}: expected 16 to 8192 pixels")
+    return a
 
 
 def choose_frames(a, run, up):
@@ -277,9 +281,15 @@ def choose_frames(a, run, up):
         return [int(np.argmin(ratio))]
     if a.frames:
         try:
-            return sorted({int(k) % n for k in a.frames.split(",")})
+            picked = [int(k) for k in a.frames.split(",")]
         except ValueError:
             sys.exit(f"--frames {a.frames}: expected frame indices like 0,10,-1, or flattest")
+        for k in picked:
+            if not -n <= k < n:
+                sys.exit(f"--frames {a.frames}: {a.run} has no frame {k} (expected 0 to {n - 1}, or -1 to -{n} from the end)")
+        return sorted({k % n for k in picked})
+    if a.every < 0:
+        sys.exit(f"--every {a.every}: expected a positive step between frames (0: every frame)")
     return list(range(0, n, a.every)) if a.every else list(range(n))
 
 
@@ -560,7 +570,8 @@ def main():
             draw_frame(a, run, k, cam, up, up_from, scene, colouring, under, frames, path)
         written.append(path)
     per = (clock.perf_counter() - started) / max(len(written), 1)
-    print(f"wrote {len(written)} PNG files to {out} ({per:.2f} s per frame, {len(run.surface)} surface triangles)")
+    where = a.out if single else f"{len(written)} PNG file{'' if len(written) == 1 else 's'} to {out}"
+    print(f"wrote {where} ({per:.2f} s per frame, {len(run.surface)} surface triangles)")
     if a.mp4:
         write_mp4(run, written, out)
 

@@ -120,18 +120,34 @@ std::vector<std::array<double, 3>> RunFile::energies() const {
   return out;
 }
 
-std::vector<Tri> RunFile::surface() const {
-  auto flat = impl_->read<int>("/mesh/surface", H5T_NATIVE_INT);
-  std::vector<Tri> out(flat.size() / 3);
-  std::copy(flat.begin(), flat.end(), out.front().data());
+namespace {
+
+// A mesh's cells of `width` nodes each, read whole; every node index must be one of the file's
+// nodes (a file edited by hand or written by another program is refused, not indexed out of range).
+template <std::size_t width>
+std::vector<std::array<int, width>> read_cells(const std::string& path, const std::vector<int>& flat, int nodes,
+                                               const std::string& name) {
+  if (flat.size() % width != 0)
+    throw Error(path + ": " + name + " holds " + std::to_string(flat.size()) + " indices, not " +
+                std::to_string(width) + " per row (expected an isochor output file)");
+  for (std::size_t i = 0; i < flat.size(); ++i)
+    if (flat[i] < 0 || flat[i] >= nodes)
+      throw Error(path + ": " + name + " row " + std::to_string(i / width) + " refers to node " +
+                  std::to_string(flat[i]) + " of " + std::to_string(nodes) + " (expected an isochor output file)");
+  std::vector<std::array<int, width>> out(flat.size() / width);
+  for (std::size_t i = 0; i < out.size(); ++i)
+    for (std::size_t k = 0; k < width; ++k) out[i][k] = flat[width * i + k];
   return out;
 }
 
+}  // namespace
+
+std::vector<Tri> RunFile::surface() const {
+  return read_cells<3>(impl_->path, impl_->read<int>("/mesh/surface", H5T_NATIVE_INT), num_nodes(), "/mesh/surface");
+}
+
 std::vector<Tet> RunFile::tets() const {
-  const auto flat = impl_->read<int>("/mesh/tets", H5T_NATIVE_INT);
-  std::vector<Tet> t(flat.size() / 4);
-  for (std::size_t i = 0; i < t.size(); ++i) t[i] = {flat[4 * i], flat[4 * i + 1], flat[4 * i + 2], flat[4 * i + 3]};
-  return t;
+  return read_cells<4>(impl_->path, impl_->read<int>("/mesh/tets", H5T_NATIVE_INT), num_nodes(), "/mesh/tets");
 }
 
 Points RunFile::rest_positions() const {
@@ -347,10 +363,10 @@ int export_obj_sequence(const std::string& h5_path, const std::string& dir, cons
   if (prefix.empty() || prefix.find('/') != std::string::npos || prefix == "." || prefix == "..")
     throw Error("--prefix " + prefix + ": expected the start of a file name (no '/'), e.g. frame");
   RunFile r(h5_path);
+  auto surface = r.surface();  // read (and checked) before anything is created
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw Error(dir + ": cannot create the directory (" + ec.message() + ")");
-  auto surface = r.surface();
   // Only surface nodes are written, renumbered from 1 in index order.
   std::vector<int> nodes;
   for (const Tri& f : surface) nodes.insert(nodes.end(), f.begin(), f.end());

@@ -82,6 +82,14 @@ class Run:
         if "mesh" not in h or "frames" not in h:
             h.close()
             raise Error(f"{self.path}: has no /mesh and /frames (expected a file written by isochor run)")
+        try:
+            self._read(h)
+        except (KeyError, ValueError, TypeError) as e:
+            h.close()
+            reason = e.args[0] if e.args else type(e).__name__
+            raise Error(f"{self.path}: is not a whole run ({reason}; expected a file written by isochor run)") from None
+
+    def _read(self, h) -> None:
         attr = {k: _text(v) for k, v in h.attrs.items()}
         self.attributes: Dict[str, object] = attr
         self.status: str = str(attr.get("status", ""))
@@ -95,6 +103,7 @@ class Run:
         self.zones: Dict[str, np.ndarray] = {k: v[()] for k, v in h.get("zones", {}).items()}
         # Each tet's smallest zone, as an index into volume_columns[1:] (-1: in none), for viewers.
         self.tet_zone: np.ndarray = m["zone"][()] if "zone" in m else np.full(len(self.tets), -1)
+        self._check_mesh()
         f = h["frames"]
         # A run killed while writing a frame may hold one series a frame longer: the shortest
         # series is what is complete (as `isochor run --resume` cuts it).
@@ -116,6 +125,19 @@ class Run:
         self.stats: Dict[str, np.ndarray] = ({k: v[:n] for k, v in st.items() if hasattr(v, "shape")}
                                              if st is not None else {})
         self._read_scene_record(h, attr)
+
+    def _check_mesh(self) -> None:
+        """Shapes and node indices as isochor writes them: a file edited by hand or written by
+        another program is refused here rather than indexed out of range by a tool."""
+        nodes = len(self.rest_positions)
+        if self.rest_positions.ndim != 2 or self.rest_positions.shape[1] != 3:
+            raise ValueError(f"/mesh/rest_positions has shape {self.rest_positions.shape}, not (nodes, 3)")
+        for name, cells, width in (("/mesh/tets", self.tets, 4), ("/mesh/surface", self.surface, 3)):
+            if cells.ndim != 2 or cells.shape[1] != width:
+                raise ValueError(f"{name} has shape {cells.shape}, not (rows, {width})")
+            if cells.size and (cells.min() < 0 or cells.max() >= nodes):
+                raise ValueError(f"{name} refers to node {cells.max() if cells.max() >= nodes else cells.min()} "
+                                 f"of {nodes}")
 
     def _read_scene_record(self, h, attr: Dict[str, object]) -> None:
         """The up direction and the colliders that the run recorded (absent in a file written

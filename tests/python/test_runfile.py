@@ -124,3 +124,71 @@ def test_a_tool_never_writes_over_what_it_reads_or_over_a_device(swing_with_coll
         assert p.returncode == 1 and len(p.stderr.splitlines()) == 1 and message in p.stderr, p.stderr
     assert open(run, "rb").read() == before
     assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+
+
+def test_an_export_writes_the_format_its_file_names_or_refuses(swing_with_colliders, tmp_path):
+    # --out FILE.glb without --format wrote a PC2 cache into FILE.glb, exit 0. The format now comes
+    # from the extension (glTF's binary starts with b"glTF", PC2 with b"POINTCACHE2"); an extension
+    # of no format, or one that contradicts --format, is one line, exit 1, and no file.
+    run = swing_with_colliders
+    export = os.path.join(SOURCE, "tools", "export.py")
+
+    def call(*args):
+        return subprocess.run([sys.executable, export, str(run), *args], capture_output=True, text=True)
+
+    for name, magic in (("a.glb", b"glTF"), ("a.pc2", b"POINTCACHE2"), ("a.usda", b"#usda 1.0")):
+        assert call("--out", str(tmp_path / name)).returncode == 0
+        assert (tmp_path / name).read_bytes().startswith(magic), name
+    for args, message in ((("--out", str(tmp_path / "b.xyz")), "no format from its extension"),
+                          (("--format", "pc2", "--out", str(tmp_path / "b.glb")),
+                           "the extension says glb, --format says pc2")):
+        p = call(*args)
+        assert p.returncode == 1 and len(p.stderr.splitlines()) == 1 and message in p.stderr, p.stderr
+    assert sorted(os.listdir(tmp_path)) == ["a.glb", "a.pc2", "a.usda"]
+
+
+def test_a_render_refuses_frames_the_run_has_not_and_sizes_no_screen_has(swing_with_colliders, tmp_path):
+    # --frames 99999999 drew frame 99999999 mod 6 and said it wrote it; --size 1e9 asked
+    # matplotlib for a picture of 1e18 pixels. Each is one line, exit 1, nothing written.
+    render = os.path.join(SOURCE, "tools", "render.py")
+    for args, message in ((("--frames", "99999999"), "has no frame 99999999 (expected 0 to 5, or -1 to -6 from the end)"),
+                          (("--frames", "0,-7"), "has no frame -7"),
+                          (("--every", "-2"), "--every -2: expected a positive step"),
+                          (("--frames", "0", "--size", "1000000000"), "--size 1000000000: expected 16 to 8192 pixels")):
+        p = subprocess.run([sys.executable, render, str(swing_with_colliders), *args, "--out", str(tmp_path / "f.png")],
+                           capture_output=True, text=True)
+        assert p.returncode == 1 and len(p.stderr.splitlines()) == 1 and message in p.stderr, p.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_run_file_with_a_broken_mesh_is_one_line(swing_with_colliders, tmp_path):
+    # A run whose /mesh/tets was deleted or points past the nodes (edited by hand, or another
+    # program's file): render printed a KeyError or IndexError traceback, export-obj wrote faces
+    # with indices past the vertices, exit 0. The reader (Python and C++) refuses it in one line.
+    import shutil
+    import h5py
+
+    broken = []
+    for name, edit in (("no_tets", lambda f: f["mesh"].__delitem__("tets")),
+                       ("far_node", lambda f: f["mesh/tets"].__setitem__((0, 0), 10 ** 6)),
+                       ("negative", lambda f: f["mesh/surface"].__setitem__((1, 2), -1))):
+        path = tmp_path / f"{name}.h5"
+        shutil.copy(swing_with_colliders, path)
+        with h5py.File(path, "a") as f:
+            edit(f)
+        broken.append(path)
+    render = os.path.join(SOURCE, "tools", "render.py")
+    for path, message in zip(broken, ("is not a whole run", "/mesh/tets refers to node 1000000 of",
+                                      "/mesh/surface refers to node -1 of")):
+        with pytest.raises(isochor.Error, match=message.replace("/", "/")):
+            isochor.open(path)
+        p = subprocess.run([sys.executable, render, str(path), "--frames", "0", "--out", str(tmp_path / "f.png")],
+                           capture_output=True, text=True)
+        assert p.returncode == 1 and len(p.stderr.splitlines()) == 1 and message in p.stderr, p.stderr
+    exe = os.environ.get("ISOCHOR_EXE")
+    if exe:  # the C++ reader checks the cells a command reads: export-obj the surface's
+        p = subprocess.run([exe, "export-obj", str(broken[2]), "--dir", str(tmp_path / "obj")], capture_output=True,
+                           text=True)
+        assert p.returncode == 1 and len(p.stderr.splitlines()) == 1, p.stderr
+        assert "/mesh/surface row 1 refers to node -1 of" in p.stderr, p.stderr
+    assert not (tmp_path / "f.png").exists() and not (tmp_path / "obj").exists()
