@@ -55,6 +55,9 @@ def scene(table: Mapping[str, Any], overrides: Overrides = None, *, name: str = 
           directory: Union[str, os.PathLike] = ".") -> Scene:
     """A scene from a dict shaped like the TOML file (what tomllib.load returns); relative file
     names in it are resolved against `directory`."""
+    if not isinstance(table, Mapping):
+        raise TypeError(f"scene(): expected a dict of the scene's tables (as tomllib.load returns), "
+                        f"got a {type(table).__name__}")
     return _core().scene_from_dict(dict(table), overrides, name, os.fspath(directory))
 
 
@@ -131,6 +134,11 @@ def run(s: Union[Scene, str, os.PathLike, Mapping[str, Any]], output: Union[str,
     """
     if overwrite and resume:
         raise ValueError("run(): overwrite excludes resume")
+    # Checked before the scene is built or a file is made (an int as on_frame had failed at the
+    # first frame, after the output was created).
+    for what, f in (("on_frame", on_frame), ("activation", activation)):
+        if f is not None and not callable(f):
+            raise TypeError(f"run(): {what} must be a function or None, got a {type(f).__name__}")
     sc = _as_scene(s, overrides)
     for note in sc.notes:  # as `isochor run` prints them
         warnings.warn(f"{sc.name}: {note}", SceneNote, stacklevel=2)

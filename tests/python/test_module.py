@@ -259,6 +259,18 @@ def test_a_callback_that_returns_neither_a_boolean_nor_none_stops_with_a_type_er
         assert r.status == "interrupted" and r.num_frames == 1
 
 
+def test_a_callback_that_is_not_a_function_is_refused_before_the_run(tmp_path):
+    # An int as on_frame raised "'int' object is not callable" at the first frame, after the
+    # output was made; a list as a scene raised dict()'s own message.
+    for kwargs in ({"on_frame": 5}, {"activation": "0.5"}):
+        what = next(iter(kwargs))
+        with pytest.raises(TypeError, match=f"run\\(\\): {what} must be a function or None, got a"):
+            isochor.run(SWING, tmp_path / "s.h5", **kwargs)
+    assert not (tmp_path / "s.h5").exists()
+    with pytest.raises(TypeError, match=r"scene\(\): expected a dict of the scene's tables .*, got a list"):
+        isochor.scene([("mesh", {})])
+
+
 def test_an_activation_function_acts_as_the_scenes_keyframes_would(tmp_path):
     # The keyframes 0 -> 0.8 over the pseudo-time and a function giving the same values: the
     # same solves, so the same positions; the file records what the function gave.
