@@ -174,3 +174,40 @@ lambda = 1.0e6
     EXPECT_TRUE(free) << name;
   }
 }
+
+// Zones whose volumes follow from the others' at every shape: the indicator vectors of their tet
+// sets are linearly dependent. The elimination (modulo a 61-bit prime) against a dense rank in
+// doubles (Eigen's full-pivot LU) and, per flagged zone, a least-squares combination of the zones
+// before it that reproduces its tets to rounding.
+TEST(RedundantZones, AreTheZonesWhoseTetsAreSumsAndDifferencesOfTheOthers) {
+  auto dense = [](const std::vector<std::vector<int>>& zones, int tets) {
+    Eigen::MatrixXd W = Eigen::MatrixXd::Zero(tets, static_cast<Eigen::Index>(zones.size()));
+    for (std::size_t j = 0; j < zones.size(); ++j)
+      for (int e : zones[j]) W(e, static_cast<Eigen::Index>(j)) += 1;
+    return W;
+  };
+  for (int per_cube : {5, 6}) {
+    const Mesh m = make_box({1.5, 0.3, 0.3}, {10, 2, 2}, {0.75, 0, 0}, per_cube);
+    std::vector<std::vector<int>> rings;
+    for (int v = 0; v < m.num_nodes(); ++v) rings.push_back(m.tet_ring(v, 1));
+    const auto redundant = redundant_zones(rings, 100'000'000);
+    ASSERT_TRUE(redundant.has_value());
+    const Eigen::MatrixXd W = dense(rings, m.num_tets());
+    Eigen::FullPivLU<Eigen::MatrixXd> lu(W);
+    EXPECT_EQ(static_cast<Eigen::Index>(redundant->size()), W.cols() - lu.rank()) << per_cube;
+    for (int j : *redundant) {
+      const Eigen::MatrixXd before = W.leftCols(j);
+      const Eigen::VectorXd x = before.colPivHouseholderQr().solve(W.col(j));
+      EXPECT_LT((before * x - W.col(j)).norm(), 1e-9) << "zone " << j;
+    }
+    // Six tets per cube: the nodes four-colour by (i + j + k) mod 4 with one colour per tet
+    // corner, so each colour's rings add up to the body (three dependencies).
+    if (per_cube == 6) EXPECT_EQ(redundant->size(), 3u);
+  }
+  const Mesh m = make_box({1, 1, 1}, {3, 3, 3}, {0, 0, 0}, 6);
+  auto zones = patch_zones(m, 1);
+  EXPECT_TRUE(redundant_zones(zones, 1'000'000)->empty());  // a partition: independent
+  zones.push_back(whole(m)[0]);                             // the global zone, their sum
+  EXPECT_EQ(*redundant_zones(zones, 1'000'000), std::vector<int>{static_cast<int>(zones.size()) - 1});
+  EXPECT_FALSE(redundant_zones(zones, 10).has_value());  // beyond its work limit: not decided
+}

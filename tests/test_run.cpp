@@ -55,6 +55,16 @@ double frames_apart(const DemoRun& a, const DemoRun& b) {
   for (std::size_t k = 0; k < a.frames.size(); ++k) d = std::max(d, (a.frames[k] - b.frames[k]).cwiseAbs().maxCoeff());
   return d;
 }
+// The largest distance of a node between two run files' frames, and the largest displacement in
+// the first.
+std::pair<double, double> apart_and_moved(const RunFile& a, const RunFile& b) {
+  double worst = 0, sag = 0;
+  for (int k = 0; k < a.num_frames(); ++k) {
+    worst = std::max(worst, (a.positions(k) - b.positions(k)).cwiseAbs().maxCoeff());
+    sag = std::max(sag, (a.positions(k) - a.rest_positions()).cwiseAbs().maxCoeff());
+  }
+  return {worst, sag};
+}
 const char* kBox = R"(
 [mesh]
 shape = "box"
@@ -151,16 +161,45 @@ select = { kind = "set", name = "zmax" }
   RunFile fa(run_scene(a, (dir / "klu.h5").string(), false).output);
   RunFile fb(run_scene(b, (dir / "reduced.h5").string(), false).output);
   ASSERT_EQ(fa.num_frames(), fb.num_frames());
-  double worst = 0, sag = 0;
-  for (int k = 0; k < fa.num_frames(); ++k) {
-    worst = std::max(worst, (fa.positions(k) - fb.positions(k)).cwiseAbs().maxCoeff());
-    sag = std::max(sag, (fa.positions(k) - fa.rest_positions()).cwiseAbs().maxCoeff());
-  }
+  const auto [worst, sag] = apart_and_moved(fa, fb);
   std::printf("klu vs reduced: largest difference %.3e m, largest displacement %.3e m\n", worst, sag);
   EXPECT_GT(sag, 1e-3);
   // Both are solutions to rtol 1e-8 / atol 1e-10: they agree far below the motion.
   EXPECT_LT(worst, 1e-6 * sag);
   for (const auto& v : fb.volumes()) EXPECT_NEAR(v[0] / 0.001, 1.0, 1e-10);
+}
+
+// The global zone over patches that partition the body: its volume is their sum at every shape,
+// so it gets no constraint row of its own (before, IDA's KLU refused the singular matrix: "the
+// constraints are linearly dependent"). KLU then runs it, every zone (the global one included)
+// holds its volume, and the frames are those of `reduced`, which takes the multipliers of
+// smallest norm over the dependent rows.
+TEST(Run, AZoneThatIsTheSumOfOthersGetsNoRowAndIsKeptAllTheSame) {
+  const auto dir = test::temp_dir();
+  const std::string base = std::string(kBox) + R"(
+[[boundary]]
+select = { kind = "set", name = "zmax" }
+)";
+  const std::vector<std::string> common{"initial.velocity=[0.0, 0.0, 0.0]", "frames.duration=0.1", "zones.patches=1",
+                                        "zones.global=true"};
+  std::vector<std::string> klu = common, red = common;
+  klu.push_back("integrator.linear_solver=klu");
+  red.push_back("integrator.linear_solver=reduced");
+  const Scene a = scene(base, klu), b = scene(base, red);
+  ASSERT_EQ(a.redundant_zones.size(), 1u);
+  EXPECT_EQ(MeshSystem(a).num_constraints(), static_cast<int>(a.zones.size()) - 1);
+  ASSERT_FALSE(a.notes.empty());
+  EXPECT_NE(a.notes.back().find("1 of " + std::to_string(a.zones.size()) + " zones"), std::string::npos)
+      << a.notes.back();
+  RunFile fa(run_scene(a, (dir / "klu.h5").string(), false).output);
+  RunFile fb(run_scene(b, (dir / "reduced.h5").string(), false).output);
+  ASSERT_EQ(fa.num_frames(), fb.num_frames());
+  const auto [worst, sag] = apart_and_moved(fa, fb);
+  EXPECT_GT(sag, 1e-4);
+  EXPECT_LT(worst, 1e-6 * sag);
+  const auto volumes = fa.volumes();
+  for (const auto& v : volumes)
+    for (std::size_t z = 0; z < v.size(); ++z) EXPECT_NEAR(v[z] / volumes.front()[z], 1.0, 1e-10) << "column " << z;
 }
 
 // linear_solver = "auto" on IDA: block-Jacobi CG on S (krylov: CG iterations, no factor) for a

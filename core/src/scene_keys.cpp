@@ -244,10 +244,12 @@ constexpr KeySpec kRows[] = {
      .shown = "cnh: true when the table names other zones but no patches, or with `default = \"global\"`; else false "
               "(the default is 2-ring patches); false for the other models",
      .doc = "one zone, `global`, holding every tet. Together with zones that partition the mesh (`zones.patches`, or "
-            "mesh regions that cover it) its volume is their sum, so its constraint is linearly dependent on theirs: "
-            "IDA with `reduced`/`krylov` (the `auto` choice up to 256 rows) and backward Euler run it, taking the "
-            "multipliers of smallest norm (the motion is that of the patches alone); IDA with `klu` stops before its "
-            "first step and says so"},
+            "mesh regions that cover it) its volume is their sum at every shape. Any zone whose tets are sums and "
+            "differences of other zones' tets (this one; one per colour class of 1-ring zones on a mesh whose nodes "
+            "four-colour, as the boxes' six tets per cube do) is found before the run (exact elimination of the zones' "
+            "tet sets) and gets no constraint row: the others' rows keep its volume exactly, every solver (`klu` "
+            "included) runs it, and its volume is written like any zone's; the run's first line names the zones "
+            "(`/frames/multipliers` has one column fewer for each)"},
     {.name = "zones.default",
      .kind = K::string,
      .fallback = "\"patches\"",

@@ -101,11 +101,22 @@ MeshSystem::MeshSystem(const Scene& scene, const Ranks* ranks)
   const auto all_zones = scene_zone_tets(scene);
   zone_volumes_ = VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern());
   if (scene.keep_zones && !all_zones.empty()) {
+    // The constraint rows: every zone but those whose volumes follow from the others'.
+    std::vector<int> kept;
+    std::vector<std::vector<int>> kept_tets;
+    for (std::size_t j = 0, r = 0; j < all_zones.size(); ++j) {
+      if (r < scene.redundant_zones.size() && scene.redundant_zones[r] == static_cast<int>(j)) {
+        ++r;
+        continue;
+      }
+      kept.push_back(static_cast<int>(j));
+      kept_tets.push_back(all_zones[j]);
+    }
     auto zones = std::make_unique<VolumeConstraints>(
-        VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern()));
+        VolumeConstraints::zones(scene.mesh, kept_tets, dofs_, elastic_->pattern()));
     for (int j = 0; j < zones->size(); ++j)
       if (zones->row_dofs(j).empty())
-        throw Error(scene.file.name() + ": zone \"" + scene.zones[j].first +
+        throw Error(scene.file.name() + ": zone \"" + scene.zones[static_cast<std::size_t>(kept[j])].first +
                     "\" has only driven nodes on its boundary: its volume cannot be kept");
     if (scene.zone_restore_time > 0)
       zones->restore_from(scene.initial_positions.cols() ? scene.initial_positions : scene.mesh.rest_positions(),

@@ -807,6 +807,7 @@ Scene parse_scene(SceneFile file, const Mesh* character_mesh) {
            {},
            {},
            {},
+           {},
            0.0,
            true,
            {},

@@ -4,6 +4,8 @@
 // dg/dt from the velocities of Dirichlet nodes, and the contracted Hessian sum_j lambda_j H_j
 // filled into an assembly pattern.
 #pragma once
+#include <cstddef>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -12,6 +14,15 @@
 #include "isochor/models/constraint_set.hpp"
 
 namespace isochor {
+
+// The zones (indices, increasing) whose volume is, at every configuration, a linear combination
+// of the volumes of zones before them: their tet sets' indicator vectors are linearly dependent
+// (1-ring zones on a mesh whose nodes four-colour so that each tet has one node of each colour:
+// each colour's zones sum to the whole body; the global zone over a partition). Their constraint
+// rows would add nothing but a singular KKT matrix. Exact Gaussian elimination of the indicator
+// vectors (modulo a 61-bit prime); nullopt where it would touch more than work_limit entries or
+// keep more than a quarter of that many.
+std::optional<std::vector<int>> redundant_zones(const std::vector<std::vector<int>>& zone_tets, std::size_t work_limit);
 
 class VolumeConstraints : public ConstraintSet {
  public:

@@ -119,6 +119,10 @@ struct Scene {
     return initial_velocities.cols() ? Eigen::Vector3d(initial_velocities.col(n)) : initial_velocity;
   }
   std::vector<std::pair<std::string, std::vector<int>>> zones;  // name, sorted tet indices
+  // Zones (indices into `zones`, increasing) whose volume is at every configuration a linear
+  // combination of the others' (redundant_zones): measured and written like any zone, but given no
+  // constraint row, which would only make the KKT matrix singular.
+  std::vector<int> redundant_zones;
   double zone_restore_time =
       0.0;                 // zones.restore_time (s): zone targets go from the start's volumes to the rest volumes
   bool keep_zones = true;  // zones.keep: false measures the zones' volumes without constraining them
