@@ -316,14 +316,15 @@ TEST(Statics, TwoTetsRightTetDoublesWithTheGlobalZone) {
   EXPECT_LT(g.volumes().back()[0] / V0, 0.6);
 }
 
-// Backward Euler with many constraints (1-ring zones) factors the whole KKT matrix with KLU; with
-// few it eliminates the borders by a Schur complement on CHOLMOD's factor. Both solve the same
-// Newton systems, so the frames agree to the Newton tolerance.
+// Backward Euler with many constraints (1-ring zones) factors the whole KKT matrix (KLU up to 32
+// rows, UMFPACK above: 2^3 cells with the KKT path from 9 rows on, 3^3 cells, 61 rows, and
+// 10 x 4 x 4 cells, 272 rows); with few it eliminates the borders by a Schur complement on
+// CHOLMOD's factor. Both solve the same Newton systems, so the frames agree to the Newton tolerance.
 TEST(Run, BackwardEulerKktAndSchurPathsAgree) {
-  Scene sc = scene(R"(
+  for (const char* cells : {"2", "3", "[10, 4, 4]"}) {
+    Scene sc = scene(R"(
 [mesh]
 shape = "box"
-cells = 3
 size = [0.1, 0.1, 0.1]
 center = [0, 0, 0.05]
 [material]
@@ -342,26 +343,31 @@ newton_tol = 1e-12
 [frames]
 rate = 50.0
 duration = 0.2
-)");
-  ASSERT_GT(sc.zones.size(), 32u);  // above the default threshold: the KKT path
-  MeshSystem sys(sc);
-  std::vector<VectorXd> frames[2];
-  for (int path = 0; path < 2; ++path) {
-    BackwardEulerOptions o;
-    o.dt = 0.004;
-    o.newton_tol = 1e-12;
-    o.schur_max_constraints = path == 0 ? 32 : 100000;
-    BackwardEuler(sys, o).run(sc.frames.times(), [&](int, double, const VectorXd& q, const VectorXd&, const VectorXd&,
-                                                     const RunStats::FrameSample&) { frames[path].push_back(q); });
+)",
+                     {std::string("mesh.cells=") + cells});
+    const bool small = std::string(cells) == "2";
+    MeshSystem sys(sc);
+    // KLU (KktFactor::kMultifrontalRows) on the first, UMFPACK on the others.
+    EXPECT_EQ(sys.num_constraints() > 32, !small) << sys.num_constraints();
+    ASSERT_GT(sys.num_constraints(), 8);
+    std::vector<VectorXd> frames[2];
+    for (int path = 0; path < 2; ++path) {
+      BackwardEulerOptions o;
+      o.dt = 0.004;
+      o.newton_tol = 1e-12;
+      o.schur_max_constraints = path == 0 ? (small ? 8 : 32) : 100000;
+      BackwardEuler(sys, o).run(sc.frames.times(), [&](int, double, const VectorXd& q, const VectorXd&, const VectorXd&,
+                                                       const RunStats::FrameSample&) { frames[path].push_back(q); });
+    }
+    ASSERT_EQ(frames[0].size(), frames[1].size());
+    double worst = 0, moved = 0;
+    for (std::size_t k = 0; k < frames[0].size(); ++k) {
+      worst = std::max(worst, (frames[0][k] - frames[1][k]).cwiseAbs().maxCoeff());
+      moved = std::max(moved, (frames[0][k] - frames[0][0]).cwiseAbs().maxCoeff());
+    }
+    EXPECT_GT(moved, 1e-3) << cells;
+    EXPECT_LT(worst, 1e-9) << cells;
   }
-  ASSERT_EQ(frames[0].size(), frames[1].size());
-  double worst = 0, moved = 0;
-  for (std::size_t k = 0; k < frames[0].size(); ++k) {
-    worst = std::max(worst, (frames[0][k] - frames[1][k]).cwiseAbs().maxCoeff());
-    moved = std::max(moved, (frames[0][k] - frames[0][0]).cwiseAbs().maxCoeff());
-  }
-  EXPECT_GT(moved, 1e-3);
-  EXPECT_LT(worst, 1e-9);
 }
 
 TEST(IdaRun, FixedBottomCubeStartsAtTightTolerances) {

@@ -1,10 +1,11 @@
 // The KKT matrix [K G^T; G 0] of n dofs and m constraints in one fixed CSC pattern (both
-// triangles), with the slot of every entry of K's pattern and of every G entry, and a KLU
-// factorisation of it in a METIS order (each local constraint beside its nodes). Used by statics
-// (through KINSOL) and by backward Euler when there are many constraints.
+// triangles), with the slot of every entry of K's pattern and of every G entry, and its sparse LU
+// (KktFactor: KLU, or UMFPACK for many rows). Used by statics (through KINSOL) and by backward
+// Euler when there are many constraints.
 #pragma once
 #include <klu.h>
 
+#include <cstddef>
 #include <memory>
 #include <vector>
 
@@ -27,10 +28,18 @@ struct KktLayout {
   void fill(const double* Kvals, const std::vector<std::vector<double>>& G, double* values) const;
 };
 
-// KLU on a KktLayout's pattern: symbolic analysis once (METIS order), numeric factorisation on
-// demand, in-place solves.
+// A sparse LU of a KktLayout's pattern: symbolic analysis once, numeric factorisation on demand,
+// in-place solves. Up to kMultifrontalRows constraint rows, KLU in a METIS order (each local
+// constraint beside its nodes); above, UMFPACK (multifrontal, dense BLAS kernels on its fronts,
+// its own fill-reducing order). Measured on the clamped beam with 4,600 1-ring zones (21,870
+// tets, 18,400 unknowns; backward Euler, 50 steps, one factorisation, one thread): KLU in the
+// METIS order 13.5 s to factor, 21 s the run; KLU in its own AMD order 235 s; UMFPACK 1.45 s
+// (9.2M + 9.6M factor entries), 7.9 s the run, with the same 139 Newton iterations; with 108
+// 2-ring patches 5.23 s against 0.69 s for two factorisations (docs/decisions.md). 32 is where
+// backward Euler leaves its dense border for this matrix.
 class KktFactor {
  public:
+  static constexpr std::size_t kMultifrontalRows = 32;
   KktFactor(const KktLayout& layout, const SparsePattern& K, int dofs_per_group,
             const std::vector<std::vector<Index>>& rows);
   ~KktFactor();
@@ -42,6 +51,10 @@ class KktFactor {
   mutable klu_l_common common_;
   klu_l_symbolic* symbolic_ = nullptr;
   klu_l_numeric* numeric_ = nullptr;
+  bool multifrontal_ = false;  // UMFPACK's symbolic_ and numeric_ below instead of KLU's
+  void* umf_symbolic_ = nullptr;
+  void* umf_numeric_ = nullptr;
+  mutable std::vector<double> b_;  // the right-hand side while UMFPACK solves into rhs
 };
 
 }  // namespace isochor

@@ -58,7 +58,8 @@ SparseRow minus(const SparseRow& v, Residue c, const SparseRow& row, std::size_t
 
 }  // namespace
 
-std::optional<std::vector<int>> redundant_zones(const std::vector<std::vector<int>>& zone_tets, std::size_t work_limit) {
+std::optional<std::vector<int>> redundant_zones(const std::vector<std::vector<int>>& zone_tets,
+                                                std::size_t work_limit) {
   std::unordered_map<int, SparseRow> basis;  // by pivot tet, the pivot's coefficient 1
   std::vector<int> redundant;
   // The basis fills in as a banded elimination does (1-ring zones on 21,870 tets: 4.5M entries
