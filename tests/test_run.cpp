@@ -84,6 +84,12 @@ duration = 0.3
 rtol = 1e-8
 atol = 1e-10
 )";
+// kBox hanging at rest from its top face, with these overrides, on IDA's linear solver `solver`.
+Scene hanging_box(std::vector<std::string> overrides, const std::string& solver) {
+  overrides.insert(overrides.begin(), "initial.velocity=[0.0, 0.0, 0.0]");
+  overrides.push_back("integrator.linear_solver=" + solver);
+  return scene(std::string(kBox) + "\n[[boundary]]\nselect = { kind = \"set\", name = \"zmax\" }\n", overrides);
+}
 }  // namespace
 
 TEST(Run, FreeFallFollowsTheParabola) {
@@ -149,15 +155,8 @@ TEST(Run, FailuresNameTheTimeAndKeepTheFrames) {
 
 TEST(Run, ReducedAndKluSolversGiveTheSameFrames) {
   const auto dir = test::temp_dir();
-  const std::string base = std::string(kBox) + R"(
-[[boundary]]
-select = { kind = "set", name = "zmax" }
-)";
-  const std::vector<std::string> common{"initial.velocity=[0.0, 0.0, 0.0]", "frames.duration=0.2", "material.E=4640.0"};
-  std::vector<std::string> klu = common, red = common;
-  klu.push_back("integrator.linear_solver=klu");
-  red.push_back("integrator.linear_solver=reduced");
-  Scene a = scene(base, klu), b = scene(base, red);
+  const std::vector<std::string> common{"frames.duration=0.2", "material.E=4640.0"};
+  const Scene a = hanging_box(common, "klu"), b = hanging_box(common, "reduced");
   RunFile fa(run_scene(a, (dir / "klu.h5").string(), false).output);
   RunFile fb(run_scene(b, (dir / "reduced.h5").string(), false).output);
   ASSERT_EQ(fa.num_frames(), fb.num_frames());
@@ -176,16 +175,8 @@ select = { kind = "set", name = "zmax" }
 // smallest norm over the dependent rows.
 TEST(Run, AZoneThatIsTheSumOfOthersGetsNoRowAndIsKeptAllTheSame) {
   const auto dir = test::temp_dir();
-  const std::string base = std::string(kBox) + R"(
-[[boundary]]
-select = { kind = "set", name = "zmax" }
-)";
-  const std::vector<std::string> common{"initial.velocity=[0.0, 0.0, 0.0]", "frames.duration=0.1", "zones.patches=1",
-                                        "zones.global=true"};
-  std::vector<std::string> klu = common, red = common;
-  klu.push_back("integrator.linear_solver=klu");
-  red.push_back("integrator.linear_solver=reduced");
-  const Scene a = scene(base, klu), b = scene(base, red);
+  const std::vector<std::string> common{"frames.duration=0.1", "zones.patches=1", "zones.global=true"};
+  const Scene a = hanging_box(common, "klu"), b = hanging_box(common, "reduced");
   ASSERT_EQ(a.redundant_zones.size(), 1u);
   EXPECT_EQ(MeshSystem(a).num_constraints(), static_cast<int>(a.zones.size()) - 1);
   ASSERT_FALSE(a.notes.empty());

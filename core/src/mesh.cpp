@@ -121,14 +121,17 @@ Mesh::Mesh(Points positions, std::vector<Tet> tets, const std::string& what)
   if (!X_.allFinite()) throw Error(what + ": a node position is not finite");
   // Sizes a body can have, as for shapes and colliders: a mesh of 1e-300 m has masses and volumes
   // that underflow to 0, one of 1e300 m forces that overflow.
-  const double across = n > 0 ? (X_.rowwise().maxCoeff() - X_.rowwise().minCoeff()).maxCoeff() : 1.0;
-  if (n > 0 && !(across >= 1e-6 && across <= 1e6) || X_.cwiseAbs().maxCoeff() > 1e7) {
-    char buf[200];
-    std::snprintf(buf, sizeof buf,
-                  ": the mesh is %.3g m across, its farthest node %.3g m from the origin (expected 1e-06 to 1e+06 m "
-                  "across, within 1e+07 m: sizes are in metres)",
-                  across, X_.cwiseAbs().maxCoeff());
-    throw Error(what + buf);
+  if (n > 0) {
+    const double across = (X_.rowwise().maxCoeff() - X_.rowwise().minCoeff()).maxCoeff();
+    const double farthest = X_.cwiseAbs().maxCoeff();
+    if (!(across >= 1e-6 && across <= 1e6) || farthest > 1e7) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf,
+                    ": the mesh is %.3g m across, its farthest node %.3g m from the origin (expected 1e-06 to 1e+06 "
+                    "m across, within 1e+07 m: sizes are in metres)",
+                    across, farthest);
+      throw Error(what + buf);
+    }
   }
   volume_.resize(T);
   double mean_abs = 0.0;

@@ -10,7 +10,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <sstream>
 #include <stdexcept>
 
@@ -26,11 +25,9 @@ constexpr const char* kOverride = "--set";
 // and a longer one is refused before it is used.
 constexpr std::size_t kMaxStringBytes = 4096;
 
-std::string bounded_string(const std::string& v, const std::function<void(const std::string&)>& fail) {
-  if (v.size() > kMaxStringBytes)
-    fail("expected a string of at most " + std::to_string(kMaxStringBytes) +
-         " bytes (a path, a name or a choice), got " + std::to_string(v.size()) + " bytes");
-  return v;
+std::string too_long(const std::string& v) {
+  return "expected a string of at most " + std::to_string(kMaxStringBytes) +
+         " bytes (a path, a name or a choice), got " + std::to_string(v.size()) + " bytes";
 }
 
 std::string fmt(double v) {
@@ -225,7 +222,8 @@ std::optional<std::string> Section::string_opt(std::string_view key) const {
   }
   auto s = n->as_string();
   if (!s) fail(key, "expected " + expect + ", got " + type_name(*n));
-  std::string v = bounded_string(s->get(), [&](const std::string& m) { fail(key, m); });
+  std::string v = s->get();
+  if (v.size() > kMaxStringBytes) fail(key, too_long(v));
   if (!choices.empty() && std::find(choices.begin(), choices.end(), v) == choices.end())
     fail(key, "expected " + expect + ", got \"" + v + "\"");
   return v;
@@ -274,7 +272,8 @@ std::vector<std::string> Section::strings(std::string_view key) const {
   for (const toml::node& e : *a) {
     auto s = e.as_string();
     if (!s) fail(key, "expected a list of strings, got an element that is " + type_name(e));
-    out.push_back(bounded_string(s->get(), [&](const std::string& m) { fail(key, m); }));
+    if (s->get().size() > kMaxStringBytes) fail(key, too_long(s->get()));
+    out.push_back(s->get());
   }
   return out;
 }

@@ -35,7 +35,7 @@ struct KktLayout {
 // tets, 18,400 unknowns; backward Euler, 50 steps, one factorisation, one thread): KLU in the
 // METIS order 13.5 s to factor, 21 s the run; KLU in its own AMD order 235 s; UMFPACK 1.45 s
 // (9.2M + 9.6M factor entries), 7.9 s the run, with the same 139 Newton iterations; with 108
-// 2-ring patches 5.23 s against 0.69 s for two factorisations (docs/decisions.md). 32 is where
+// 2-ring patches 5.23 s against 0.79 s for two factorisations (docs/decisions.md). 32 is where
 // backward Euler leaves its dense border for this matrix.
 class KktFactor {
  public:

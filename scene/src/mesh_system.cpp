@@ -67,6 +67,33 @@ std::vector<std::vector<int>> scene_zone_tets(const Scene& s) {
   return z;
 }
 
+namespace {
+
+// The zones' constraint rows: every zone but those whose volumes follow from the others'
+// (Scene::redundant_zones), each with a free node on its boundary, moving to the rest volumes
+// over zones.restore_time where that is set.
+std::unique_ptr<VolumeConstraints> zone_constraints(const Scene& scene, const std::vector<std::vector<int>>& all_zones,
+                                                    const DofMap& dofs, const Pattern& pattern) {
+  std::vector<int> kept;
+  std::vector<std::vector<int>> kept_tets;
+  for (std::size_t j = 0; j < all_zones.size(); ++j)
+    if (!std::binary_search(scene.redundant_zones.begin(), scene.redundant_zones.end(), static_cast<int>(j))) {
+      kept.push_back(static_cast<int>(j));
+      kept_tets.push_back(all_zones[j]);
+    }
+  auto zones = std::make_unique<VolumeConstraints>(VolumeConstraints::zones(scene.mesh, kept_tets, dofs, pattern));
+  for (int j = 0; j < zones->size(); ++j)
+    if (zones->row_dofs(j).empty())
+      throw Error(scene.file.name() + ": zone \"" + scene.zones[static_cast<std::size_t>(kept[j])].first +
+                  "\" has only driven nodes on its boundary: its volume cannot be kept");
+  if (scene.zone_restore_time > 0)
+    zones->restore_from(scene.initial_positions.cols() ? scene.initial_positions : scene.mesh.rest_positions(),
+                        scene.frames.times().front(), scene.zone_restore_time);
+  return zones;
+}
+
+}  // namespace
+
 MeshSystem::MeshSystem(const Scene& scene, const Ranks* ranks)
     : scene_(scene),
       node_rank_(ranks && ranks->size() > 1 ? scene_node_ranks(scene, ranks->size()) : std::vector<int>()),
@@ -100,29 +127,8 @@ MeshSystem::MeshSystem(const Scene& scene, const Ranks* ranks)
   damping_ = scene.damping;
   const auto all_zones = scene_zone_tets(scene);
   zone_volumes_ = VolumeConstraints::zones(scene.mesh, all_zones, dofs_, elastic_->pattern());
-  if (scene.keep_zones && !all_zones.empty()) {
-    // The constraint rows: every zone but those whose volumes follow from the others'.
-    std::vector<int> kept;
-    std::vector<std::vector<int>> kept_tets;
-    for (std::size_t j = 0, r = 0; j < all_zones.size(); ++j) {
-      if (r < scene.redundant_zones.size() && scene.redundant_zones[r] == static_cast<int>(j)) {
-        ++r;
-        continue;
-      }
-      kept.push_back(static_cast<int>(j));
-      kept_tets.push_back(all_zones[j]);
-    }
-    auto zones = std::make_unique<VolumeConstraints>(
-        VolumeConstraints::zones(scene.mesh, kept_tets, dofs_, elastic_->pattern()));
-    for (int j = 0; j < zones->size(); ++j)
-      if (zones->row_dofs(j).empty())
-        throw Error(scene.file.name() + ": zone \"" + scene.zones[static_cast<std::size_t>(kept[j])].first +
-                    "\" has only driven nodes on its boundary: its volume cannot be kept");
-    if (scene.zone_restore_time > 0)
-      zones->restore_from(scene.initial_positions.cols() ? scene.initial_positions : scene.mesh.rest_positions(),
-                          scene.frames.times().front(), scene.zone_restore_time);
-    add_constraints(std::move(zones));
-  }
+  if (scene.keep_zones && !all_zones.empty())
+    add_constraints(zone_constraints(scene, all_zones, dofs_, elastic_->pattern()));
   if (auto supports = make_supports(scene, dofs_)) add_constraints(std::move(supports));  // [[boundary]] components
   dof_mass_.resize(num_dofs());
   for (int f = 0; f < dofs_.num_free(); ++f) dof_mass_.segment<3>(3 * f).setConstant(node_mass_[dofs_.free_nodes[f]]);

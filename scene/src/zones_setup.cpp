@@ -230,10 +230,6 @@ void drop_driven_zones(const Section& s, ZoneChoice& c, const Mesh& mesh, const 
   c = std::move(kept);
 }
 
-}  // namespace
-
-namespace {
-
 // Zones whose volumes follow exactly from the others' get no constraint row; the scene says so.
 // An elimination beyond kRedundancyWork entries is not finished, and every zone keeps its row:
 // 1-ring zones on the 21,870-tet beam take 25M (0.2 s, 70 MB), on 101,250 tets 309M (2 s, 1 GB);
