@@ -3,8 +3,9 @@
 # under gravity for 50 ms, at cells [15k, 3k, 3k] (810 k^3 tets), with the global zone (one row),
 # 2-ring patches and per-node 1-ring zones, under backward Euler (dt = 1 ms, 50 steps) and IDA
 # (rtol 1e-4), each with its automatic linear solver (backward Euler: the dense border up to 32
-# rows, else the KKT matrix by UMFPACK; IDA: krylov up to 256 rows,
-# else KLU on the GGL matrix). Three of the 1-ring zones on this mesh are sums and differences of
+# rows, else the KKT matrix by UMFPACK; IDA: krylov up to 256 rows, else `klu`, which above 32
+# rows solves the GGL system through its KKT matrix, refined: integrators/src/ggl_kkt.hpp).
+# Three of the 1-ring zones on this mesh are sums and differences of
 # the others and get no row (docs/decisions.md). Wall seconds of
 # the solver (median of the rounds, cases interleaved), steps, Newton iterations, fresh
 # factorisations and their seconds, and the tip's deflection. Writes docs/results/zones_dynamics.csv.
@@ -52,9 +53,6 @@ for k in $ks; do
     for z in global patches2 rings1; do
       for m in be ida; do
         extra=""
-        # IDA on 1-ring zones: KLU (the auto choice above 256 rows) factors the GGL matrix, whose
-        # fill these rows make large (5 factorisations, 46 s at k = 2); not run at k = 3.
-        if [ "$z" = rings1 ] && [ "$m" = ida ] && [ "$k" = 3 ]; then continue; fi
         # shellcheck disable=SC2046
         bench_run zones_dynamics "$scene" --set "mesh.cells=[$((15 * k)), $((3 * k)), $((3 * k))]" $(zones_of $z) \
           $(method_of $m) $extra

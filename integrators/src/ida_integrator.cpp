@@ -3,6 +3,7 @@
 #include "klu_order.hpp"
 #include "sundials_util.hpp"
 #include "timing.hpp"
+#include "ggl_kkt.hpp"
 
 #include "isochor/integrators/ggl.hpp"
 #include "isochor/integrators/initial_state.hpp"
@@ -49,6 +50,10 @@ struct IdaIntegrator::Impl {
   SUNContext ctx = nullptr;
   SUNLinearSolver LS = nullptr;   // what IDA calls: the reduced solver, or KLU wrapped to time it
   SUNLinearSolver klu = nullptr;  // klu: SUNDIALS' KLU solver inside LS
+  // "klu" above kMultifrontalRows constraints: the GGL system through its KKT matrix
+  // (ggl_kkt.hpp) instead of KLU on the GGL matrix.
+  bool via_kkt = false;
+  std::unique_ptr<GglKktSolver> kkt;
   void* ida_mem = nullptr;
   std::exception_ptr caught;  // thrown inside a callback, rethrown when IDA returns
   long last_newton_failures = 0;
@@ -89,12 +94,13 @@ struct IdaIntegrator::Impl {
   Impl(ConstrainedSystem& s, IdaOptions o) : sys(s), opt(std::move(o)), ggl((check_system(s), s)) {
     n = sys.num_dofs();
     m = sys.num_constraints();
+    via_kkt = opt.linear_solver == LinearSolverKind::klu && static_cast<std::size_t>(m) > kMultifrontalRows;
     if (opt.linear_solver != LinearSolverKind::klu)
       // CG's residual below what IDA's Newton test can see: 1e-6 rtol, at most 1e-12
       // (docs/decisions.md), unless the scene sets integrator.linear_tol.
       reduced = std::make_unique<ReducedSolver>(ggl, symmetric_solver_of(opt.linear_solver),
                                                 opt.linear_tol > 0 ? opt.linear_tol : std::min(1e-12, 1e-6 * opt.rtol));
-    else if (opt.ordering == KluOrdering::metis) {
+    else if (opt.ordering == KluOrdering::metis && !via_kkt) {
       check_groups(sys, "KLU's METIS ordering (integrator.ordering = \"metis\")");
       const auto t0 = Clock::now();
       order = metis_order(sys.pattern(), sys.dofs_per_group(), n, 2, sys.constraint_rows(), 2);
@@ -222,6 +228,35 @@ int timed_klu_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, sunr
     const int r = SUNLinSolSolve(s.klu, A, x, b, tol);
     s.stats.solve_seconds += seconds_since(t0);
     return r;
+  });
+}
+// The GGL system through its KKT matrix (ggl_kkt.hpp): a fresh factorisation at every setup;
+// between setups IDA scales the correction for the change of c_j, as it does for KLU.
+int kkt_setup(SUNLinearSolver S, SUNMatrix A) {
+  auto& s = *static_cast<Impl*>(S->content);
+  return guarded(s.caught, [&] {
+    const auto t0 = Clock::now();
+    double cj = 0;
+    check(IDAGetCurrentCj(s.ida_mem, &cj), "IDAGetCurrentCj");
+    const bool ok = s.kkt->setup(cj, SM_DATA_S(A));
+    s.stats.factor_seconds += seconds_since(t0);
+    s.stats.fresh_factorisations++;
+    s.stats.factor_nnz = s.kkt->factor_entries();
+    if (!ok && s.trace) std::fprintf(stderr, "ida: the KKT matrix of the GGL system is singular\n");
+    return ok ? sun::kSuccess : SUNLS_PACKAGE_FAIL_REC;  // singular: IDA retries a smaller step
+  });
+}
+int kkt_solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) {
+  auto& s = *static_cast<Impl*>(S->content);
+  return guarded(s.caught, [&] {
+    const auto t0 = Clock::now();
+    check(IDAGetErrWeights(s.ida_mem, s.ewt.get()), "IDAGetErrWeights");
+    const bool ok = s.kkt->solve(N_VGetArrayPointer(b), N_VGetArrayPointer(x), N_VGetArrayPointer(s.ewt.get()));
+    s.stats.solve_seconds += seconds_since(t0);
+    s.stats.linear_iterations = s.kkt->refinements();
+    s.stats.linear_fallbacks = s.kkt->fallbacks();
+    if (!ok && s.trace) std::fprintf(stderr, "ida: the refinement of the KKT solve did not converge\n");
+    return ok ? sun::kSuccess : SUNLS_PACKAGE_FAIL_REC;
   });
 }
 // The reduced solver reads the filled GGL matrix.
@@ -367,13 +402,18 @@ void create_ida(Impl& s, double t0, double t_end, const VectorXd& q0, const Vect
   check(IDASetMaxNumSteps(mem, 100000), "IDASetMaxNumSteps", t0);
 }
 
-// The Jacobian matrix and the linear solver: the reduced solver, or KLU (in METIS's node-grouped
-// order or its own) inside a wrapper that times it.
+// The Jacobian matrix and the linear solver: the reduced solver, the KKT solver, or KLU (in
+// METIS's node-grouped order or its own) inside a wrapper that times it.
 void attach_linear_solver(Impl& s, double t0) {
   const Index N = 2 * s.n + 2 * s.m;
   s.J.reset(check_ptr(SUNSparseMatrix(N, N, s.ggl.pattern().nnz(), CSC_MAT, s.ctx), "SUNSparseMatrix"));
   if (s.reduced) {
     s.LS_owner = make_custom_linear_solver(s.ctx, &s, reduced_setup, reduced_solve);
+  } else if (s.via_kkt) {
+    const auto ta = Clock::now();
+    s.kkt = std::make_unique<GglKktSolver>(s.ggl);
+    s.stats.symbolic_seconds += seconds_since(ta);
+    s.LS_owner = make_custom_linear_solver(s.ctx, &s, kkt_setup, kkt_solve);
   } else {
     s.klu_owner.reset(check_ptr(SUNLinSol_KLU(s.yy.get(), s.J.get(), s.ctx), "SUNLinSol_KLU"));
     s.klu = s.klu_owner.get();
@@ -538,6 +578,7 @@ void release(Impl& s) {
   s.nls.reset();
   s.LS_owner.reset();
   s.klu_owner.reset();
+  s.kkt.reset();
   s.J.reset();
   for (sun::Vector* v : {&s.yy, &s.yp, &s.id, &s.atol, &s.yout, &s.ele, &s.ewt}) v->reset();
   s.context.reset();
@@ -577,10 +618,8 @@ void IdaIntegrator::begin(const std::vector<double>& times, const FrameCallback&
   attach_linear_solver(s, t0);
   s.stops = step_stops(s, t0);
   s.next_stop = 0;
-  if (s.trace) {
-    s.ele.reset(check_ptr(N_VClone(s.yy.get()), "N_VClone"));
-    s.ewt.reset(check_ptr(N_VClone(s.yy.get()), "N_VClone"));
-  }
+  if (s.trace) s.ele.reset(check_ptr(N_VClone(s.yy.get()), "N_VClone"));
+  if (s.trace || s.kkt) s.ewt.reset(check_ptr(N_VClone(s.yy.get()), "N_VClone"));
   s.yout.reset(check_ptr(N_VClone(s.yy.get()), "N_VClone"));
   s.frame_interval = times.size() > 1 ? times[1] - times[0] : std::max(times.back() - t0, 1.0);
   s.stalled = 0;

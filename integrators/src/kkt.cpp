@@ -1,7 +1,5 @@
 #include "kkt.hpp"
 
-#include <umfpack.h>
-
 #include <algorithm>
 
 #include "klu_order.hpp"
@@ -41,24 +39,22 @@ KktLayout::KktLayout(const SparsePattern& K, const std::vector<std::vector<Index
     }
 }
 
-void KktLayout::fill(const double* Kvals, const std::vector<std::vector<double>>& G, double* values) const {
+void KktLayout::fill(const double* Kvals, const std::vector<std::vector<double>>& C,
+                     const std::vector<std::vector<double>>& R, double* values) const {
   std::fill(values, values + p.nnz(), 0.0);
   for (std::size_t k = 0; k < kk.size(); ++k) values[kk[k]] += Kvals[k];
-  for (std::size_t j = 0; j < G.size(); ++j)
-    for (std::size_t k = 0; k < G[j].size(); ++k) {
-      values[gcol[j][k]] += G[j][k];
-      values[grow[j][k]] += G[j][k];
+  for (std::size_t j = 0; j < C.size(); ++j)
+    for (std::size_t k = 0; k < C[j].size(); ++k) {
+      values[gcol[j][k]] += C[j][k];
+      values[grow[j][k]] += R[j][k];
     }
 }
 
 KktFactor::KktFactor(const KktLayout& layout, const SparsePattern& K, int dofs_per_group,
                      const std::vector<std::vector<Index>>& rows)
-    : layout_(layout), multifrontal_(rows.size() > kMultifrontalRows) {
-  static_assert(sizeof(Index) == sizeof(SuiteSparse_long), "UMFPACK's dl interface takes the pattern's indices");
-  if (multifrontal_) {
-    if (umfpack_dl_symbolic(layout_.p.n, layout_.p.n, layout_.p.col_ptr.data(), layout_.p.row_ind.data(), nullptr,
-                            &umf_symbolic_, nullptr, nullptr) != UMFPACK_OK)
-      umf_symbolic_ = nullptr;
+    : layout_(layout) {
+  if (rows.size() > kMultifrontalRows) {
+    umfpack_ = std::make_unique<UmfpackLu>(layout_.p.n, layout_.p.col_ptr.data(), layout_.p.row_ind.data());
     return;
   }
   order_ = metis_order(K, dofs_per_group, K.n, 1, rows, 1);
@@ -69,20 +65,12 @@ KktFactor::KktFactor(const KktLayout& layout, const SparsePattern& K, int dofs_p
 }
 
 KktFactor::~KktFactor() {
-  if (umf_numeric_) umfpack_dl_free_numeric(&umf_numeric_);
-  if (umf_symbolic_) umfpack_dl_free_symbolic(&umf_symbolic_);
   if (numeric_) klu_l_free_numeric(&numeric_, &common_);
   if (symbolic_) klu_l_free_symbolic(&symbolic_, &common_);
 }
 
 bool KktFactor::factor(const double* values) {
-  if (multifrontal_) {
-    if (!umf_symbolic_) return false;
-    if (umf_numeric_) umfpack_dl_free_numeric(&umf_numeric_);
-    // A singular matrix leaves a factor with a zero pivot (UMFPACK_WARNING_singular_matrix).
-    return umfpack_dl_numeric(layout_.p.col_ptr.data(), layout_.p.row_ind.data(), values, umf_symbolic_, &umf_numeric_,
-                              nullptr, nullptr) == UMFPACK_OK;
-  }
+  if (umfpack_) return umfpack_->factor(values);
   if (!symbolic_) return false;
   if (numeric_) klu_l_free_numeric(&numeric_, &common_);
   numeric_ = klu_l_factor(const_cast<Index*>(layout_.p.col_ptr.data()), const_cast<Index*>(layout_.p.row_ind.data()),
@@ -90,19 +78,16 @@ bool KktFactor::factor(const double* values) {
   return numeric_ && common_.status == KLU_OK;
 }
 
+double KktFactor::factor_entries() const {
+  if (umfpack_) return umfpack_->factor_entries();
+  return numeric_ ? static_cast<double>(numeric_->lnz + numeric_->unz) : 0.0;
+}
+
 void KktFactor::solve(double* rhs) const {
-  if (!multifrontal_) {
+  if (umfpack_)
+    umfpack_->solve(rhs);
+  else
     klu_l_solve(symbolic_, numeric_, layout_.p.n, 1, rhs, &common_);
-    return;
-  }
-  // No iterative refinement: it would read the matrix's values, which the caller may have
-  // changed since the factorisation it reuses; KLU's solve does none either.
-  double control[UMFPACK_CONTROL];
-  umfpack_dl_defaults(control);
-  control[UMFPACK_IRSTEP] = 0;
-  b_.assign(rhs, rhs + layout_.p.n);
-  umfpack_dl_solve(UMFPACK_A, layout_.p.col_ptr.data(), layout_.p.row_ind.data(), nullptr, rhs, b_.data(), umf_numeric_,
-                   control, nullptr);
 }
 
 }  // namespace isochor

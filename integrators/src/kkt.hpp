@@ -1,7 +1,7 @@
 // The KKT matrix [K G^T; G 0] of n dofs and m constraints in one fixed CSC pattern (both
 // triangles), with the slot of every entry of K's pattern and of every G entry, and its sparse LU
-// (KktFactor: KLU, or UMFPACK for many rows). Used by statics (through KINSOL) and by backward
-// Euler when there are many constraints.
+// (KktFactor: KLU, or UMFPACK for many rows). Used by statics (through KINSOL), by backward
+// Euler when there are many constraints, and by IDA's GGL system with many (ggl_kkt.hpp).
 #pragma once
 #include <klu.h>
 
@@ -11,6 +11,7 @@
 
 #include "isochor/integrators/constrained_system.hpp"
 #include "isochor/integrators/sparse_pattern.hpp"
+#include "umfpack_lu.hpp"
 
 namespace isochor {
 
@@ -25,7 +26,12 @@ struct KktLayout {
   std::vector<std::vector<Index>> gcol, grow;  // slots of G^T (column n + j) and G (row n + j)
   KktLayout(const SparsePattern& K, const std::vector<std::vector<Index>>& rows);
   // values (p.nnz()) = [Kvals G^T; G 0].
-  void fill(const double* Kvals, const std::vector<std::vector<double>>& G, double* values) const;
+  void fill(const double* Kvals, const std::vector<std::vector<double>>& G, double* values) const {
+    fill(Kvals, G, G, values);
+  }
+  // values = [Kvals C^T; R 0]: another matrix than G in the bottom rows, on G's pattern.
+  void fill(const double* Kvals, const std::vector<std::vector<double>>& C, const std::vector<std::vector<double>>& R,
+            double* values) const;
 };
 
 // A sparse LU of a KktLayout's pattern: symbolic analysis once, numeric factorisation on demand,
@@ -39,22 +45,20 @@ struct KktLayout {
 // backward Euler leaves its dense border for this matrix.
 class KktFactor {
  public:
-  static constexpr std::size_t kMultifrontalRows = 32;
+  static constexpr std::size_t kMultifrontalRows = isochor::kMultifrontalRows;
   KktFactor(const KktLayout& layout, const SparsePattern& K, int dofs_per_group,
             const std::vector<std::vector<Index>>& rows);
   ~KktFactor();
   bool factor(const double* values);  // false if singular
   void solve(double* rhs) const;      // in place, n + m
+  double factor_entries() const;      // entries of L and U of the last factorisation
  private:
   const KktLayout& layout_;
   std::vector<Index> order_;
   mutable klu_l_common common_;
   klu_l_symbolic* symbolic_ = nullptr;
   klu_l_numeric* numeric_ = nullptr;
-  bool multifrontal_ = false;  // UMFPACK's symbolic_ and numeric_ below instead of KLU's
-  void* umf_symbolic_ = nullptr;
-  void* umf_numeric_ = nullptr;
-  mutable std::vector<double> b_;  // the right-hand side while UMFPACK solves into rhs
+  std::unique_ptr<UmfpackLu> umfpack_;  // above kMultifrontalRows, instead of KLU
 };
 
 }  // namespace isochor
