@@ -17,24 +17,7 @@ csv=${4:-docs/results/zones_dynamics.csv}
 tmp=$(mktemp)
 scene=out/bench/beam_dynamic.toml
 trap 'rm -f "$tmp"' EXIT
-cat > "$scene" <<'TOML'
-[mesh]
-shape = "box"
-size = [1.5, 0.3, 0.3]
-center = [0.75, 0.0, 0.0]
-[material]
-model = "cnh"
-density = 1000.0
-mu = 1.0e6
-lambda = 1.0e6
-[[boundary]]
-select = { kind = "set", name = "xmin" }
-[forces]
-gravity = [0.0, 0.0, -9.81]
-[frames]
-rate = 100
-duration = 0.05
-TOML
+beam_scene "$scene"
 zones_of() {
   case $1 in
     global) echo "--set zones.default=global" ;;
@@ -52,21 +35,10 @@ for k in $ks; do
   for ((r = 0; r < rounds; ++r)); do
     for z in global patches2 rings1; do
       for m in be ida; do
-        extra=""
         # shellcheck disable=SC2046
         bench_run zones_dynamics "$scene" --set "mesh.cells=[$((15 * k)), $((3 * k)), $((3 * k))]" $(zones_of $z) \
-          $(method_of $m) $extra
-        /usr/bin/python3 - out/bench/zones_dynamics.h5 "$k" "$z" "$m" >> "$tmp" <<'PY'
-import sys, h5py, numpy as np
-f = h5py.File(sys.argv[1], "r")
-X = f["/mesh/rest_positions"][()]
-x = f["/frames/positions"][-1]
-tip = np.argmin((X[:, 0] - 1.5) ** 2 + X[:, 1] ** 2 + X[:, 2] ** 2)
-s = f["/stats"].attrs
-zones = len(f["/zones"]) if "zones" in f else 0
-print(f"{sys.argv[2]},{sys.argv[3]},{sys.argv[4]},{f['/mesh/tets'].shape[0]},{zones},{s['wall_seconds']:.3f},"
-      f"{s['steps']},{s['newton_iterations']},{s['fresh_factorisations']:.0f},{s['factorisation_seconds']:.2f},{x[tip, 2] - X[tip, 2]:.6f}")
-PY
+          $(method_of $m)
+        beam_row out/bench/zones_dynamics.h5 "$k" "$z" "$m" >> "$tmp"
       done
     done
   done

@@ -149,6 +149,12 @@ substeps_on_failure = 4
   }
   // semi-implicit takes one update per step: a hybrid Hessian has nothing to switch within.
   EXPECT_THROW(scene(text, {"integrator.kind=semi_implicit"}), Error);
+  // The rows up to which backward Euler's border is dense: 8 unless set (the measured crossover,
+  // BackwardEulerOptions), an option of backward Euler alone.
+  EXPECT_EQ(scene(text, {}).integrator.backward_euler.schur_max_constraints, 8);
+  EXPECT_EQ(scene(text, {"integrator.dense_border_rows=0"}).integrator.backward_euler.schur_max_constraints, 0);
+  EXPECT_THROW(scene(text, {"integrator.kind=ida", "integrator.dense_border_rows=4"}), Error);
+  EXPECT_THROW(scene(text, {"integrator.dense_border_rows=-1"}), Error);
 }
 
 TEST(Scene, ZonesFromSelectionsAndFrames) {

@@ -1309,6 +1309,21 @@ constexpr KeySpec kRows[] = {
      .doc = "backward Euler: Newton iterations allowed per step before the step fails (or is halved, "
             "`substeps_on_failure`); IDA (1..100): iterations per step attempt before IDA counts a convergence failure "
             "and retries with a fresh Jacobian or a quarter of the step (IDASetMaxNonlinIters)"},
+    {.name = "integrator.dense_border_rows",
+     .kind = K::integer,
+     .fallback = "8",
+     .min = 0,
+     .max = 100000,
+     .doc =
+         "backward Euler and semi-implicit: constraint rows (zones and support rows) up to which each Newton "
+         "iteration solves the step matrix alone and the rows' border by a dense Schur complement (m + 1 solves with "
+         "the step matrix's solver); above, the whole KKT matrix is factored (KLU up to 32 rows, UMFPACK above; "
+         "always with `linear_solver = \"klu\"`). Measured on the clamped beam with 1 to 32 zones, 50 steps "
+         "(`bench/dense_border.sh`): the dense border costs 0.085 s per row at 6,480 tets and 0.39 s at 21,870, the "
+         "KKT path a fixed 0.66 and 4.1 s and 0.013 and 0.13 per row; they cross near 4 rows on the first mesh and "
+         "near 10 on the second, and at 32 rows the dense border took 2.8 and 1.9 times as long "
+         "(`docs/results/zones_cost.md`). On MPI "
+         "ranks the dense border is kept up to 32 rows (the KKT matrix is factored on one process)"},
     {.name = "integrator.line_search",
      .kind = K::boolean,
      .fallback = "true",
@@ -1507,7 +1522,8 @@ constexpr KeySpec kRows[] = {
          "while S is indefinite, LLᵀ tried again every 8 factorisations; not in backward Euler with the line search, "
          "which shifts an indefinite S by more inertia as it does with PCG: LDLᵀ's directions there descended poorly, "
          "and the 4.7K-tet ball at 1 ms failed at 36 ms where it now runs), the 2m constraint borders by a Schur "
-         "complement (backward Euler: the KKT matrix above 32 constraints, as `klu`). `\"krylov\"`: as `reduced`, but "
+         "complement (backward Euler: the KKT matrix above `dense_border_rows` constraints, as `klu`). `\"krylov\"`: "
+         "as `reduced`, but "
          "S "
          "solved by conjugate gradients with the inverses of its 3×3 nodal blocks as preconditioner (relative residual "
          "1e-12, tighter for IDA below rtol 1e-6): no factor, memory proportional to the matrix; in IDA, where CG "

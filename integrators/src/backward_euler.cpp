@@ -43,10 +43,12 @@ struct BackwardEuler::Impl {
         opt(o),
         n((check_system(s), s.num_dofs())),
         m(s.num_constraints()),
-        use_kkt(o.linear_solver == LinearSolverKind::klu || m > o.schur_max_constraints) {
+        use_kkt(o.linear_solver == LinearSolverKind::klu ||
+                m > (s.partition() ? std::max(o.schur_max_constraints, BackwardEulerOptions::kRanksDenseBorderMax)
+                                   : o.schur_max_constraints)) {
     if (use_kkt && s.partition())
       throw Error("backward Euler: " + std::to_string(m) + " constraint rows (more than " +
-                  std::to_string(o.schur_max_constraints) +
+                  std::to_string(std::max(o.schur_max_constraints, BackwardEulerOptions::kRanksDenseBorderMax)) +
                   ") take KLU on the whole KKT matrix, which runs on one process (on MPI ranks: fewer zones, or "
                   "integrator.kind = \"ida\")");
     if (o.project_hessian && !s.set_hessian_projection(true))

@@ -56,8 +56,8 @@ class GglKktSolver {
   long fallbacks() const { return fallbacks_; }  // setups solved by J's own LU
 
  private:
-  bool refine(const double* b, double* x, const double* weights);  // false: no convergence
-  void precondition(const double* b, double* x);                   // x = P^-1 b
+  bool refine(const double* b, double* x, const double* weights);                      // false: no convergence
+  void precondition(const double* b, double* x);                                       // x = P^-1 b
   void block_times(const std::vector<Index>& slot, const double* x, double* y) const;  // y += X x
 
   const GglForm& form_;
@@ -66,17 +66,17 @@ class GglKktSolver {
   const double* values_ = nullptr;
   KktLayout layout_;
   KktFactor factor_;
-  std::vector<double> kv_, sx_;  // K1's values; S's (in the system's pattern)
+  std::vector<double> kv_, sx_;                // K1's values; S's (in the system's pattern)
   std::vector<std::vector<double>> g_, brow_;  // G and B + c G, per row
   Eigen::SparseMatrix<double> gs_;             // G, m x n
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ggt_;
   bool ggt_analysed_ = false;
   Eigen::VectorXd k1_, dp_, dm_, r_, dx_, x_;
   long refinements_ = 0;
-  double rho_ = -1;
+  double rho_ = -1;                    // the largest contraction measured since the setup (-1: none yet)
   std::unique_ptr<UmfpackLu> direct_;  // J's LU, made at the first fallback
   bool direct_ready_ = false;          // this setup solves with direct_
-  long fallbacks_ = 0;  // the largest contraction measured since the setup (-1: none yet)
+  long fallbacks_ = 0;                 // setups solved by direct_
 };
 
 }  // namespace isochor

@@ -4,7 +4,8 @@
 
 namespace isochor {
 
-UmfpackLu::UmfpackLu(Index n, const Index* col_ptr, const Index* row_ind) : n_(n), col_ptr_(col_ptr), row_ind_(row_ind) {
+UmfpackLu::UmfpackLu(Index n, const Index* col_ptr, const Index* row_ind)
+    : n_(n), col_ptr_(col_ptr), row_ind_(row_ind) {
   static_assert(sizeof(Index) == sizeof(SuiteSparse_long), "UMFPACK's dl interface takes the pattern's indices");
   if (umfpack_dl_symbolic(n_, n_, col_ptr_, row_ind_, nullptr, &symbolic_, nullptr, nullptr) != UMFPACK_OK)
     symbolic_ = nullptr;

@@ -30,6 +30,10 @@ void parse_backward_euler(const Section& in, IntegratorKind kind, IntegratorSpec
   o.max_newton = static_cast<int>(in.integer("max_newton", 30));
   o.line_search = in.boolean("line_search", true);
   o.substeps_on_failure = static_cast<int>(in.integer("substeps_on_failure", 0));
+  o.schur_max_constraints =
+      static_cast<int>(in.integer("dense_border_rows", BackwardEulerOptions::kDefaultDenseBorderRows));
+  if (kind != IntegratorKind::backward_euler && kind != IntegratorKind::semi_implicit)
+    refuse_option(in, "dense_border_rows", "is an option of the backward_euler and semi_implicit integrators");
   if (kind != IntegratorKind::backward_euler)
     refuse_option(in, "line_search", "is an option of the backward_euler integrator");
   if (kind != IntegratorKind::backward_euler && kind != IntegratorKind::statics)

@@ -43,11 +43,21 @@ struct BackwardEulerOptions {
   double newton_tol = 1e-6;
   double newton_atol = 1e-12;
   long max_steps = kDefaultMaxSteps;
-  // Up to this many constraints: CHOLMOD on the n x n step matrix and a dense Schur complement
-  // for the borders; more (e.g. 1-ring zones): KLU on the whole (n + m) KKT matrix.
-  int schur_max_constraints = 32;
-  // "reduced" (the above), "klu" (KLU on the KKT matrix always), "krylov" (block-Jacobi PCG
-  // instead of CHOLMOD on the step matrix; the KKT path above schur_max_constraints stays KLU).
+  // Up to this many constraints: the n x n step matrix by its solver (CHOLMOD or PCG) and a dense
+  // Schur complement for the borders (m + 1 solves per Newton iteration); more: the whole (n + m)
+  // KKT matrix by KktFactor (KLU, UMFPACK above 32 rows). Measured on the clamped beam (backward
+  // Euler, 50 steps, the global zone and patches of 2 to 6 rings; bench/dense_border.sh, medians
+  // of 3 rounds on one thread; docs/results/zones_cost.md): the dense border costs about 0.085 s
+  // per row at 6,480 tets and 0.39 s at 21,870, the KKT path 0.013 and 0.13 per row over a fixed
+  // 0.66 and 4.1 s: they cross near 4 rows on the first mesh and near 10 on the second; at 32
+  // rows the dense border took 2.8 and 1.9 times the KKT path's time. On MPI ranks (the KKT
+  // matrix is one process's) the dense border goes up to kRanksDenseBorderMax whatever this is.
+  // Scene key integrator.dense_border_rows.
+  int schur_max_constraints = kDefaultDenseBorderRows;
+  static constexpr int kDefaultDenseBorderRows = 8;
+  static constexpr int kRanksDenseBorderMax = 32;
+  // "reduced" (the above), "klu" (the KKT matrix always), "krylov" (block-Jacobi PCG instead of
+  // CHOLMOD on the step matrix; the KKT path above schur_max_constraints stays KktFactor).
   LinearSolverKind linear_solver = LinearSolverKind::reduced;
   // krylov and amg: the relative residual at which CG stops (0: kDefaultLinearTol). Newton's
   // test measures its own contraction and stops on its estimated error, so an inexact solve
