@@ -1319,9 +1319,9 @@ constexpr KeySpec kRows[] = {
          "iteration solves the step matrix alone and the rows' border by a dense Schur complement (m + 1 solves with "
          "the step matrix's solver); above, the whole KKT matrix is factored (KLU up to 32 rows, UMFPACK above; "
          "always with `linear_solver = \"klu\"`). Measured on the clamped beam with 1 to 32 zones, 50 steps "
-         "(`bench/dense_border.sh`): the dense border costs 0.085 s per row at 6,480 tets and 0.39 s at 21,870, the "
-         "KKT path a fixed 0.66 and 4.1 s and 0.013 and 0.13 per row; they cross near 4 rows on the first mesh and "
-         "near 10 on the second, and at 32 rows the dense border took 2.8 and 1.9 times as long "
+         "(`bench/dense_border.sh`): the dense border costs 0.087 s per row at 6,480 tets and 0.40 s at 21,870, the "
+         "KKT path a fixed 0.67 and 4.1 s and 0.012 and 0.098 per row; they cross near 4 rows on the first mesh "
+         "and near 9 on the second, and at 32 rows the dense border took 3.0 and 1.9 times as long "
          "(`docs/results/zones_cost.md`). On MPI "
          "ranks the dense border is kept up to 32 rows (the KKT matrix is factored on one process)"},
     {.name = "integrator.line_search",
@@ -1514,7 +1514,8 @@ constexpr KeySpec kRows[] = {
          "sparse G Gᵀ, refined against the GGL matrix until the estimated error is 1e-4 in IDA's weighted norm (the "
          "refinement steps counted in `/stats linear_iterations`; where they do not converge, at large steps on stiff "
          "contact, the GGL matrix's own UMFPACK factor for that setup, counted in `linear_fallbacks`): the same steps "
-         "and frames to 1e-12 m, the 6,480-tet beam with 1,516 1-ring zones 6.2 s against KLU's 53 s; backward "
+         "and frames to 1e-12 m, the 6,480-tet beam with 1,516 1-ring zones 5.9 s against KLU's 53 s (bench medians); "
+         "backward "
          "Euler and statics: the KKT matrix, by UMFPACK instead above 32 constraint rows, 9 times faster to factor "
          "with the beam's 4,600 1-ring rows: `docs/decisions.md`). `\"reduced\"`: eliminate the velocity update and "
          "factor only the n×n "

@@ -47,10 +47,10 @@ struct BackwardEulerOptions {
   // Schur complement for the borders (m + 1 solves per Newton iteration); more: the whole (n + m)
   // KKT matrix by KktFactor (KLU, UMFPACK above 32 rows). Measured on the clamped beam (backward
   // Euler, 50 steps, the global zone and patches of 2 to 6 rings; bench/dense_border.sh, medians
-  // of 3 rounds on one thread; docs/results/zones_cost.md): the dense border costs about 0.085 s
-  // per row at 6,480 tets and 0.39 s at 21,870, the KKT path 0.013 and 0.13 per row over a fixed
-  // 0.66 and 4.1 s: they cross near 4 rows on the first mesh and near 10 on the second; at 32
-  // rows the dense border took 2.8 and 1.9 times the KKT path's time. On MPI ranks (the KKT
+  // of 3 rounds on one thread; docs/results/zones_cost.md): the dense border costs about 0.087 s
+  // per row at 6,480 tets and 0.40 s at 21,870, the KKT path 0.012 and 0.098 per row over a fixed
+  // 0.67 and 4.1 s: they cross near 4 rows on the first mesh and near 9 on the second; at 32 rows
+  // the dense border took 3.0 and 1.9 times the KKT path's time. On MPI ranks (the KKT
   // matrix is one process's) the dense border goes up to kRanksDenseBorderMax whatever this is.
   // Scene key integrator.dense_border_rows.
   int schur_max_constraints = kDefaultDenseBorderRows;
