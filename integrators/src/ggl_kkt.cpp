@@ -52,12 +52,9 @@ bool GglKktSolver::setup(double cj, const double* values) {
   layout_.fill(sx_.data(), g_, brow_, kv_.data());
   if (!factor_.factor(kv_.data())) return false;
   gs_.setFromTriplets(t.begin(), t.end());
-  const Eigen::SparseMatrix<double> ggt = gs_ * gs_.transpose();
-  if (!ggt_analysed_) {
-    ggt_.analyzePattern(ggt);
-    ggt_analysed_ = true;
-  }
-  ggt_.factorize(ggt);
+  // Analysed afresh each setup: the product's pattern follows G's entries, and G Gᵀ is only
+  // m x m with an entry per pair of rows that share a dof.
+  ggt_.compute(gs_ * gs_.transpose());
   return ggt_.info() == Eigen::Success;
 }
 
