@@ -220,8 +220,9 @@ TEST(Run, IdaKluOnManyRowsSolvesThroughTheKktMatrixAndGivesTheReducedSolversFram
 }
 
 // linear_solver = "auto" on IDA: block-Jacobi CG on S (krylov: CG iterations, no factor) for a
-// mesh with one zone; KLU on the whole matrix for more than 256 constraint rows (one patch zone
-// per 1-ring of a 14^3-cell box), which the reduced solvers would carry as dense columns.
+// mesh with one zone; "klu" for more than 256 constraint rows (one patch zone per 1-ring of a
+// 14^3-cell box: above 32 rows that is the GGL system through its KKT matrix, ggl_kkt.hpp), which
+// the reduced solvers would carry as dense columns.
 TEST(Run, AutoLinearSolverIsKrylovForAFewZonesAndKluForMany) {
   const auto dir = test::temp_dir();
   Scene one = scene(kBox, {"frames.duration=0.02"});

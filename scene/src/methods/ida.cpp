@@ -39,8 +39,12 @@ void parse_ida(const Section& in, IntegratorKind kind, IntegratorSpec& spec) {
 // (7 n x m matrices) and solve with S 2m times per setup, so their cost grows with the rows:
 // with one patch zone per 1-ring (zones.patches = 1, a free box, 20 ms) krylov still took 1.0 s
 // against klu's 2.5 s at 65 zones (1.7K tets) and 6.2 s against 29.4 s at 125 zones (6K tets), a
-// cost of ~0.05 s per zone there. Above 256 rows (1-ring zones: one per node) KLU on the whole
-// matrix, whose cost does not grow with them.
+// cost of ~0.05 s per zone there (klu was then KLU on the GGL matrix). Above 256 rows (1-ring
+// zones: one per node) klu, which above 32 rows solves through the KKT matrix (ggl_kkt.hpp).
+// Against that path the crossover depends on the rows' width and on the setups per step: the
+// same box's 125 patches, 9 setups in 11 steps, took 8.9 s on krylov and 1.0 s on klu; the
+// 21,870-tet beam's 108 2-ring patches, 5 setups in 261 steps, 12.2 s and 28.7 s (single runs,
+// one thread). One threshold on the row count cannot place both; it stays at 256.
 constexpr int kAutoKrylovMaxConstraints = 256;
 
 LinearSolverKind automatic_ida_solver(const ConstrainedSystem& system) {
