@@ -18,6 +18,15 @@
 
 namespace isochor {
 
+namespace {
+// The constraint rows up to which the border is dense: the option's, and on MPI ranks at least
+// kRanksDenseBorderMax (the KKT matrix is factored on one process).
+int dense_border_max(const ConstrainedSystem& s, const BackwardEulerOptions& o) {
+  return s.partition() ? std::max(o.schur_max_constraints, BackwardEulerOptions::kRanksDenseBorderMax)
+                       : o.schur_max_constraints;
+}
+}  // namespace
+
 struct BackwardEuler::Impl {
   ConstrainedSystem& sys;
   BackwardEulerOptions opt;
@@ -43,12 +52,10 @@ struct BackwardEuler::Impl {
         opt(o),
         n((check_system(s), s.num_dofs())),
         m(s.num_constraints()),
-        use_kkt(o.linear_solver == LinearSolverKind::klu ||
-                m > (s.partition() ? std::max(o.schur_max_constraints, BackwardEulerOptions::kRanksDenseBorderMax)
-                                   : o.schur_max_constraints)) {
+        use_kkt(o.linear_solver == LinearSolverKind::klu || m > dense_border_max(s, o)) {
     if (use_kkt && s.partition())
       throw Error("backward Euler: " + std::to_string(m) + " constraint rows (more than " +
-                  std::to_string(std::max(o.schur_max_constraints, BackwardEulerOptions::kRanksDenseBorderMax)) +
+                  std::to_string(dense_border_max(s, o)) +
                   ") take KLU on the whole KKT matrix, which runs on one process (on MPI ranks: fewer zones, or "
                   "integrator.kind = \"ida\")");
     if (o.project_hessian && !s.set_hessian_projection(true))

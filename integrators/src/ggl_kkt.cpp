@@ -23,7 +23,7 @@ GglKktSolver::GglKktSolver(const GglForm& form)
   }
   gs_.resize(m_, n_);
   k1_.resize(n_ + m_);
-  dp_.resize(n_);
+  gt_dm_.resize(n_);
   dm_.resize(m_);
   r_.resize(form.size());
   dx_.resize(form.size());
@@ -67,25 +67,20 @@ void GglKktSolver::block_times(const std::vector<Index>& slot, const double* x, 
 
 void GglKktSolver::precondition(const double* b, double* x) {
   const Index n = n_, m = m_;
-  const double *r1 = b, *r2 = b + n, *r3 = b + 2 * n, *r4 = b + 2 * n + m;
-  const auto& rows = form_.system().constraint_rows();
+  const Eigen::Map<const Eigen::VectorXd> r1(b, n), r2(b + n, n), r3(b + 2 * n, m), r4(b + 2 * n + m, m);
   // K1 [dp; dl] = [r2 + V r1; r4 + G r1].
-  std::copy(r2, r2 + n, k1_.data());
-  block_times(form_.vv, r1, k1_.data());
-  for (Index j = 0; j < m; ++j) {
-    double s = r4[j];
-    for (std::size_t k = 0; k < rows[j].size(); ++k) s += g_[j][k] * r1[rows[j][k]];
-    k1_[n + j] = s;
-  }
+  k1_.head(n) = r2;
+  block_times(form_.vv, r1.data(), k1_.data());
+  k1_.tail(m) = r4 + gs_ * r1;
   factor_.solve(k1_.data());
-  dp_ = k1_.head(n);
+  const auto dp = k1_.head(n);
   // dm = c (G G^T)^-1 (G dp - r3).
-  dm_ = gs_ * dp_ - Eigen::Map<const Eigen::VectorXd>(r3, m);
-  dm_ = cj_ * ggt_.solve(dm_);
+  dm_ = cj_ * ggt_.solve(gs_ * dp - r3);
   // dq = dp - G^T dm / c; row 1 exactly: dv = (c I + H_mu) dq + G^T dm - r1.
+  gt_dm_ = gs_.transpose() * dm_;
   Eigen::Map<Eigen::VectorXd> dq(x, n), dv(x + n, n);
-  dq = dp_ - gs_.transpose() * dm_ / cj_;
-  dv = gs_.transpose() * dm_ - Eigen::Map<const Eigen::VectorXd>(r1, n);
+  dq = dp - gt_dm_ / cj_;
+  dv = gt_dm_ - r1;
   block_times(form_.qq, x, x + n);
   std::copy(k1_.data() + n, k1_.data() + n + m, x + 2 * n);
   std::copy(dm_.data(), dm_.data() + m, x + 2 * n + m);

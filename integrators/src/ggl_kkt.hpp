@@ -70,7 +70,7 @@ class GglKktSolver {
   std::vector<std::vector<double>> g_, brow_;  // G and B + c G, per row
   Eigen::SparseMatrix<double> gs_;             // G, m x n
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ggt_;
-  Eigen::VectorXd k1_, dp_, dm_, r_, dx_, x_;
+  Eigen::VectorXd k1_, gt_dm_, dm_, r_, dx_, x_;
   long refinements_ = 0;
   double rho_ = -1;                    // the largest contraction measured since the setup (-1: none yet)
   std::unique_ptr<UmfpackLu> direct_;  // J's LU, made at the first fallback
